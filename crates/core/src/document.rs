@@ -1,0 +1,469 @@
+//! The on-disk graph document (RON, versioned), its migrations, and atomic saving.
+//!
+//! The document is its own set of plain structs, separate from the runtime graph: it keeps node
+//! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
+//! Older shapes load through explicit migration functions ([`migrate_v0`]), never serde aliases.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::Path;
+
+use serde::de::{MapAccess, Visitor};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
+
+/// The version this build writes.
+pub const CURRENT_VERSION: u32 = 1;
+
+/// A parameter value as written in a graph file; converted to a typed value against the port.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ParamValue {
+    /// `true` / `false`.
+    Bool(bool),
+    /// An integer literal.
+    Int(i64),
+    /// A float literal.
+    Float(f64),
+    /// A string (also paths, enum options and `#rrggbb` colours).
+    String(String),
+    /// A tuple or list (`(1.0, 0.5, 0.2)` for colours and vectors).
+    List(Vec<ParamValue>),
+}
+
+impl fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ParamValue::Bool(v) => write!(f, "{v}"),
+            ParamValue::Int(v) => write!(f, "{v}"),
+            ParamValue::Float(v) => write!(f, "{v:?}"),
+            ParamValue::String(v) => write!(f, "{v:?}"),
+            ParamValue::List(items) => {
+                write!(f, "(")?;
+                for (i, v) in items.iter().enumerate() {
+                    if i > 0 {
+                        write!(f, ", ")?;
+                    }
+                    write!(f, "{v}")?;
+                }
+                write!(f, ")")
+            }
+        }
+    }
+}
+
+impl ParamValue {
+    /// Parses a value as typed on a command line (`0.5`, `"a b"`, `(1, 0, 0)`); text that is not
+    /// RON becomes a string, so `--set load.path=frames/a.png` needs no quotes.
+    pub fn parse_cli(text: &str) -> ParamValue {
+        ron::from_str::<ParamValue>(text).unwrap_or_else(|_| ParamValue::String(text.to_string()))
+    }
+}
+
+/// One node in a document.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NodeDoc {
+    /// The registered node type (`imaging.to_gray`) or `graph.include`.
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// Parameters by port name; ports not listed keep their defaults.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub params: BTreeMap<String, ParamValue>,
+    /// Editor position, when the graph was laid out by hand.
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub pos: Option<(f32, f32)>,
+}
+
+impl NodeDoc {
+    /// A node of `type_name` with default parameters.
+    pub fn new(type_name: &str) -> Self {
+        NodeDoc { type_name: type_name.to_string(), params: BTreeMap::new(), pos: None }
+    }
+
+    /// Sets one parameter.
+    pub fn param(mut self, name: &str, value: ParamValue) -> Self {
+        self.params.insert(name.to_string(), value);
+        self
+    }
+}
+
+/// Nodes in file order. Deserialized by hand so that a duplicated id is reported, not silently
+/// dropped as a map would do.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeList(pub Vec<(String, NodeDoc)>);
+
+impl Serialize for NodeList {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (id, node) in &self.0 {
+            map.serialize_entry(id, node)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for NodeList {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = NodeList;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a map from node id to node")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<NodeList, A::Error> {
+                let mut out = Vec::new();
+                while let Some((k, v)) = map.next_entry::<String, NodeDoc>()? {
+                    out.push((k, v));
+                }
+                Ok(NodeList(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// What a graph file exposes when it is used as one node through `graph.include`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InterfaceDoc {
+    /// Input name → the inner input port it feeds (`"blur.image"`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub inputs: BTreeMap<String, String>,
+    /// Output name → the inner output port it reads (`"gray.image"`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub outputs: BTreeMap<String, String>,
+    /// Exposed parameter name → the inner parameter it sets (`"crop.width"`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub params: BTreeMap<String, String>,
+}
+
+impl InterfaceDoc {
+    /// Whether nothing is exposed.
+    pub fn is_empty(&self) -> bool {
+        self.inputs.is_empty() && self.outputs.is_empty() && self.params.is_empty()
+    }
+}
+
+/// A graph document, version 1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GraphDoc {
+    /// Always [`CURRENT_VERSION`] after loading.
+    pub version: u32,
+    /// Optional one-line description.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// For preset files: what the graph exposes as a node.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interface: Option<InterfaceDoc>,
+    /// Nodes by readable id, in file order.
+    pub nodes: NodeList,
+    /// Edges as `("from_node.output", "to_node.input")`.
+    #[serde(default)]
+    pub edges: Vec<(String, String)>,
+}
+
+impl Default for GraphDoc {
+    fn default() -> Self {
+        GraphDoc { version: CURRENT_VERSION, description: None, interface: None, nodes: NodeList::default(), edges: Vec::new() }
+    }
+}
+
+impl GraphDoc {
+    /// An empty document.
+    pub fn new() -> Self {
+        GraphDoc::default()
+    }
+
+    /// Adds (or replaces) a node.
+    pub fn add_node(&mut self, id: &str, node: NodeDoc) -> &mut Self {
+        match self.nodes.0.iter_mut().find(|(k, _)| k == id) {
+            Some(slot) => slot.1 = node,
+            None => self.nodes.0.push((id.to_string(), node)),
+        }
+        self
+    }
+
+    /// Adds an edge `from` (`node.output`) → `to` (`node.input`).
+    pub fn connect(&mut self, from: &str, to: &str) -> &mut Self {
+        self.edges.push((from.to_string(), to.to_string()));
+        self
+    }
+
+    /// The node with id `id`.
+    pub fn node(&self, id: &str) -> Option<&NodeDoc> {
+        self.nodes.0.iter().find(|(k, _)| k == id).map(|(_, n)| n)
+    }
+
+    /// The node with id `id`, mutably.
+    pub fn node_mut(&mut self, id: &str) -> Option<&mut NodeDoc> {
+        self.nodes.0.iter_mut().find(|(k, _)| k == id).map(|(_, n)| n)
+    }
+
+    /// Sets `node.param = value`; an error names a missing node.
+    pub fn set_param(&mut self, node: &str, param: &str, value: ParamValue) -> Result<(), String> {
+        let n = self.node_mut(node).ok_or_else(|| format!("no node '{node}' in the graph"))?;
+        n.params.insert(param.to_string(), value);
+        Ok(())
+    }
+
+    /// Parses a document from RON text, migrating older versions.
+    pub fn from_ron(text: &str) -> Result<GraphDoc, Diagnostics> {
+        let probe: VersionProbe = ron_options().from_str(text).map_err(syntax_error)?;
+        match probe.version {
+            0 => {
+                let old: v0::GraphDocV0 = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v0(old))
+            }
+            1 => ron_options().from_str(text).map_err(syntax_error),
+            v => Err(Diagnostics::one(Diagnostic::new(
+                DiagnosticKind::Version,
+                Location::File,
+                format!(
+                    "graph version {v} is newer than this pyrograph understands (up to {CURRENT_VERSION}); \
+                     upgrade pyrograph"
+                ),
+            ))),
+        }
+    }
+
+    /// Reads and parses a graph file.
+    pub fn load(path: &Path) -> Result<GraphDoc, Diagnostics> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Diagnostics::one(Diagnostic::new(DiagnosticKind::Io, Location::File, format!("cannot read graph: {e}")))
+                .in_file(path)
+        })?;
+        GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
+    }
+
+    /// The document as pretty RON.
+    pub fn to_ron(&self) -> String {
+        let config = ron::ser::PrettyConfig::new().depth_limit(4).indentor("    ").struct_names(false);
+        // Serializing plain structs, maps and strings cannot fail.
+        ron::ser::to_string_pretty(self, config).unwrap_or_default() + "\n"
+    }
+
+    /// Writes the document atomically (temp file + rename). Refuses to replace an existing file
+    /// unless `overwrite` is set.
+    pub fn save(&self, path: &Path, overwrite: bool) -> std::io::Result<()> {
+        write_atomic(path, self.to_ron().as_bytes(), overwrite)
+    }
+}
+
+/// Writes `Some(x)` as plain `x`, matching how authors write optional fields.
+fn bare_some<S: Serializer, T: Serialize>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(x) => x.serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
+/// RON options for reading: optional fields may be written bare (`pos: (1, 2)`, not `Some(..)`).
+fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+#[derive(Deserialize)]
+struct VersionProbe {
+    /// 0 when absent: the unversioned pre-release shape.
+    #[serde(default)]
+    version: u32,
+}
+
+fn syntax_error(e: ron::error::SpannedError) -> Diagnostics {
+    let location = Location::Text { line: e.span.start.line, column: e.span.start.col };
+    Diagnostics::one(Diagnostic::new(DiagnosticKind::Syntax, location, format!("malformed graph: {}", e.code)))
+}
+
+/// The pre-release (unversioned) document shape, kept so old files still open.
+pub mod v0 {
+    use std::collections::BTreeMap;
+
+    use serde::Deserialize;
+
+    use super::ParamValue;
+
+    /// A node in the old shape: ids inside the node, `kind` and `settings`, flat `x`/`y`.
+    #[derive(Deserialize)]
+    pub struct NodeV0 {
+        /// Node id.
+        pub id: String,
+        /// Node type.
+        pub kind: String,
+        /// Parameters.
+        #[serde(default)]
+        pub settings: BTreeMap<String, ParamValue>,
+        /// Editor x.
+        #[serde(default)]
+        pub x: Option<f32>,
+        /// Editor y.
+        #[serde(default)]
+        pub y: Option<f32>,
+    }
+
+    /// A link in the old shape.
+    #[derive(Deserialize)]
+    pub struct LinkV0 {
+        /// `node.port` source.
+        pub from: String,
+        /// `node.port` destination.
+        pub to: String,
+    }
+
+    /// The whole old document: a node list and a link list, no version field.
+    #[derive(Deserialize)]
+    pub struct GraphDocV0 {
+        /// Nodes in order.
+        pub nodes: Vec<NodeV0>,
+        /// Links in order.
+        #[serde(default)]
+        pub links: Vec<LinkV0>,
+    }
+}
+
+/// Migrates the unversioned pre-release shape to version 1.
+pub fn migrate_v0(old: v0::GraphDocV0) -> GraphDoc {
+    let nodes = old
+        .nodes
+        .into_iter()
+        .map(|n| {
+            let pos = n.x.zip(n.y);
+            (n.id, NodeDoc { type_name: n.kind, params: n.settings, pos })
+        })
+        .collect();
+    let edges = old.links.into_iter().map(|l| (l.from, l.to)).collect();
+    GraphDoc { version: CURRENT_VERSION, description: None, interface: None, nodes: NodeList(nodes), edges }
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so readers
+/// never see a half-written file. With `overwrite` false an existing file is an error.
+pub fn write_atomic(path: &Path, bytes: &[u8], overwrite: bool) -> std::io::Result<()> {
+    use std::io::Write;
+    if !overwrite && path.exists() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!("{} exists; refusing to overwrite it (ask for overwrite to replace it)", path.display()),
+        ));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Parses `node.port` into its two halves.
+pub fn split_endpoint(text: &str) -> Option<(&str, &str)> {
+    let (node, port) = text.rsplit_once('.')?;
+    (!node.is_empty() && !port.is_empty()).then_some((node, port))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SAMPLE: &str = r#"(
+        version: 1,
+        nodes: {
+            "frames": (type: "imaging.load_sequence", params: {"path": "frames", "fps": 30.0}),
+            "gray": (type: "imaging.to_gray", pos: (420, 80)),
+        },
+        edges: [("frames.clip", "gray.image")],
+    )"#;
+
+    #[test]
+    fn parses_the_design_shape() {
+        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
+        assert_eq!(doc.nodes.0.len(), 2);
+        assert_eq!(doc.nodes.0[0].0, "frames");
+        assert_eq!(doc.node("frames").unwrap().params["fps"], ParamValue::Float(30.0));
+        assert_eq!(doc.node("gray").unwrap().pos, Some((420.0, 80.0)));
+        assert_eq!(doc.edges, vec![("frames.clip".to_string(), "gray.image".to_string())]);
+    }
+
+    #[test]
+    fn round_trips_through_text() {
+        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
+        let again = GraphDoc::from_ron(&doc.to_ron()).unwrap();
+        assert_eq!(doc, again);
+    }
+
+    #[test]
+    fn keeps_duplicate_ids_for_validation() {
+        let text = r#"(version: 1, nodes: {"a": (type: "x"), "a": (type: "y")})"#;
+        let doc = GraphDoc::from_ron(text).unwrap();
+        assert_eq!(doc.nodes.0.len(), 2);
+    }
+
+    #[test]
+    fn syntax_errors_carry_line_and_column() {
+        let err = GraphDoc::from_ron("(version: 1,\n nodes: {\"a\": (type: }\n)").unwrap_err();
+        match &err.0[0].location {
+            Location::Text { line, .. } => assert_eq!(*line, 2),
+            other => panic!("expected a text location, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn newer_versions_are_refused_with_advice() {
+        let err = GraphDoc::from_ron("(version: 7, nodes: {})").unwrap_err();
+        assert_eq!(err.0[0].kind, DiagnosticKind::Version);
+        assert!(err.0[0].message.contains("upgrade"));
+    }
+
+    #[test]
+    fn migrates_the_unversioned_shape() {
+        let old = r#"(
+            nodes: [(id: "c", kind: "imaging.constant_color", settings: {"width": 4}, x: 1.0, y: 2.0)],
+            links: [(from: "c.image", to: "w.clip")],
+        )"#;
+        let doc = GraphDoc::from_ron(old).unwrap();
+        assert_eq!(doc.version, 1);
+        assert_eq!(doc.node("c").unwrap().type_name, "imaging.constant_color");
+        assert_eq!(doc.node("c").unwrap().params["width"], ParamValue::Int(4));
+        assert_eq!(doc.node("c").unwrap().pos, Some((1.0, 2.0)));
+        assert_eq!(doc.edges[0], ("c.image".to_string(), "w.clip".to_string()));
+    }
+
+    #[test]
+    fn cli_values_parse_as_ron_or_fall_back_to_text() {
+        assert_eq!(ParamValue::parse_cli("0.5"), ParamValue::Float(0.5));
+        assert_eq!(ParamValue::parse_cli("7"), ParamValue::Int(7));
+        assert_eq!(ParamValue::parse_cli("frames/a.png"), ParamValue::String("frames/a.png".into()));
+        assert_eq!(
+            ParamValue::parse_cli("(1, 0.5, 0)"),
+            ParamValue::List(vec![ParamValue::Int(1), ParamValue::Float(0.5), ParamValue::Int(0)])
+        );
+    }
+
+    #[test]
+    fn atomic_write_refuses_to_overwrite_unless_asked() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.ron");
+        write_atomic(&p, b"one", false).unwrap();
+        assert!(write_atomic(&p, b"two", false).is_err());
+        assert_eq!(std::fs::read(&p).unwrap(), b"one");
+        write_atomic(&p, b"two", true).unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"two");
+        let leftovers = std::fs::read_dir(dir.path()).unwrap().count();
+        assert_eq!(leftovers, 1, "no temp files left behind");
+    }
+
+    #[test]
+    fn endpoints_split_at_the_last_dot() {
+        assert_eq!(split_endpoint("a.b.port"), Some(("a.b", "port")));
+        assert_eq!(split_endpoint("nodot"), None);
+        assert_eq!(split_endpoint(".x"), None);
+    }
+}

@@ -1,0 +1,460 @@
+//! The lazy, memoizing evaluator: cooks the upstream cone of the requested nodes in topological
+//! order, independent branches in parallel, and re-uses every result whose fingerprint is unchanged.
+//!
+//! A node's fingerprint hashes its type, whether it is lifted, and the *content* fingerprints of
+//! its inputs. So a changed parameter re-cooks that node and its downstream only, and when a
+//! re-cooked output equals the old one, its consumers see the same input fingerprint and stay
+//! cached (salsa's "backdating"). Every actual cook is appended to a recompute log for tests.
+
+use std::collections::{HashMap, HashSet, VecDeque};
+use std::hash::{Hash, Hasher};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use petgraph::stable_graph::NodeIndex;
+use rayon::prelude::*;
+
+use crate::error::NodeError;
+use crate::fingerprint::Fingerprinter;
+use crate::graph::{Graph, GraphNode, InputSource};
+use crate::node::{Inputs, Node, TimeDep};
+use crate::value::{Clip, FrameSource, PortType, Value};
+
+/// What a long cook reports while it runs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Progress {
+    /// A node started cooking.
+    NodeStarted {
+        /// Its id.
+        node: Arc<str>,
+    },
+    /// A node finished (successfully or not).
+    NodeFinished {
+        /// Its id.
+        node: Arc<str>,
+        /// Whether it succeeded.
+        ok: bool,
+    },
+    /// A node pulled one more frame of a clip.
+    Frame {
+        /// The node doing the pulling.
+        node: Arc<str>,
+        /// Frames done so far.
+        done: usize,
+        /// Frames in all.
+        total: usize,
+    },
+}
+
+/// A progress callback; called from worker threads.
+pub type ProgressFn = Arc<dyn Fn(&Progress) + Send + Sync>;
+
+/// A shared flag that stops a cook at the next node or frame boundary.
+#[derive(Clone, Debug, Default)]
+pub struct CancelToken(Arc<AtomicBool>);
+
+impl CancelToken {
+    /// A token that is not cancelled.
+    pub fn new() -> Self {
+        CancelToken::default()
+    }
+    /// Asks running cooks to stop.
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+    /// Whether cancellation was asked for.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+    /// Clears the flag so the token can be used again.
+    pub fn reset(&self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
+}
+
+/// Settings of one render that sinks (writers) obey.
+#[derive(Clone, Debug, Default)]
+pub struct CookSettings {
+    /// Inclusive frame range to write (`--frames A-B`); all frames when `None`.
+    pub frames: Option<(usize, usize)>,
+    /// Replace existing files even where a writer's `overwrite` parameter is off.
+    pub overwrite: bool,
+}
+
+/// Context of a cook: cancellation, progress, render settings and the node being cooked.
+#[derive(Clone, Default)]
+pub struct CookCtx {
+    cancel: CancelToken,
+    progress: Option<ProgressFn>,
+    settings: Arc<CookSettings>,
+    node: Option<Arc<str>>,
+}
+
+impl CookCtx {
+    /// A context with no progress reporting that is never cancelled.
+    pub fn new() -> Self {
+        CookCtx::default()
+    }
+    /// Uses `token` for cancellation.
+    pub fn with_cancel(mut self, token: CancelToken) -> Self {
+        self.cancel = token;
+        self
+    }
+    /// Reports progress to `f`.
+    pub fn with_progress(mut self, f: ProgressFn) -> Self {
+        self.progress = Some(f);
+        self
+    }
+    /// Uses render settings.
+    pub fn with_settings(mut self, settings: CookSettings) -> Self {
+        self.settings = Arc::new(settings);
+        self
+    }
+    /// The render settings.
+    pub fn settings(&self) -> &CookSettings {
+        &self.settings
+    }
+    /// The cancellation token.
+    pub fn cancel_token(&self) -> &CancelToken {
+        &self.cancel
+    }
+    /// `Err(Cancelled)` once cancellation was asked for.
+    pub fn check_cancel(&self) -> Result<(), NodeError> {
+        if self.cancel.is_cancelled() { Err(NodeError::Cancelled) } else { Ok(()) }
+    }
+    /// The id of the node being cooked, if any.
+    pub fn node_id(&self) -> Option<&str> {
+        self.node.as_deref()
+    }
+    /// Reports per-frame progress of the current node.
+    pub fn frame_progress(&self, done: usize, total: usize) {
+        if let (Some(f), Some(node)) = (&self.progress, &self.node) {
+            f(&Progress::Frame { node: node.clone(), done, total });
+        }
+    }
+    fn report(&self, p: Progress) {
+        if let Some(f) = &self.progress {
+            f(&p);
+        }
+    }
+    pub(crate) fn for_node(&self, id: &Arc<str>) -> CookCtx {
+        CookCtx { node: Some(id.clone()), ..self.clone() }
+    }
+}
+
+#[derive(Clone)]
+struct CacheEntry {
+    fingerprint: u64,
+    outputs: Arc<[Value]>,
+    out_fps: Arc<[u64]>,
+}
+
+/// The outcome of one node in a cook.
+pub type NodeResult = Result<Arc<[Value]>, NodeError>;
+
+/// Results of a cook, per node of the cooked cone.
+#[derive(Default)]
+pub struct CookResult {
+    results: HashMap<Arc<str>, NodeResult>,
+}
+
+impl CookResult {
+    /// The outcome of node `id`, if it was in the cooked cone.
+    pub fn node(&self, id: &str) -> Option<&NodeResult> {
+        self.results.get(id)
+    }
+
+    /// Output `port` of node `id` (errors say why it is not there).
+    pub fn output(&self, graph: &Graph, id: &str, port: &str) -> Result<Value, NodeError> {
+        let res = self.results.get(id).ok_or_else(|| NodeError::msg(format!("node '{id}' was not cooked")))?;
+        let values = res.as_ref().map_err(Clone::clone)?;
+        let idx = graph.index(id).ok_or_else(|| NodeError::msg(format!("no node '{id}'")))?;
+        let p = graph.node(idx).node.desc().output_index(port).ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
+        Ok(values[p].clone())
+    }
+
+    /// Every failed node with its error, in no particular order.
+    pub fn errors(&self) -> impl Iterator<Item = (&str, &NodeError)> {
+        self.results.iter().filter_map(|(k, v)| v.as_ref().err().map(|e| (&**k, e)))
+    }
+
+    /// Whether every node of the cone cooked.
+    pub fn is_ok(&self) -> bool {
+        self.results.values().all(Result::is_ok)
+    }
+
+    /// The errors that are a node's own (not "upstream failed" echoes), for reporting.
+    pub fn root_errors(&self) -> Vec<(&str, &NodeError)> {
+        let mut v: Vec<_> = self.errors().filter(|(_, e)| !matches!(e, NodeError::Upstream(_))).collect();
+        v.sort_by(|a, b| a.0.cmp(b.0));
+        v
+    }
+}
+
+/// Cooks graphs, keeping results between cooks.
+#[derive(Default)]
+pub struct Evaluator {
+    cache: HashMap<Arc<str>, CacheEntry>,
+    log: Vec<Arc<str>>,
+}
+
+struct Outcome {
+    result: NodeResult,
+    entry: Option<CacheEntry>,
+    cooked: bool,
+}
+
+impl Evaluator {
+    /// An evaluator with an empty cache.
+    pub fn new() -> Self {
+        Evaluator::default()
+    }
+
+    /// Node ids actually cooked (not served from the cache), in cook order, since the last take.
+    pub fn take_log(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.log).iter().map(|s| s.to_string()).collect()
+    }
+
+    /// Forgets every cached result.
+    pub fn clear(&mut self) {
+        self.cache.clear();
+    }
+
+    /// Cooks `targets` and their upstream cone. Unknown ids are an error; node failures are in
+    /// the result, per node, and do not stop unrelated branches.
+    pub fn cook(&mut self, graph: &Graph, targets: &[&str], ctx: &CookCtx) -> Result<CookResult, NodeError> {
+        let mut roots = Vec::with_capacity(targets.len());
+        for t in targets {
+            roots.push(graph.index(t).ok_or_else(|| NodeError::msg(format!("no node '{t}' in the graph")))?);
+        }
+        let levels = levels_of_cone(graph, &roots);
+        let mut results: HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)> = HashMap::new();
+        for level in levels {
+            let outcomes: Vec<(NodeIndex, Outcome)> = if level.len() == 1 {
+                vec![(level[0], self.cook_node(graph, level[0], &results, ctx))]
+            } else {
+                level.par_iter().map(|&i| (i, self.cook_node(graph, i, &results, ctx))).collect()
+            };
+            for (idx, outcome) in outcomes {
+                let id = graph.node(idx).id.clone();
+                if outcome.cooked {
+                    self.log.push(id.clone());
+                }
+                let fps = outcome.entry.as_ref().map(|e| e.out_fps.clone());
+                if let Some(entry) = outcome.entry {
+                    if graph.node(idx).node.desc().time != TimeDep::Sink {
+                        self.cache.insert(id, entry);
+                    }
+                }
+                results.insert(idx, (outcome.result, fps));
+            }
+        }
+        let live: HashSet<&str> = graph.topo_order().iter().map(|i| &*graph.node(*i).id).collect();
+        self.cache.retain(|k, _| live.contains(&**k));
+        let results = results.into_iter().map(|(idx, (r, _))| (graph.node(idx).id.clone(), r)).collect();
+        Ok(CookResult { results })
+    }
+
+    /// Cooks one output port (`"node.port"`) and returns its value.
+    pub fn output(&mut self, graph: &Graph, endpoint: &str, ctx: &CookCtx) -> Result<Value, NodeError> {
+        let (id, port) = crate::document::split_endpoint(endpoint)
+            .ok_or_else(|| NodeError::msg(format!("'{endpoint}' is not of the form node.port")))?;
+        self.cook(graph, &[id], ctx)?.output(graph, id, port)
+    }
+
+    fn cook_node(
+        &self,
+        graph: &Graph,
+        idx: NodeIndex,
+        done: &HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)>,
+        ctx: &CookCtx,
+    ) -> Outcome {
+        let gn = graph.node(idx);
+        let fail = |e| Outcome { result: Err(e), entry: None, cooked: false };
+        let (values, fingerprint) = match gather_inputs(graph, gn, done) {
+            Ok(v) => v,
+            Err(e) => return fail(e),
+        };
+        let desc = gn.node.desc();
+        if desc.time != TimeDep::Sink
+            && let Some(hit) = self.cache.get(&gn.id).filter(|c| c.fingerprint == fingerprint)
+        {
+            return Outcome { result: Ok(hit.outputs.clone()), entry: Some(hit.clone()), cooked: false };
+        }
+        if let Err(e) = ctx.check_cancel() {
+            return fail(e);
+        }
+        let node_ctx = ctx.for_node(&gn.id);
+        node_ctx.report(Progress::NodeStarted { node: gn.id.clone() });
+        let cooked = if gn.lifted {
+            Ok(lift(gn, values, fingerprint))
+        } else {
+            gn.node.cook(&Inputs::new(desc, &values), &node_ctx).and_then(|out| check_outputs(gn, out))
+        };
+        node_ctx.report(Progress::NodeFinished { node: gn.id.clone(), ok: cooked.is_ok() });
+        match cooked {
+            Ok(outputs) => {
+                let out_fps: Arc<[u64]> = outputs.iter().map(Value::fingerprint).collect();
+                let outputs: Arc<[Value]> = outputs.into();
+                let entry = CacheEntry { fingerprint, outputs: outputs.clone(), out_fps };
+                Outcome { result: Ok(outputs), entry: Some(entry), cooked: true }
+            }
+            Err(e) => Outcome { result: Err(wrap(gn, e)), entry: None, cooked: true },
+        }
+    }
+}
+
+fn wrap(gn: &GraphNode, e: NodeError) -> NodeError {
+    match e {
+        NodeError::Upstream(_) | NodeError::InNode { .. } => e,
+        other => NodeError::InNode { node: gn.id.to_string(), type_name: gn.node.desc().type_name.clone(), source: Box::new(other) },
+    }
+}
+
+fn check_outputs(gn: &GraphNode, out: Vec<Value>) -> Result<Vec<Value>, NodeError> {
+    let want = &gn.node.desc().outputs;
+    if out.len() != want.len() {
+        return Err(NodeError::msg(format!("produced {} outputs, its description declares {}", out.len(), want.len())));
+    }
+    Ok(out)
+}
+
+/// Input values and the node's fingerprint; `Err` when an upstream node failed.
+fn gather_inputs(
+    graph: &Graph,
+    gn: &GraphNode,
+    done: &HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)>,
+) -> Result<(Vec<Value>, u64), NodeError> {
+    let mut h = Fingerprinter::new();
+    gn.node.desc().type_name.hash(&mut h);
+    gn.lifted.hash(&mut h);
+    gn.node.fingerprint_salt().hash(&mut h);
+    let mut values = Vec::with_capacity(gn.inputs.len());
+    for (src, port) in gn.inputs.iter().zip(&gn.node.desc().inputs) {
+        match src {
+            InputSource::Const(v) => {
+                v.hash_into(&mut h);
+                values.push(v.clone());
+            }
+            InputSource::Edge { from, port: out } => match done.get(from) {
+                Some((Ok(vals), fps)) => {
+                    let fp = fps.as_ref().map_or_else(|| vals[*out].fingerprint(), |f| f[*out]);
+                    h.write_u64(fp);
+                    values.push(vals[*out].clone());
+                }
+                _ => return Err(NodeError::Upstream(graph.node(*from).id.to_string())),
+            },
+            InputSource::Missing => return Err(NodeError::port(&port.name, "required input is not connected")),
+        }
+    }
+    Ok((values, h.finish()))
+}
+
+/// Groups the upstream cone of `roots` into levels whose nodes depend only on earlier levels.
+fn levels_of_cone(graph: &Graph, roots: &[NodeIndex]) -> Vec<Vec<NodeIndex>> {
+    let mut cone: HashSet<NodeIndex> = HashSet::new();
+    let mut queue: VecDeque<NodeIndex> = roots.iter().copied().collect();
+    while let Some(i) = queue.pop_front() {
+        if cone.insert(i) {
+            queue.extend(graph.upstream(i));
+        }
+    }
+    let mut level: HashMap<NodeIndex, usize> = HashMap::new();
+    let mut levels: Vec<Vec<NodeIndex>> = Vec::new();
+    for &i in graph.topo_order().iter().filter(|i| cone.contains(i)) {
+        let l = graph.upstream(i).filter_map(|u| level.get(&u)).map(|l| l + 1).max().unwrap_or(0);
+        level.insert(i, l);
+        if levels.len() <= l {
+            levels.resize_with(l + 1, Vec::new);
+        }
+        levels[l].push(i);
+    }
+    levels
+}
+
+/// A per-frame node run over clips: one lazy clip per output; frame i cooks the node on frame i
+/// of every clip input (constants stay constant). The clip is as long as the shortest input clip.
+struct Lifted {
+    node: Arc<dyn Node>,
+    id: Arc<str>,
+    inputs: Vec<Value>,
+    lift: Vec<bool>,
+    len: usize,
+    recent: Mutex<VecDeque<(usize, Arc<Vec<Value>>)>>,
+}
+
+/// How many recent frames a multi-output lifted node keeps, so sibling output clips share work.
+const LIFTED_RECENT: usize = 16;
+
+impl Lifted {
+    fn frame_outputs(&self, frame: usize, ctx: &CookCtx) -> Result<Arc<Vec<Value>>, NodeError> {
+        if let Some(hit) = self.recent.lock().ok().and_then(|r| r.iter().find(|(f, _)| *f == frame).map(|(_, v)| v.clone())) {
+            return Ok(hit);
+        }
+        let desc = self.node.desc();
+        let in_frame = |e: NodeError| NodeError::InNode {
+            node: self.id.to_string(),
+            type_name: desc.type_name.clone(),
+            source: Box::new(NodeError::Frame { frame, source: Box::new(e) }),
+        };
+        let mut values = Vec::with_capacity(self.inputs.len());
+        for (v, lift) in self.inputs.iter().zip(&self.lift) {
+            match (v, lift) {
+                (Value::Clip(c), true) => values.push(c.get(frame, ctx)?),
+                _ => values.push(v.clone()),
+            }
+        }
+        let node_ctx = ctx.for_node(&self.id);
+        let out = self.node.cook(&Inputs::new(desc, &values), &node_ctx).map_err(in_frame)?;
+        if out.len() != desc.outputs.len() {
+            return Err(in_frame(NodeError::msg("wrong number of outputs")));
+        }
+        let out = Arc::new(out);
+        if desc.outputs.len() > 1
+            && let Ok(mut r) = self.recent.lock()
+        {
+            r.push_back((frame, out.clone()));
+            if r.len() > LIFTED_RECENT {
+                r.pop_front();
+            }
+        }
+        Ok(out)
+    }
+}
+
+struct LiftedPort {
+    lifted: Arc<Lifted>,
+    port: usize,
+}
+
+impl FrameSource for LiftedPort {
+    fn len(&self) -> usize {
+        self.lifted.len
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        Ok(self.lifted.frame_outputs(index, ctx)?[self.port].clone())
+    }
+}
+
+fn lift(gn: &GraphNode, inputs: Vec<Value>, fingerprint: u64) -> Vec<Value> {
+    let desc = gn.node.desc();
+    let lift: Vec<bool> = inputs
+        .iter()
+        .zip(&desc.inputs)
+        .map(|(v, p)| matches!(v, Value::Clip(_)) && !matches!(p.ty, PortType::Clip(_)))
+        .collect();
+    let clips = || inputs.iter().zip(&lift).filter(|(_, l)| **l).filter_map(|(v, _)| if let Value::Clip(c) = v { Some(c) } else { None });
+    let len = clips().map(Clip::len).min().unwrap_or(0);
+    let fps = clips().next().map_or(24.0, Clip::fps);
+    let lifted = Arc::new(Lifted { node: gn.node.clone(), id: gn.id.clone(), inputs, lift, len, recent: Mutex::new(VecDeque::new()) });
+    desc.outputs
+        .iter()
+        .enumerate()
+        .map(|(port, p)| {
+            let mut h = Fingerprinter::new();
+            (fingerprint, port).hash(&mut h);
+            let source = Arc::new(LiftedPort { lifted: lifted.clone(), port });
+            Value::Clip(Clip::new(p.ty.clone(), fps, h.finish(), source))
+        })
+        .collect()
+}

@@ -1,0 +1,344 @@
+//! Node descriptions (ports, defaults, ranges, docs) and the trait every node type implements.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use crate::error::NodeError;
+use crate::eval::CookCtx;
+use crate::value::{Clip, Image, Mask, PortType, Value};
+
+/// How a node relates to time; decides lifting and caching.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TimeDep {
+    /// Produces values from parameters alone (a loader, a constant).
+    Source,
+    /// Works on one frame at a time; a `Clip<T>` into a `T` input lifts it over time.
+    PerFrame,
+    /// Needs whole clips at once (training, transitions).
+    WholeClip,
+    /// A deterministic simulation stepped frame by frame.
+    Simulation,
+    /// Writes files; cooked only when asked (render), never served from the cache.
+    Sink,
+}
+
+impl TimeDep {
+    /// Lower-case name for listings.
+    pub fn name(self) -> &'static str {
+        match self {
+            TimeDep::Source => "source",
+            TimeDep::PerFrame => "per-frame",
+            TimeDep::WholeClip => "whole-clip",
+            TimeDep::Simulation => "simulation",
+            TimeDep::Sink => "sink",
+        }
+    }
+}
+
+/// Whether a `Path` parameter names something read or something written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PathRole {
+    /// Read: resolves against the graph file's folder.
+    Input,
+    /// Written: resolves against the render's output folder (`--out`), else the graph file's folder.
+    Output,
+}
+
+/// One input or output port.
+#[derive(Clone, Debug)]
+pub struct PortDesc {
+    /// Stable name, used in graph files (`node.port`).
+    pub name: String,
+    /// The type it carries.
+    pub ty: PortType,
+    /// The constant used when the port is neither connected nor set; `None` makes it required.
+    pub default: Option<Value>,
+    /// Inclusive numeric range for `Float`/`Int` parameters.
+    pub range: Option<(f64, f64)>,
+    /// Allowed names for `Enum` parameters.
+    pub options: Vec<String>,
+    /// For `Path` parameters, how the path resolves.
+    pub path_role: Option<PathRole>,
+    /// One line of help for tooltips and the node reference.
+    pub doc: String,
+}
+
+impl PortDesc {
+    /// A port of type `ty` with no default (a required input, or any output).
+    pub fn new(name: &str, ty: PortType, doc: &str) -> Self {
+        PortDesc {
+            name: name.to_string(),
+            ty,
+            default: None,
+            range: None,
+            options: Vec::new(),
+            path_role: None,
+            doc: doc.to_string(),
+        }
+    }
+
+    /// A Float parameter with default and inclusive range.
+    pub fn float(name: &str, default: f64, range: (f64, f64), doc: &str) -> Self {
+        PortDesc { default: Some(Value::Float(default)), range: Some(range), ..Self::new(name, PortType::Float, doc) }
+    }
+
+    /// An Int parameter with default and inclusive range.
+    pub fn int(name: &str, default: i64, range: (i64, i64), doc: &str) -> Self {
+        let range = Some((range.0 as f64, range.1 as f64));
+        PortDesc { default: Some(Value::Int(default)), range, ..Self::new(name, PortType::Int, doc) }
+    }
+
+    /// A Bool parameter.
+    pub fn bool(name: &str, default: bool, doc: &str) -> Self {
+        PortDesc { default: Some(Value::Bool(default)), ..Self::new(name, PortType::Bool, doc) }
+    }
+
+    /// A Color parameter (linear RGBA).
+    pub fn color(name: &str, default: [f32; 4], doc: &str) -> Self {
+        PortDesc { default: Some(Value::Color(default)), ..Self::new(name, PortType::Color, doc) }
+    }
+
+    /// A String parameter.
+    pub fn string(name: &str, default: &str, doc: &str) -> Self {
+        PortDesc { default: Some(Value::String(default.to_string())), ..Self::new(name, PortType::String, doc) }
+    }
+
+    /// An Enum parameter; the first option is the default unless `default` names another.
+    pub fn choice(name: &str, options: &[&str], default: &str, doc: &str) -> Self {
+        PortDesc {
+            default: Some(Value::Enum(default.to_string())),
+            options: options.iter().map(|s| s.to_string()).collect(),
+            ..Self::new(name, PortType::Enum, doc)
+        }
+    }
+
+    /// A Path parameter; `default` of `None` makes it required.
+    pub fn path(name: &str, role: PathRole, default: Option<&str>, doc: &str) -> Self {
+        PortDesc {
+            default: default.map(|d| Value::Path(PathBuf::from(d))),
+            path_role: Some(role),
+            ..Self::new(name, PortType::Path, doc)
+        }
+    }
+
+    /// Whether the port must be connected or set.
+    pub fn is_required(&self) -> bool {
+        self.default.is_none()
+    }
+}
+
+/// The static description of a node type.
+#[derive(Clone, Debug)]
+pub struct NodeDesc {
+    /// Stable type name, `family.name` (`imaging.to_gray`).
+    pub type_name: String,
+    /// Palette category.
+    pub category: String,
+    /// What the node does and which paper section it implements (first line is the summary).
+    pub doc: String,
+    /// Inputs and parameters, in order.
+    pub inputs: Vec<PortDesc>,
+    /// Outputs, in order.
+    pub outputs: Vec<PortDesc>,
+    /// Relation to time.
+    pub time: TimeDep,
+}
+
+impl NodeDesc {
+    /// A description without ports.
+    pub fn new(type_name: &str, category: &str, time: TimeDep, doc: &str) -> Self {
+        NodeDesc {
+            type_name: type_name.to_string(),
+            category: category.to_string(),
+            doc: doc.to_string(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            time,
+        }
+    }
+
+    /// Adds an input port.
+    pub fn input(mut self, port: PortDesc) -> Self {
+        self.inputs.push(port);
+        self
+    }
+
+    /// Adds an output port.
+    pub fn output(mut self, name: &str, ty: PortType, doc: &str) -> Self {
+        self.outputs.push(PortDesc::new(name, ty, doc));
+        self
+    }
+
+    /// Index of the input named `name`.
+    pub fn input_index(&self, name: &str) -> Option<usize> {
+        self.inputs.iter().position(|p| p.name == name)
+    }
+
+    /// Index of the output named `name`.
+    pub fn output_index(&self, name: &str) -> Option<usize> {
+        self.outputs.iter().position(|p| p.name == name)
+    }
+
+    /// First line of the doc.
+    pub fn summary(&self) -> &str {
+        self.doc.lines().next().unwrap_or("")
+    }
+}
+
+/// A node type: a description plus the function that cooks it.
+pub trait Node: Send + Sync {
+    /// The static description.
+    fn desc(&self) -> &NodeDesc;
+    /// Computes the outputs (in `desc().outputs` order) from the inputs.
+    fn cook(&self, inputs: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError>;
+    /// Extra state the outputs depend on beyond the inputs (an included file's content), mixed
+    /// into the cache fingerprint.
+    fn fingerprint_salt(&self) -> u64 {
+        0
+    }
+}
+
+/// The cook function of a [`FnNode`].
+pub type CookFn = fn(&Inputs<'_>, &CookCtx) -> Result<Vec<Value>, NodeError>;
+
+/// A node made of a description and a plain function: the usual way to declare one.
+pub struct FnNode {
+    desc: NodeDesc,
+    cook: CookFn,
+}
+
+impl FnNode {
+    /// Pairs a description with its cook function.
+    pub fn new(desc: NodeDesc, cook: CookFn) -> Arc<dyn Node> {
+        Arc::new(FnNode { desc, cook })
+    }
+}
+
+impl Node for FnNode {
+    fn desc(&self) -> &NodeDesc {
+        &self.desc
+    }
+    fn cook(&self, inputs: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        (self.cook)(inputs, ctx)
+    }
+}
+
+/// The input values of one cook, addressed by port name, with typed accessors whose errors name the port.
+pub struct Inputs<'a> {
+    desc: &'a NodeDesc,
+    values: &'a [Value],
+}
+
+impl<'a> Inputs<'a> {
+    /// Pairs values (in `desc.inputs` order) with their description.
+    pub fn new(desc: &'a NodeDesc, values: &'a [Value]) -> Self {
+        Inputs { desc, values }
+    }
+
+    /// The raw value of port `name`.
+    pub fn get(&self, name: &str) -> Result<&'a Value, NodeError> {
+        self.desc
+            .input_index(name)
+            .and_then(|i| self.values.get(i))
+            .ok_or_else(|| NodeError::port(name, "no such input on this node"))
+    }
+
+    fn wrong(&self, name: &str, wanted: &str, got: &Value) -> NodeError {
+        NodeError::port(name, format!("needs {wanted}, got {}", got.type_name()))
+    }
+
+    /// A Float (an Int is widened).
+    pub fn float(&self, name: &str) -> Result<f64, NodeError> {
+        match self.get(name)? {
+            Value::Float(v) => Ok(*v),
+            Value::Int(v) => Ok(*v as f64),
+            other => Err(self.wrong(name, "Float", other)),
+        }
+    }
+
+    /// An Int.
+    pub fn int(&self, name: &str) -> Result<i64, NodeError> {
+        match self.get(name)? {
+            Value::Int(v) => Ok(*v),
+            other => Err(self.wrong(name, "Int", other)),
+        }
+    }
+
+    /// A non-negative Int as `usize`.
+    pub fn usize(&self, name: &str) -> Result<usize, NodeError> {
+        let v = self.int(name)?;
+        usize::try_from(v).map_err(|_| NodeError::port(name, format!("must not be negative, got {v}")))
+    }
+
+    /// A Bool.
+    pub fn bool(&self, name: &str) -> Result<bool, NodeError> {
+        match self.get(name)? {
+            Value::Bool(v) => Ok(*v),
+            other => Err(self.wrong(name, "Bool", other)),
+        }
+    }
+
+    /// A Color.
+    pub fn color(&self, name: &str) -> Result<[f32; 4], NodeError> {
+        match self.get(name)? {
+            Value::Color(v) => Ok(*v),
+            other => Err(self.wrong(name, "Color", other)),
+        }
+    }
+
+    /// A String.
+    pub fn string(&self, name: &str) -> Result<&'a str, NodeError> {
+        match self.get(name)? {
+            Value::String(v) => Ok(v),
+            other => Err(self.wrong(name, "String", other)),
+        }
+    }
+
+    /// The chosen option of an Enum.
+    pub fn choice(&self, name: &str) -> Result<&'a str, NodeError> {
+        match self.get(name)? {
+            Value::Enum(v) => Ok(v),
+            other => Err(self.wrong(name, "Enum", other)),
+        }
+    }
+
+    /// A Path (already resolved by the graph loader).
+    pub fn path(&self, name: &str) -> Result<&'a std::path::Path, NodeError> {
+        match self.get(name)? {
+            Value::Path(v) => Ok(v),
+            other => Err(self.wrong(name, "Path", other)),
+        }
+    }
+
+    /// An Image.
+    pub fn image(&self, name: &str) -> Result<&'a Arc<Image>, NodeError> {
+        match self.get(name)? {
+            Value::Image(v) => Ok(v),
+            other => Err(self.wrong(name, "Image", other)),
+        }
+    }
+
+    /// A Mask.
+    pub fn mask(&self, name: &str) -> Result<&'a Arc<Mask>, NodeError> {
+        match self.get(name)? {
+            Value::Mask(v) => Ok(v),
+            other => Err(self.wrong(name, "Mask", other)),
+        }
+    }
+
+    /// Contours.
+    pub fn contours(&self, name: &str) -> Result<&'a Arc<crate::value::Contours>, NodeError> {
+        match self.get(name)? {
+            Value::Contours(v) => Ok(v),
+            other => Err(self.wrong(name, "Contours", other)),
+        }
+    }
+
+    /// A Clip.
+    pub fn clip(&self, name: &str) -> Result<&'a Clip, NodeError> {
+        match self.get(name)? {
+            Value::Clip(v) => Ok(v),
+            other => Err(self.wrong(name, "Clip", other)),
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! The table of node types, filled by each node family's explicit `register` function.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use crate::node::{Node, NodeDesc};
+
+/// Node types by stable type name.
+#[derive(Clone, Default)]
+pub struct Registry {
+    nodes: BTreeMap<String, Arc<dyn Node>>,
+}
+
+impl Registry {
+    /// An empty registry.
+    pub fn new() -> Self {
+        Registry::default()
+    }
+
+    /// A registry with the core's own nodes (`graph.include`, `value.*`, `math.*`).
+    pub fn with_builtins() -> Self {
+        let mut r = Registry::new();
+        crate::builtin::register(&mut r);
+        r
+    }
+
+    /// Adds a node type.
+    ///
+    /// # Panics
+    /// When the type name is already taken: two node families claiming one name is a programming
+    /// error caught by the first test that builds the registry, never a user-input condition.
+    pub fn add(&mut self, node: Arc<dyn Node>) {
+        let name = node.desc().type_name.clone();
+        let previous = self.nodes.insert(name.clone(), node);
+        assert!(previous.is_none(), "node type '{name}' registered twice");
+    }
+
+    /// The node type named `type_name`.
+    pub fn get(&self, type_name: &str) -> Option<&Arc<dyn Node>> {
+        self.nodes.get(type_name)
+    }
+
+    /// All descriptions, sorted by type name.
+    pub fn descs(&self) -> impl Iterator<Item = &NodeDesc> {
+        self.nodes.values().map(|n| n.desc())
+    }
+
+    /// Type names close to `name` (same suffix or a small edit distance), for "did you mean" hints.
+    pub fn suggest(&self, name: &str) -> Option<&str> {
+        let tail = name.rsplit('.').next().unwrap_or(name);
+        self.nodes
+            .keys()
+            .map(|k| (edit_distance(k, name).min(edit_distance(k.rsplit('.').next().unwrap_or(k), tail)), k))
+            .filter(|(d, _)| *d <= 2)
+            .min()
+            .map(|(_, k)| k.as_str())
+    }
+}
+
+/// Levenshtein distance; short names only, so the quadratic table is fine.
+pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distance_counts_single_edits() {
+        assert_eq!(edit_distance("to_gray", "to_grey"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("same", "same"), 0);
+    }
+
+    #[test]
+    fn suggests_a_close_type_name() {
+        let r = Registry::with_builtins();
+        assert_eq!(r.suggest("math.ad"), Some("math.add"));
+        assert_eq!(r.suggest("zzzzzzzz"), None);
+    }
+}

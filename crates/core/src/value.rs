@@ -1,0 +1,589 @@
+//! Port types and the values that flow along edges: scalars, images, masks and lazy clips.
+
+use std::collections::{HashMap, VecDeque};
+use std::fmt;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use rayon::prelude::*;
+
+use crate::error::NodeError;
+use crate::eval::CookCtx;
+use crate::fingerprint::{Fingerprinter, hash_f32s};
+
+/// The closed set of types a port can carry.
+///
+/// `Clip(T)` is a time-varying sequence of `T`. Connecting a `Clip(T)` output to a `T` input of a
+/// per-frame node lifts that node over time (its outputs become clips); nothing else converts
+/// implicitly.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum PortType {
+    /// 64-bit float.
+    Float,
+    /// 64-bit signed integer.
+    Int,
+    /// Boolean.
+    Bool,
+    /// Linear RGBA colour.
+    Color,
+    /// Two floats.
+    Vec2,
+    /// Three floats.
+    Vec3,
+    /// Free text.
+    String,
+    /// A file-system path; relative paths resolve against the graph file's folder.
+    Path,
+    /// One of a fixed list of names (the port description lists them).
+    Enum,
+    /// An f32 image, gray or RGBA.
+    Image,
+    /// A binary mask (0 or 255 per pixel).
+    Mask,
+    /// Polygons traced from a mask, with hierarchy depth and area.
+    Contours,
+    /// A time-varying sequence of the inner type.
+    Clip(Box<PortType>),
+}
+
+impl PortType {
+    /// `Clip<inner>`.
+    pub fn clip_of(inner: PortType) -> PortType {
+        PortType::Clip(Box::new(inner))
+    }
+
+    /// The element type of a clip type, `None` for per-frame types.
+    pub fn clip_element(&self) -> Option<&PortType> {
+        match self {
+            PortType::Clip(inner) => Some(inner),
+            _ => None,
+        }
+    }
+
+    /// Types that can be written as a constant parameter in a graph file.
+    pub fn is_parameter(&self) -> bool {
+        !matches!(self, PortType::Image | PortType::Mask | PortType::Contours | PortType::Clip(_))
+    }
+}
+
+impl fmt::Display for PortType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PortType::Clip(inner) => write!(f, "Clip<{inner}>"),
+            other => write!(f, "{other:?}"),
+        }
+    }
+}
+
+/// Channel layout of an [`Image`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Channels {
+    /// One plane of intensity.
+    Gray,
+    /// Interleaved red, green, blue, alpha (straight alpha).
+    Rgba,
+}
+
+impl Channels {
+    /// Number of interleaved floats per pixel.
+    pub fn count(self) -> usize {
+        match self {
+            Channels::Gray => 1,
+            Channels::Rgba => 4,
+        }
+    }
+}
+
+/// An f32 image with interleaved channels; nominal range 0..1, values above 1 are HDR.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    width: u32,
+    height: u32,
+    channels: Channels,
+    data: Vec<f32>,
+}
+
+impl Image {
+    /// A black (and, for RGBA, fully transparent) image.
+    pub fn new(width: u32, height: u32, channels: Channels) -> Self {
+        let len = width as usize * height as usize * channels.count();
+        Image { width, height, channels, data: vec![0.0; len] }
+    }
+
+    /// Wraps existing interleaved data; `None` when its length does not match the size.
+    pub fn from_vec(width: u32, height: u32, channels: Channels, data: Vec<f32>) -> Option<Self> {
+        (data.len() == width as usize * height as usize * channels.count())
+            .then_some(Image { width, height, channels, data })
+    }
+
+    /// Builds a gray image from a function of the pixel coordinates.
+    pub fn gray_from_fn(width: u32, height: u32, f: impl Fn(u32, u32) -> f32) -> Self {
+        let data = (0..height).flat_map(|y| (0..width).map(move |x| (x, y))).map(|(x, y)| f(x, y)).collect();
+        Image { width, height, channels: Channels::Gray, data }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// `(width, height)`.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Channel layout.
+    pub fn channels(&self) -> Channels {
+        self.channels
+    }
+
+    /// Interleaved samples, row-major from the top-left.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Mutable interleaved samples.
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+
+    /// Consumes the image, returning its samples.
+    pub fn into_vec(self) -> Vec<f32> {
+        self.data
+    }
+
+    /// The samples of pixel `(x, y)`.
+    pub fn pixel(&self, x: u32, y: u32) -> &[f32] {
+        let n = self.channels.count();
+        let i = (y as usize * self.width as usize + x as usize) * n;
+        &self.data[i..i + n]
+    }
+
+    /// Bytes held by the samples (used for cache budgets).
+    pub fn byte_size(&self) -> usize {
+        self.data.len() * std::mem::size_of::<f32>()
+    }
+
+    /// This image as RGBA: gray is replicated into RGB with alpha 1.
+    pub fn to_rgba(&self) -> Image {
+        match self.channels {
+            Channels::Rgba => self.clone(),
+            Channels::Gray => {
+                let data = self.data.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
+                Image { width: self.width, height: self.height, channels: Channels::Rgba, data }
+            }
+        }
+    }
+}
+
+/// A binary mask: one byte per pixel, 0 outside and 255 inside (imageproc's convention).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Mask {
+    width: u32,
+    height: u32,
+    data: Vec<u8>,
+}
+
+impl Mask {
+    /// An empty (all-outside) mask.
+    pub fn new(width: u32, height: u32) -> Self {
+        Mask { width, height, data: vec![0; width as usize * height as usize] }
+    }
+
+    /// Wraps existing bytes; `None` when the length does not match. Non-zero bytes become 255.
+    pub fn from_vec(width: u32, height: u32, mut data: Vec<u8>) -> Option<Self> {
+        if data.len() != width as usize * height as usize {
+            return None;
+        }
+        data.iter_mut().for_each(|v| *v = if *v == 0 { 0 } else { 255 });
+        Some(Mask { width, height, data })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// One byte per pixel, row-major.
+    pub fn data(&self) -> &[u8] {
+        &self.data
+    }
+
+    /// Whether pixel `(x, y)` is inside.
+    pub fn get(&self, x: u32, y: u32) -> bool {
+        self.data[y as usize * self.width as usize + x as usize] != 0
+    }
+}
+
+/// One closed polygon traced from a mask.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Contour {
+    /// Vertices in pixel coordinates (x right, y down), in border-following order.
+    pub points: Vec<[f32; 2]>,
+    /// Nesting depth: 0 for outermost borders, 1 for the holes in them, 2 for islands in holes, …
+    pub depth: u32,
+    /// Index of the enclosing contour in the same list, if any.
+    pub parent: Option<usize>,
+    /// Enclosed area in square pixels (shoelace formula, always positive).
+    pub area: f64,
+}
+
+impl Contour {
+    /// Whether this contour bounds a hole (odd depth).
+    pub fn is_hole(&self) -> bool {
+        self.depth % 2 == 1
+    }
+}
+
+/// The contours of one mask, with the size of the image they were traced in.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Contours {
+    /// Width of the source image.
+    pub width: u32,
+    /// Height of the source image.
+    pub height: u32,
+    /// Contours, parents before their children.
+    pub contours: Vec<Contour>,
+}
+
+/// Produces the frames of a [`Clip`] on demand.
+pub trait FrameSource: Send + Sync {
+    /// Number of frames.
+    fn len(&self) -> usize;
+    /// Whether the clip has no frames.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Computes frame `index` (`index < len()`); results are cached by the clip.
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError>;
+}
+
+/// Default cap on the bytes one clip keeps cached; older frames are recomputed when evicted.
+pub const FRAME_CACHE_BUDGET: usize = 512 << 20;
+
+/// A bounded first-in-first-out cache of computed frames.
+struct FrameCache {
+    inner: Mutex<CacheInner>,
+}
+
+#[derive(Default)]
+struct CacheInner {
+    frames: HashMap<usize, Value>,
+    order: VecDeque<usize>,
+    bytes: usize,
+}
+
+impl FrameCache {
+    fn new() -> Self {
+        FrameCache { inner: Mutex::new(CacheInner::default()) }
+    }
+
+    fn get(&self, index: usize) -> Option<Value> {
+        self.inner.lock().ok()?.frames.get(&index).cloned()
+    }
+
+    fn put(&self, index: usize, value: &Value) {
+        let Ok(mut inner) = self.inner.lock() else { return };
+        if inner.frames.contains_key(&index) {
+            return;
+        }
+        inner.bytes += value.byte_size();
+        inner.frames.insert(index, value.clone());
+        inner.order.push_back(index);
+        while inner.bytes > FRAME_CACHE_BUDGET && inner.order.len() > 1 {
+            let Some(old) = inner.order.pop_front() else { break };
+            if let Some(v) = inner.frames.remove(&old) {
+                inner.bytes -= v.byte_size();
+            }
+        }
+    }
+}
+
+/// A lazy, random-access sequence of per-frame values; each frame is computed on demand and cached.
+#[derive(Clone)]
+pub struct Clip {
+    element: PortType,
+    fps: f64,
+    fingerprint: u64,
+    source: Arc<dyn FrameSource>,
+    cache: Arc<FrameCache>,
+}
+
+impl fmt::Debug for Clip {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Clip<{}>({} frames @ {} fps)", self.element, self.len(), self.fps)
+    }
+}
+
+/// A clip whose frames are already in memory.
+struct VecSource(Vec<Value>);
+
+impl FrameSource for VecSource {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
+        Ok(self.0[index].clone())
+    }
+}
+
+impl Clip {
+    /// A lazy clip. `fingerprint` must change whenever the frames could.
+    pub fn new(element: PortType, fps: f64, fingerprint: u64, source: Arc<dyn FrameSource>) -> Self {
+        Clip { element, fps, fingerprint, source, cache: Arc::new(FrameCache::new()) }
+    }
+
+    /// A clip of frames already computed; its fingerprint is the hash of their content.
+    pub fn from_frames(element: PortType, fps: f64, frames: Vec<Value>) -> Self {
+        let mut h = Fingerprinter::new();
+        frames.iter().for_each(|f| h.write_u64(f.fingerprint()));
+        Clip::new(element, fps, h.finish(), Arc::new(VecSource(frames)))
+    }
+
+    /// The per-frame type.
+    pub fn element(&self) -> &PortType {
+        &self.element
+    }
+
+    /// Frames per second (metadata for writers and players).
+    pub fn fps(&self) -> f64 {
+        self.fps
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.source.len()
+    }
+
+    /// Whether there are no frames.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Identity of the clip's content.
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
+    }
+
+    /// Frame `index`, computed on first use and cached.
+    pub fn get(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        if index >= self.len() {
+            return Err(NodeError::msg(format!("frame {index} is past the end of a {}-frame clip", self.len())));
+        }
+        if let Some(v) = self.cache.get(index) {
+            return Ok(v);
+        }
+        ctx.check_cancel()?;
+        let v = self.source.frame(index, ctx)?;
+        self.cache.put(index, &v);
+        Ok(v)
+    }
+
+    /// Frame `index` as an image (the clip must be a `Clip<Image>`).
+    pub fn image(&self, index: usize, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        match self.get(index, ctx)? {
+            Value::Image(img) => Ok(img),
+            other => Err(NodeError::msg(format!("frame {index}: expected an Image, got {}", other.type_name()))),
+        }
+    }
+
+    /// All frames in `range`, computed in parallel; reports per-frame progress through `ctx`.
+    pub fn materialize_range(&self, range: std::ops::Range<usize>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        let total = range.len();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        range
+            .into_par_iter()
+            .map(|i| {
+                let v = self.get(i, ctx)?;
+                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                ctx.frame_progress(n, total);
+                Ok(v)
+            })
+            .collect()
+    }
+
+    /// Every frame, in parallel.
+    pub fn materialize(&self, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        self.materialize_range(0..self.len(), ctx)
+    }
+}
+
+/// A value on a port.
+#[derive(Clone, Debug)]
+pub enum Value {
+    /// See [`PortType::Float`].
+    Float(f64),
+    /// See [`PortType::Int`].
+    Int(i64),
+    /// See [`PortType::Bool`].
+    Bool(bool),
+    /// See [`PortType::Color`].
+    Color([f32; 4]),
+    /// See [`PortType::Vec2`].
+    Vec2([f64; 2]),
+    /// See [`PortType::Vec3`].
+    Vec3([f64; 3]),
+    /// See [`PortType::String`].
+    String(String),
+    /// See [`PortType::Path`].
+    Path(PathBuf),
+    /// See [`PortType::Enum`]: the chosen option's name.
+    Enum(String),
+    /// See [`PortType::Image`].
+    Image(Arc<Image>),
+    /// See [`PortType::Mask`].
+    Mask(Arc<Mask>),
+    /// See [`PortType::Contours`].
+    Contours(Arc<Contours>),
+    /// See [`PortType::Clip`].
+    Clip(Clip),
+}
+
+impl Value {
+    /// The type of this value.
+    pub fn port_type(&self) -> PortType {
+        match self {
+            Value::Float(_) => PortType::Float,
+            Value::Int(_) => PortType::Int,
+            Value::Bool(_) => PortType::Bool,
+            Value::Color(_) => PortType::Color,
+            Value::Vec2(_) => PortType::Vec2,
+            Value::Vec3(_) => PortType::Vec3,
+            Value::String(_) => PortType::String,
+            Value::Path(_) => PortType::Path,
+            Value::Enum(_) => PortType::Enum,
+            Value::Image(_) => PortType::Image,
+            Value::Mask(_) => PortType::Mask,
+            Value::Contours(_) => PortType::Contours,
+            Value::Clip(c) => PortType::clip_of(c.element().clone()),
+        }
+    }
+
+    /// Short name of the value's type for messages.
+    pub fn type_name(&self) -> String {
+        self.port_type().to_string()
+    }
+
+    /// A content hash: equal values hash equal, so unchanged outputs stop re-cooking downstream.
+    pub fn fingerprint(&self) -> u64 {
+        let mut h = Fingerprinter::new();
+        self.hash_into(&mut h);
+        h.finish()
+    }
+
+    /// Feeds the value's content into a hasher.
+    pub fn hash_into(&self, h: &mut Fingerprinter) {
+        std::mem::discriminant(self).hash(h);
+        match self {
+            Value::Float(v) => v.to_bits().hash(h),
+            Value::Int(v) => v.hash(h),
+            Value::Bool(v) => v.hash(h),
+            Value::Color(c) => c.iter().for_each(|v| v.to_bits().hash(h)),
+            Value::Vec2(c) => c.iter().for_each(|v| v.to_bits().hash(h)),
+            Value::Vec3(c) => c.iter().for_each(|v| v.to_bits().hash(h)),
+            Value::String(s) | Value::Enum(s) => s.hash(h),
+            Value::Path(p) => p.hash(h),
+            Value::Image(img) => {
+                (img.width, img.height, img.channels).hash(h);
+                hash_f32s(h, &img.data);
+            }
+            Value::Mask(m) => {
+                (m.width, m.height).hash(h);
+                h.write(&m.data);
+            }
+            Value::Contours(c) => {
+                (c.width, c.height, c.contours.len()).hash(h);
+                for k in &c.contours {
+                    (k.depth, k.parent, k.area.to_bits(), k.points.len()).hash(h);
+                    k.points.iter().for_each(|p| (p[0].to_bits(), p[1].to_bits()).hash(h));
+                }
+            }
+            Value::Clip(c) => c.fingerprint.hash(h),
+        }
+    }
+
+    /// Approximate memory held by the value.
+    pub fn byte_size(&self) -> usize {
+        match self {
+            Value::Image(img) => img.byte_size(),
+            Value::Mask(m) => m.data.len(),
+            Value::Contours(c) => c.contours.iter().map(|k| k.points.len() * 8 + 48).sum(),
+            Value::String(s) | Value::Enum(s) => s.len(),
+            _ => std::mem::size_of::<Value>(),
+        }
+    }
+
+    /// A one-line human description (`Image 480×480 Rgba`, `Clip<Image> 150 frames`, `0.5`).
+    pub fn summary(&self) -> String {
+        match self {
+            Value::Float(v) => format!("{v}"),
+            Value::Int(v) => format!("{v}"),
+            Value::Bool(v) => format!("{v}"),
+            Value::Color(c) => format!("({}, {}, {}, {})", c[0], c[1], c[2], c[3]),
+            Value::Vec2(c) => format!("({}, {})", c[0], c[1]),
+            Value::Vec3(c) => format!("({}, {}, {})", c[0], c[1], c[2]),
+            Value::String(s) | Value::Enum(s) => s.clone(),
+            Value::Path(p) => p.display().to_string(),
+            Value::Image(img) => format!("Image {}x{} {:?}", img.width, img.height, img.channels),
+            Value::Mask(m) => format!("Mask {}x{}", m.width, m.height),
+            Value::Contours(c) => format!("Contours {} in {}x{}", c.contours.len(), c.width, c.height),
+            Value::Clip(c) => format!("Clip<{}> {} frames @ {} fps", c.element(), c.len(), c.fps()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clip_type_displays_its_element() {
+        assert_eq!(PortType::clip_of(PortType::Image).to_string(), "Clip<Image>");
+        assert_eq!(PortType::Float.to_string(), "Float");
+    }
+
+    #[test]
+    fn gray_to_rgba_replicates_with_opaque_alpha() {
+        let img = Image::gray_from_fn(2, 1, |x, _| x as f32 * 0.5);
+        let rgba = img.to_rgba();
+        assert_eq!(rgba.data(), &[0.0, 0.0, 0.0, 1.0, 0.5, 0.5, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn equal_images_share_a_fingerprint_and_different_ones_do_not() {
+        let a = Value::Image(Arc::new(Image::gray_from_fn(3, 3, |x, y| (x + y) as f32)));
+        let b = Value::Image(Arc::new(Image::gray_from_fn(3, 3, |x, y| (x + y) as f32)));
+        let c = Value::Image(Arc::new(Image::gray_from_fn(3, 3, |x, y| (x * y) as f32)));
+        assert_eq!(a.fingerprint(), b.fingerprint());
+        assert_ne!(a.fingerprint(), c.fingerprint());
+    }
+
+    #[test]
+    fn mask_from_vec_normalises_to_255_and_checks_length() {
+        let m = Mask::from_vec(2, 1, vec![0, 7]).unwrap();
+        assert_eq!(m.data(), &[0, 255]);
+        assert!(Mask::from_vec(2, 2, vec![0]).is_none());
+    }
+
+    #[test]
+    fn clip_rejects_out_of_range_frames_and_materializes_in_order() {
+        let frames = (0..5).map(|i| Value::Int(i)).collect();
+        let clip = Clip::from_frames(PortType::Int, 24.0, frames);
+        let ctx = CookCtx::default();
+        assert!(clip.get(5, &ctx).is_err());
+        let all = clip.materialize(&ctx).unwrap();
+        let ints: Vec<i64> = all.iter().map(|v| if let Value::Int(i) = v { *i } else { -1 }).collect();
+        assert_eq!(ints, vec![0, 1, 2, 3, 4]);
+    }
+}

@@ -1,1 +1,20 @@
+//! pyrograph: a node-graph toolkit for procedural fire.
+//!
+//! This facade gathers every node family into one [`registry`], and holds what the CLI, the
+//! examples and the benches share: the embedded demo graph, the node reference generator and the
+//! evaluator benchmark graphs.
+#![deny(missing_docs)]
 
+pub mod bench;
+pub mod demo;
+pub mod reference;
+
+pub use pyrograph_core as core;
+pub use pyrograph_nodes_imaging as imaging;
+
+/// A registry with every node type pyrograph ships.
+pub fn registry() -> core::Registry {
+    let mut r = core::Registry::with_builtins();
+    imaging::register(&mut r);
+    r
+}

@@ -1,1 +1,492 @@
-fn main() {}
+//! `pyrograph`: cook node graphs headlessly (CI, render farms), check them, list nodes and presets.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::{Arc, Mutex};
+
+use clap::{Parser, Subcommand};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use serde_json::json;
+
+use pyrograph::core::{
+    BuildOptions, CookCtx, CookResult, CookSettings, Diagnostic, Diagnostics, Evaluator, Graph, GraphDoc, NodeError, ParamValue,
+    Progress, Registry, TimeDep,
+};
+
+#[derive(Parser)]
+#[command(name = "pyrograph", version, about = "Node-graph toolkit for procedural fire. With no command, cooks the built-in demo graph.")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Cook a graph: every writer node (or the nodes given with --node).
+    Render {
+        /// The graph file (RON).
+        graph: PathBuf,
+        /// Inclusive frame range to write, e.g. 0-99 or 12.
+        #[arg(long, value_parser = parse_frames)]
+        frames: Option<(usize, usize)>,
+        /// Folder that relative output paths resolve against (default: the graph file's folder).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a parameter: node.param=value (value in RON: 0.5, "text", (1, 0, 0)).
+        #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
+        set: Vec<String>,
+        /// Cook only these nodes (and what they need).
+        #[arg(long = "node", value_name = "ID")]
+        nodes: Vec<String>,
+        /// Replace existing output files.
+        #[arg(long)]
+        overwrite: bool,
+        /// Print a JSON report instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Validate a graph and probe its sources (files exist and decode) without rendering.
+    Check {
+        /// The graph file (RON).
+        graph: PathBuf,
+        /// Print a JSON report instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The node reference.
+    Nodes {
+        /// As Markdown (what docs/nodes.md holds).
+        #[arg(long, conflicts_with = "json")]
+        markdown: bool,
+        /// As JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Nodes, edges, types and interface of a graph.
+    Info {
+        /// The graph file (RON).
+        graph: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// List the preset graphs of a folder with their exposed ports.
+    Presets {
+        /// Folder of presets.
+        #[arg(long, default_value = "graphs/presets")]
+        dir: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Time the evaluator: cold, warm and one-parameter re-cook of 200-node chains and fans.
+    Bench {
+        /// Iterations per measurement.
+        #[arg(long, default_value_t = 200)]
+        iters: usize,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Cook the built-in demo graph (what `pyrograph` alone does).
+    Demo {
+        /// Output folder.
+        #[arg(long, default_value = pyrograph::demo::DEMO_OUT)]
+        out: PathBuf,
+    },
+}
+
+fn parse_frames(s: &str) -> Result<(usize, usize), String> {
+    let parse = |t: &str| t.trim().parse::<usize>().map_err(|_| format!("'{t}' is not a frame number"));
+    let (a, b) = match s.split_once('-') {
+        Some((a, b)) => (parse(a)?, parse(b)?),
+        None => (parse(s)?, parse(s)?),
+    };
+    if a > b {
+        return Err(format!("frame range {a}-{b} is empty: the first frame is after the last"));
+    }
+    Ok((a, b))
+}
+
+/// A failure that ends the command with exit code 1 after printing its message.
+struct Failure(String);
+
+impl From<Diagnostics> for Failure {
+    fn from(d: Diagnostics) -> Self {
+        Failure(d.to_string())
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let registry = pyrograph::registry();
+    let result = match cli.command {
+        None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
+        Some(Command::Demo { out }) => demo(&registry, &out),
+        Some(Command::Render { graph, frames, out, set, nodes, overwrite, json }) => {
+            let opts = RenderOpts { frames, out, set, nodes, overwrite, json };
+            render(&registry, &graph, &opts)
+        }
+        Some(Command::Check { graph, json }) => check(&registry, &graph, json),
+        Some(Command::Nodes { markdown, json }) => {
+            nodes(&registry, markdown, json);
+            Ok(())
+        }
+        Some(Command::Info { graph, json }) => info(&registry, &graph, json),
+        Some(Command::Presets { dir, json }) => presets(&registry, &dir, json),
+        Some(Command::Bench { iters, json }) => {
+            bench(&registry, iters, json);
+            Ok(())
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure(msg)) => {
+            if !msg.is_empty() {
+                eprintln!("{msg}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+struct RenderOpts {
+    frames: Option<(usize, usize)>,
+    out: Option<PathBuf>,
+    set: Vec<String>,
+    nodes: Vec<String>,
+    overwrite: bool,
+    json: bool,
+}
+
+fn apply_sets(doc: &mut GraphDoc, sets: &[String]) -> Result<(), Failure> {
+    for s in sets {
+        let (lhs, value) = s.split_once('=').ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
+        let (node, param) =
+            pyrograph::core::document::split_endpoint(lhs).ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
+        doc.set_param(node, param, ParamValue::parse_cli(value)).map_err(|e| Failure(format!("error: --set {s}: {e}")))?;
+    }
+    Ok(())
+}
+
+fn load(registry: &Registry, path: &Path, sets: &[String], options: &BuildOptions) -> Result<(GraphDoc, Graph), Failure> {
+    let mut doc = GraphDoc::load(path)?;
+    apply_sets(&mut doc, sets)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut graph = Graph::build(&doc, registry, &dir, options).map_err(|d| Failure::from(d.in_file(path)))?;
+    graph.file = Some(path.to_path_buf());
+    Ok((doc, graph))
+}
+
+/// Progress bars per node, drawn on stderr (hidden when it is not a terminal).
+fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
+    if !enabled {
+        return None;
+    }
+    let multi = MultiProgress::new();
+    let bars: Mutex<HashMap<Arc<str>, ProgressBar>> = Mutex::new(HashMap::new());
+    let style = ProgressStyle::with_template("{prefix:>16} [{bar:32}] {pos}/{len} frames {per_sec} eta {eta}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    Some(Arc::new(move |p: &Progress| {
+        let Progress::Frame { node, done, total } = p else { return };
+        let Ok(mut bars) = bars.lock() else { return };
+        let bar = bars.entry(node.clone()).or_insert_with(|| {
+            let b = multi.add(ProgressBar::new(*total as u64));
+            b.set_style(style.clone());
+            b.set_prefix(node.to_string());
+            b
+        });
+        bar.set_position((*done as u64).max(bar.position()));
+        if done == total {
+            bar.finish();
+        }
+    }))
+}
+
+fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failure> {
+    let options = BuildOptions { output_dir: o.out.clone() };
+    let (_, graph) = load(registry, path, &o.set, &options)?;
+    let targets: Vec<String> = if o.nodes.is_empty() {
+        let sinks = graph.sinks();
+        if sinks.is_empty() { graph.leaves() } else { sinks }.iter().map(|s| s.to_string()).collect()
+    } else {
+        o.nodes.clone()
+    };
+    let target_refs: Vec<&str> = targets.iter().map(String::as_str).collect();
+    let mut ctx = CookCtx::new().with_settings(CookSettings { frames: o.frames, overwrite: o.overwrite });
+    if let Some(p) = progress_bars(!o.json) {
+        ctx = ctx.with_progress(p);
+    }
+    let started = std::time::Instant::now();
+    let result = Evaluator::new().cook(&graph, &target_refs, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
+    report(&graph, &targets, &result, started.elapsed(), o.json)
+}
+
+fn report(graph: &Graph, targets: &[String], result: &CookResult, elapsed: std::time::Duration, json: bool) -> Result<(), Failure> {
+    let errors = result.root_errors();
+    if json {
+        let nodes: serde_json::Map<String, serde_json::Value> = targets
+            .iter()
+            .map(|t| {
+                let v = match result.node(t) {
+                    Some(Ok(values)) => json!({"ok": true, "outputs": output_map(graph, t, values)}),
+                    Some(Err(e)) => json!({"ok": false, "error": e.to_string()}),
+                    None => json!({"ok": false, "error": "not cooked"}),
+                };
+                (t.clone(), v)
+            })
+            .collect();
+        let errs: Vec<_> = errors.iter().map(|(n, e)| json!({"node": n, "error": e.to_string()})).collect();
+        println!("{}", json!({"ok": errors.is_empty(), "seconds": elapsed.as_secs_f64(), "targets": nodes, "errors": errs}));
+    } else {
+        for t in targets {
+            if let Some(Ok(values)) = result.node(t) {
+                println!("{t}: {}", describe_outputs(graph, t, values));
+            }
+        }
+        for (node, e) in &errors {
+            eprintln!("error: {}", explain(node, e));
+        }
+        if errors.is_empty() {
+            println!("cooked in {:.2} s", elapsed.as_secs_f64());
+        }
+    }
+    if errors.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
+}
+
+fn explain(node: &str, e: &NodeError) -> String {
+    match e {
+        NodeError::InNode { .. } => e.to_string(),
+        other => format!("node '{node}': {other}"),
+    }
+}
+
+fn output_map(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> serde_json::Value {
+    let Some(idx) = graph.index(id) else { return json!({}) };
+    let desc = graph.node(idx).node.desc();
+    desc.outputs.iter().zip(values).map(|(p, v)| (p.name.clone(), json!(v.summary()))).collect::<serde_json::Map<_, _>>().into()
+}
+
+fn describe_outputs(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> String {
+    let Some(idx) = graph.index(id) else { return String::new() };
+    let desc = graph.node(idx).node.desc();
+    desc.outputs.iter().zip(values).map(|(p, v)| format!("{} = {}", p.name, v.summary())).collect::<Vec<_>>().join(", ")
+}
+
+fn demo(registry: &Registry, out: &Path) -> Result<(), Failure> {
+    let doc = GraphDoc::from_ron(pyrograph::demo::DEMO_RON)?;
+    let options = BuildOptions { output_dir: Some(out.to_path_buf()) };
+    let graph = Graph::build(&doc, registry, Path::new("."), &options)?;
+    let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
+    let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
+    let mut ctx = CookCtx::new();
+    if let Some(p) = progress_bars(true) {
+        ctx = ctx.with_progress(p);
+    }
+    let started = std::time::Instant::now();
+    let result = Evaluator::new().cook(&graph, &targets, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
+    let errors = result.root_errors();
+    if !errors.is_empty() {
+        let msgs: Vec<String> = errors.iter().map(|(n, e)| format!("error: {}", explain(n, e))).collect();
+        return Err(Failure(msgs.join("\n")));
+    }
+    let abs = std::fs::canonicalize(out).unwrap_or_else(|_| out.to_path_buf());
+    for s in &sinks {
+        let frames = result.output(&graph, s, "frames").map(|v| v.summary()).unwrap_or_default();
+        let first = result.output(&graph, s, "first").map(|v| v.summary()).unwrap_or_default();
+        println!("demo: {s} wrote {frames} frames, first {first}");
+    }
+    println!("demo frames are in {} (cooked in {:.2} s)", abs.display(), started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn diag_json(d: &Diagnostic) -> serde_json::Value {
+    json!({
+        "file": d.file.as_ref().map(|f| f.display().to_string()),
+        "location": d.location.to_string(),
+        "kind": format!("{:?}", d.kind),
+        "message": d.message,
+    })
+}
+
+fn check(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure> {
+    let built = load_checked(registry, path);
+    let (graph, problems) = match built {
+        Ok(g) => {
+            let errs = probe_sources(&g);
+            (Some(g), errs)
+        }
+        Err(d) => (None, d.0.iter().map(|d| (diag_json(d), format!("error: {d}"))).collect()),
+    };
+    if json_out {
+        let list: Vec<_> = problems.iter().map(|p| p.0.clone()).collect();
+        let counts = graph.as_ref().map(|g| json!({"nodes": g.node_count(), "edges": g.edge_count()}));
+        println!("{}", json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list}));
+    } else if let (Some(g), true) = (&graph, problems.is_empty()) {
+        println!("ok: {}: {} nodes, {} edges", path.display(), g.node_count(), g.edge_count());
+    } else {
+        for p in &problems {
+            eprintln!("{}", p.1);
+        }
+        eprintln!("{}: {} problem(s)", path.display(), problems.len());
+    }
+    if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
+}
+
+fn load_checked(registry: &Registry, path: &Path) -> Result<Graph, Diagnostics> {
+    Graph::load(path, registry, &BuildOptions::default()).map(|(_, g)| g)
+}
+
+/// Cooks the source nodes (loaders), which open and probe their files, so `check` reports a
+/// missing or corrupt input without rendering anything.
+fn probe_sources(graph: &Graph) -> Vec<(serde_json::Value, String)> {
+    let sources: Vec<String> = graph
+        .topo_order()
+        .iter()
+        .map(|i| graph.node(*i))
+        .filter(|n| n.node.desc().time == TimeDep::Source)
+        .map(|n| n.id.to_string())
+        .collect();
+    let refs: Vec<&str> = sources.iter().map(String::as_str).collect();
+    let file = graph.file.as_ref().map(|f| f.display().to_string());
+    match Evaluator::new().cook(graph, &refs, &CookCtx::new()) {
+        Ok(res) => res
+            .root_errors()
+            .into_iter()
+            .map(|(n, e)| {
+                let msg = explain(n, e);
+                (json!({"file": file, "location": format!("node '{n}'"), "kind": "Cook", "message": msg}), format!("error: {msg}"))
+            })
+            .collect(),
+        Err(e) => vec![(json!({"file": file, "kind": "Cook", "message": e.to_string()}), format!("error: {e}"))],
+    }
+}
+
+fn nodes(registry: &Registry, markdown: bool, json_out: bool) {
+    if markdown {
+        print!("{}", pyrograph::reference::markdown(registry));
+    } else if json_out {
+        let list: Vec<_> = registry
+            .descs()
+            .map(|d| {
+                let port = |p: &pyrograph::core::PortDesc| {
+                    json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary()),
+                           "range": p.range, "options": p.options, "doc": p.doc})
+                };
+                json!({"type": d.type_name, "category": d.category, "time": d.time.name(), "doc": d.doc,
+                       "inputs": d.inputs.iter().map(port).collect::<Vec<_>>(),
+                       "outputs": d.outputs.iter().map(port).collect::<Vec<_>>()})
+            })
+            .collect();
+        println!("{}", serde_json::Value::Array(list));
+    } else {
+        for d in registry.descs() {
+            println!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());
+        }
+    }
+}
+
+fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure> {
+    let (doc, graph) = Graph::load(path, registry, &BuildOptions::default())?;
+    let rows: Vec<_> = graph
+        .topo_order()
+        .iter()
+        .map(|i| {
+            let n = graph.node(*i);
+            let outs: Vec<String> =
+                n.node.desc().outputs.iter().zip(&n.out_types).map(|(p, t)| format!("{}: {t}", p.name)).collect();
+            (n.id.to_string(), n.node.desc().type_name.clone(), n.lifted, outs)
+        })
+        .collect();
+    if json_out {
+        let nodes: Vec<_> =
+            rows.iter().map(|(id, ty, lifted, outs)| json!({"id": id, "type": ty, "lifted": lifted, "outputs": outs})).collect();
+        println!(
+            "{}",
+            json!({"file": path.display().to_string(), "description": doc.description, "nodes": nodes,
+                   "edges": doc.edges, "interface": doc.interface.as_ref().map(|i| json!({"inputs": i.inputs, "outputs": i.outputs, "params": i.params})),
+                   "sinks": graph.sinks().iter().map(|s| s.to_string()).collect::<Vec<_>>()})
+        );
+        return Ok(());
+    }
+    println!("{}: {} nodes, {} edges", path.display(), graph.node_count(), graph.edge_count());
+    if let Some(d) = &doc.description {
+        println!("  {d}");
+    }
+    for (id, ty, lifted, outs) in rows {
+        println!("  {id:<16} {ty:<30} {}{}", outs.join(", "), if lifted { "  (per frame over a clip)" } else { "" });
+    }
+    for (a, b) in &doc.edges {
+        println!("  {a} -> {b}");
+    }
+    Ok(())
+}
+
+fn presets(registry: &Registry, dir: &Path, json_out: bool) -> Result<(), Failure> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Failure(format!("error: cannot read preset folder {}: {e}", dir.display())))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    files.sort();
+    let mut list = Vec::new();
+    let mut failed = false;
+    for f in files {
+        match preset_entry(registry, &f) {
+            Ok(entry) => list.push(entry),
+            Err(e) => {
+                failed = true;
+                eprintln!("{e}");
+            }
+        }
+    }
+    if json_out {
+        println!("{}", serde_json::Value::Array(list));
+    } else {
+        for p in &list {
+            println!("{}  {}", p["file"].as_str().unwrap_or(""), p["description"].as_str().unwrap_or(""));
+            for kind in ["inputs", "params", "outputs"] {
+                for port in p[kind].as_array().into_iter().flatten() {
+                    println!("    {kind:<8} {:<18} {:<14} {}", port["name"].as_str().unwrap_or(""), port["type"].as_str().unwrap_or(""), port["default"].as_str().unwrap_or(""));
+                }
+            }
+        }
+    }
+    if failed { Err(Failure(String::new())) } else { Ok(()) }
+}
+
+/// A preset's exposed ports, read by including it the way a graph would.
+fn preset_entry(registry: &Registry, file: &Path) -> Result<serde_json::Value, String> {
+    let desc = pyrograph::core::include::preset_desc(file, registry).map_err(|d| d.to_string())?;
+    let iface = GraphDoc::load(file).ok().and_then(|d| d.interface).unwrap_or_default();
+    let port = |p: &pyrograph::core::PortDesc| json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary())});
+    let inputs: Vec<_> = desc.inputs.iter().filter(|p| iface.inputs.contains_key(&p.name)).map(port).collect();
+    let params: Vec<_> = desc.inputs.iter().filter(|p| iface.params.contains_key(&p.name)).map(port).collect();
+    let outputs: Vec<_> = desc.outputs.iter().map(port).collect();
+    Ok(json!({"file": file.display().to_string(), "description": desc.summary(), "inputs": inputs, "params": params, "outputs": outputs}))
+}
+
+fn bench(registry: &Registry, iters: usize, json_out: bool) {
+    use pyrograph::bench::{Shape, Workload, time};
+    let mut rows = Vec::new();
+    for shape in [Shape::Chain, Shape::Fan] {
+        for workload in [Workload::Cold, Workload::Warm, Workload::Recook] {
+            let (median, min, cooked) = time(registry, shape, 200, workload, iters);
+            rows.push((format!("{shape:?}").to_lowercase(), format!("{workload:?}").to_lowercase(), median, min, cooked));
+        }
+    }
+    if json_out {
+        let list: Vec<_> = rows
+            .iter()
+            .map(|(s, w, med, min, c)| json!({"graph": s, "nodes": 200, "workload": w, "median_s": med.as_secs_f64(), "min_s": min.as_secs_f64(), "cooked_nodes": c, "iters": iters}))
+            .collect();
+        println!("{}", serde_json::Value::Array(list));
+        return;
+    }
+    println!("{:<8} {:<8} {:>12} {:>12} {:>8}", "graph", "workload", "median", "min", "cooked");
+    for (s, w, med, min, c) in rows {
+        println!("{s:<8} {w:<8} {:>9.1} µs {:>9.1} µs {c:>8}", med.as_secs_f64() * 1e6, min.as_secs_f64() * 1e6);
+    }
+}

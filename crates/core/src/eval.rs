@@ -152,6 +152,9 @@ struct CacheEntry {
 /// The outcome of one node in a cook.
 pub type NodeResult = Result<Arc<[Value]>, NodeError>;
 
+/// Results of the nodes cooked so far in one cook, with their output fingerprints.
+type Done = HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)>;
+
 /// Results of a cook, per node of the cooked cone.
 #[derive(Default)]
 pub struct CookResult {
@@ -228,7 +231,7 @@ impl Evaluator {
             roots.push(graph.index(t).ok_or_else(|| NodeError::msg(format!("no node '{t}' in the graph")))?);
         }
         let levels = levels_of_cone(graph, &roots);
-        let mut results: HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)> = HashMap::new();
+        let mut results: Done = HashMap::new();
         for level in levels {
             let outcomes: Vec<(NodeIndex, Outcome)> = if level.len() == 1 {
                 vec![(level[0], self.cook_node(graph, level[0], &results, ctx))]
@@ -266,7 +269,7 @@ impl Evaluator {
         &self,
         graph: &Graph,
         idx: NodeIndex,
-        done: &HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)>,
+        done: &Done,
         ctx: &CookCtx,
     ) -> Outcome {
         let gn = graph.node(idx);
@@ -323,7 +326,7 @@ fn check_outputs(gn: &GraphNode, out: Vec<Value>) -> Result<Vec<Value>, NodeErro
 fn gather_inputs(
     graph: &Graph,
     gn: &GraphNode,
-    done: &HashMap<NodeIndex, (NodeResult, Option<Arc<[u64]>>)>,
+    done: &Done,
 ) -> Result<(Vec<Value>, u64), NodeError> {
     let mut h = Fingerprinter::new();
     gn.node.desc().type_name.hash(&mut h);

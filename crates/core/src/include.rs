@@ -77,6 +77,17 @@ pub(crate) fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Arc<d
     Ok(Arc::new(IncludeNode { desc, sub: Arc::new(sub), doc_hash, eval: Mutex::new(Evaluator::new()) }))
 }
 
+/// The node description a graph file would have when included (its exposed ports), for preset
+/// listings; problems in the file come back as diagnostics.
+pub fn preset_desc(path: &Path, registry: &crate::Registry) -> Result<NodeDesc, crate::Diagnostics> {
+    let options = graph::BuildOptions::default();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let ctx = LoadCtx { registry, dir, options: &options, include_stack: Vec::new() };
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let nd = NodeDoc::new(INCLUDE_TYPE).param("path", ParamValue::String(name));
+    instantiate("preset", &nd, &ctx).map(|n| n.desc().clone()).map_err(|d| crate::Diagnostics(d).in_file(path))
+}
+
 fn short(p: &Path) -> String {
     p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
 }

@@ -208,7 +208,8 @@ pub struct FnNode {
 }
 
 impl FnNode {
-    /// Pairs a description with its cook function.
+    /// Pairs a description with its cook function, ready for [`crate::Registry::add`].
+    #[allow(clippy::new_ret_no_self)]
     pub fn new(desc: NodeDesc, cook: CookFn) -> Arc<dyn Node> {
         Arc::new(FnNode { desc, cook })
     }

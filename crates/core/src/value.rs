@@ -385,7 +385,10 @@ impl Clip {
             return Ok(v);
         }
         ctx.check_cancel()?;
-        let v = self.source.frame(index, ctx)?;
+        let v = self.source.frame(index, ctx).map_err(|e| match e {
+            NodeError::Message(_) | NodeError::Port { .. } => NodeError::Frame { frame: index, source: Box::new(e) },
+            other => other,
+        })?;
         self.cache.put(index, &v);
         Ok(v)
     }

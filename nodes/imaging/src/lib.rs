@@ -6,6 +6,7 @@ pub mod basic;
 pub mod convert;
 pub mod io;
 pub mod preprocess;
+pub mod procedural;
 
 use pyrograph_core::Registry;
 
@@ -14,4 +15,5 @@ pub fn register(registry: &mut Registry) {
     io::register(registry);
     basic::register(registry);
     preprocess::register(registry);
+    procedural::register(registry);
 }

@@ -1,0 +1,262 @@
+//! Recompute-log tests of the evaluator: what re-cooks after an edit, backdating, per-node errors,
+//! lifting over clips, cancellation, and sub-graph includes.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use pyrograph_core::{
+    BuildOptions, CancelToken, Clip, CookCtx, FnNode, Graph, GraphDoc, Inputs, NodeDesc, NodeDoc, NodeError, ParamValue, PortDesc,
+    PortType, Progress, Registry, TimeDep, Value,
+};
+
+fn registry() -> Registry {
+    let mut r = Registry::with_builtins();
+    r.add(FnNode::new(
+        NodeDesc::new("test.fail", "Test", TimeDep::PerFrame, "Fails when `fail` is set.")
+            .input(PortDesc::float("a", 0.0, (-1e9, 1e9), "passed through"))
+            .input(PortDesc::bool("fail", false, "whether to fail"))
+            .output("value", PortType::Float, "a"),
+        |i: &Inputs<'_>, _: &CookCtx| {
+            if i.bool("fail")? {
+                return Err(NodeError::port("fail", "asked to fail"));
+            }
+            Ok(vec![Value::Float(i.float("a")?)])
+        },
+    ));
+    r.add(FnNode::new(
+        NodeDesc::new("test.ramp", "Test", TimeDep::Source, "A clip of floats 0, 1, 2, …")
+            .input(PortDesc::int("frames", 10, (0, 100_000), "length"))
+            .output("clip", PortType::clip_of(PortType::Float), "the ramp"),
+        |i: &Inputs<'_>, _: &CookCtx| {
+            let frames = (0..i.usize("frames")?).map(|f| Value::Float(f as f64)).collect();
+            Ok(vec![Value::Clip(Clip::from_frames(PortType::Float, 24.0, frames))])
+        },
+    ));
+    r.add(FnNode::new(
+        NodeDesc::new("test.sum", "Test", TimeDep::WholeClip, "Sums a float clip, pulling frames in parallel.")
+            .input(PortDesc::new("clip", PortType::clip_of(PortType::Float), "input"))
+            .output("value", PortType::Float, "sum"),
+        |i: &Inputs<'_>, ctx: &CookCtx| {
+            let frames = i.clip("clip")?.materialize(ctx)?;
+            let sum = frames.iter().map(|v| if let Value::Float(f) = v { *f } else { 0.0 }).sum();
+            Ok(vec![Value::Float(sum)])
+        },
+    ));
+    r.add(FnNode::new(
+        NodeDesc::new("test.slow", "Test", TimeDep::PerFrame, "Sleeps 5 ms, then passes `a` through.")
+            .input(PortDesc::float("a", 0.0, (-1e9, 1e9), "passed through"))
+            .output("value", PortType::Float, "a"),
+        |i: &Inputs<'_>, _: &CookCtx| {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            Ok(vec![Value::Float(i.float("a")?)])
+        },
+    ));
+    r
+}
+
+fn f(v: f64) -> ParamValue {
+    ParamValue::Float(v)
+}
+
+fn build(doc: &GraphDoc) -> Graph {
+    Graph::build(doc, &registry(), std::path::Path::new("."), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"))
+}
+
+fn float(v: &Value) -> f64 {
+    match v {
+        Value::Float(x) => *x,
+        other => panic!("expected Float, got {other:?}"),
+    }
+}
+
+/// x → add → mul, and an independent y → add2.
+fn two_branches() -> GraphDoc {
+    let mut doc = GraphDoc::new();
+    doc.add_node("x", NodeDoc::new("value.float").param("value", f(1.0)));
+    doc.add_node("add", NodeDoc::new("math.add").param("b", f(2.0)));
+    doc.add_node("mul", NodeDoc::new("math.multiply").param("b", f(10.0)));
+    doc.add_node("y", NodeDoc::new("value.float").param("value", f(5.0)));
+    doc.add_node("add2", NodeDoc::new("math.add").param("b", f(1.0)));
+    doc.connect("x.value", "add.a").connect("add.value", "mul.a").connect("y.value", "add2.a");
+    doc
+}
+
+#[test]
+fn cold_cook_cooks_the_cone_once() {
+    let g = build(&two_branches());
+    let mut ev = pyrograph_core::Evaluator::new();
+    let out = ev.output(&g, "mul.value", &CookCtx::new()).unwrap();
+    assert_eq!(float(&out), 30.0);
+    let mut log = ev.take_log();
+    log.sort();
+    assert_eq!(log, ["add", "mul", "x"], "only the upstream cone of 'mul' cooks");
+}
+
+#[test]
+fn warm_cook_serves_everything_from_the_cache() {
+    let g = build(&two_branches());
+    let mut ev = pyrograph_core::Evaluator::new();
+    ev.cook(&g, &["mul", "add2"], &CookCtx::new()).unwrap();
+    ev.take_log();
+    let res = ev.cook(&g, &["mul", "add2"], &CookCtx::new()).unwrap();
+    assert!(res.is_ok());
+    assert!(ev.take_log().is_empty());
+}
+
+#[test]
+fn one_parameter_change_recooks_that_node_and_its_downstream_only() {
+    let mut doc = two_branches();
+    let mut ev = pyrograph_core::Evaluator::new();
+    ev.cook(&build(&doc), &["mul", "add2"], &CookCtx::new()).unwrap();
+    ev.take_log();
+
+    doc.set_param("add", "b", f(3.0)).unwrap();
+    let g = build(&doc);
+    let res = ev.cook(&g, &["mul", "add2"], &CookCtx::new()).unwrap();
+    assert_eq!(ev.take_log(), ["add", "mul"]);
+    assert_eq!(float(&res.output(&g, "mul", "value").unwrap()), 40.0);
+}
+
+#[test]
+fn an_unchanged_output_stops_propagation() {
+    let mut doc = two_branches();
+    doc.set_param("x", "value", f(1.0)).unwrap();
+    doc.set_param("add", "b", f(2.0)).unwrap();
+    let mut ev = pyrograph_core::Evaluator::new();
+    ev.cook(&build(&doc), &["mul"], &CookCtx::new()).unwrap();
+    ev.take_log();
+
+    // 2 + 1 == 1 + 2: 'x' and 'add' re-cook, 'mul' sees the same input and stays cached.
+    doc.set_param("x", "value", f(2.0)).unwrap();
+    doc.set_param("add", "b", f(1.0)).unwrap();
+    ev.cook(&build(&doc), &["mul"], &CookCtx::new()).unwrap();
+    assert_eq!(ev.take_log(), ["x", "add"]);
+}
+
+#[test]
+fn a_failing_node_marks_its_downstream_and_other_branches_still_cook() {
+    let mut doc = two_branches();
+    doc.add_node("bad", NodeDoc::new("test.fail").param("fail", ParamValue::Bool(true)));
+    doc.add_node("after", NodeDoc::new("math.add"));
+    doc.connect("add.value", "bad.a").connect("bad.value", "after.a");
+    let g = build(&doc);
+    let mut ev = pyrograph_core::Evaluator::new();
+    let res = ev.cook(&g, &["after", "add2"], &CookCtx::new()).unwrap();
+    assert_eq!(float(&res.output(&g, "add2", "value").unwrap()), 6.0);
+    let bad = res.node("bad").unwrap().as_ref().unwrap_err().to_string();
+    assert_eq!(bad, "node 'bad' (test.fail): port 'fail': asked to fail");
+    let after = res.node("after").unwrap().as_ref().unwrap_err();
+    assert_eq!(after, &NodeError::Upstream("bad".into()));
+    assert_eq!(res.root_errors().len(), 1);
+}
+
+#[test]
+fn a_clip_into_a_per_frame_input_lifts_the_node() {
+    let mut doc = GraphDoc::new();
+    doc.add_node("ramp", NodeDoc::new("test.ramp").param("frames", ParamValue::Int(4)));
+    doc.add_node("add", NodeDoc::new("math.add").param("b", f(0.5)));
+    doc.add_node("sum", NodeDoc::new("test.sum"));
+    doc.connect("ramp.clip", "add.a").connect("add.value", "sum.clip");
+    let g = build(&doc);
+    let add = g.node(g.index("add").unwrap());
+    assert!(add.lifted);
+    assert_eq!(add.out_types, vec![PortType::clip_of(PortType::Float)]);
+    let mut ev = pyrograph_core::Evaluator::new();
+    let sum = ev.output(&g, "sum.value", &CookCtx::new()).unwrap();
+    assert_eq!(float(&sum), 0.5 + 1.5 + 2.5 + 3.5);
+}
+
+#[test]
+fn a_cancelled_cook_stops_and_a_second_cook_completes() {
+    let mut doc = GraphDoc::new();
+    doc.add_node("ramp", NodeDoc::new("test.ramp").param("frames", ParamValue::Int(400)));
+    doc.add_node("slow", NodeDoc::new("test.slow"));
+    doc.add_node("sum", NodeDoc::new("test.sum"));
+    doc.connect("ramp.clip", "slow.a").connect("slow.value", "sum.clip");
+    let g = build(&doc);
+
+    let token = CancelToken::new();
+    let frames_seen = Arc::new(AtomicUsize::new(0));
+    let (t, seen) = (token.clone(), frames_seen.clone());
+    let progress = Arc::new(move |p: &Progress| {
+        if let Progress::Frame { .. } = p
+            && seen.fetch_add(1, Ordering::SeqCst) == 10
+        {
+            t.cancel();
+        }
+    });
+    let ctx = CookCtx::new().with_cancel(token.clone()).with_progress(progress);
+    let mut ev = pyrograph_core::Evaluator::new();
+    let started = std::time::Instant::now();
+    let res = ev.cook(&g, &["sum"], &ctx).unwrap();
+    let err = res.node("sum").unwrap().as_ref().unwrap_err();
+    assert!(err.is_cancelled(), "got {err}");
+    assert!(frames_seen.load(Ordering::SeqCst) < 400, "cancel stopped the frame loop early");
+    assert!(started.elapsed() < std::time::Duration::from_secs(2));
+
+    token.reset();
+    let sum = ev.output(&g, "sum.value", &CookCtx::new().with_cancel(token)).unwrap();
+    assert_eq!(float(&sum), (0..400).sum::<i32>() as f64);
+}
+
+fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const PRESET: &str = r#"(
+    version: 1,
+    description: Some("Scales a number and adds an offset."),
+    interface: Some((
+        inputs: {"x": "scale.a"},
+        outputs: {"y": "offset.value"},
+        params: {"factor": "scale.b", "offset": "offset.b"},
+    )),
+    nodes: {
+        "scale": (type: "math.multiply", params: {"b": 2.0}),
+        "offset": (type: "math.add", params: {"b": 0.0}),
+    },
+    edges: [("scale.value", "offset.a")],
+)"#;
+
+#[test]
+fn a_preset_included_twice_cooks_with_its_own_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("presets")).unwrap();
+    write(&dir.path().join("presets"), "affine.ron", PRESET);
+    let main = write(
+        dir.path(),
+        "main.ron",
+        r#"(
+        version: 1,
+        nodes: {
+            "x": (type: "value.float", params: {"value": 3.0}),
+            "p1": (type: "graph.include", params: {"path": "presets/affine.ron", "factor": 10.0}),
+            "p2": (type: "graph.include", params: {"path": "presets/affine.ron", "offset": 1.0}),
+        },
+        edges: [("x.value", "p1.x"), ("x.value", "p2.x")],
+    )"#,
+    );
+    let (_, g) = Graph::load(&main, &registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let mut ev = pyrograph_core::Evaluator::new();
+    let res = ev.cook(&g, &["p1", "p2"], &CookCtx::new()).unwrap();
+    assert_eq!(float(&res.output(&g, "p1", "y").unwrap()), 30.0);
+    assert_eq!(float(&res.output(&g, "p2", "y").unwrap()), 7.0);
+}
+
+#[test]
+fn include_cycles_between_files_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = |other: &str| {
+        format!(
+            r#"(version: 1, interface: Some((outputs: {{"y": "inc.y"}})),
+               nodes: {{"inc": (type: "graph.include", params: {{"path": "{other}"}})}})"#
+        )
+    };
+    write(dir.path(), "a.ron", &body("b.ron"));
+    write(dir.path(), "b.ron", &body("a.ron"));
+    let err = Graph::load(&dir.path().join("a.ron"), &registry(), &BuildOptions::default()).err().expect("cycle must fail");
+    let text = err.to_string();
+    assert!(text.contains("include cycle: a.ron -> b.ron -> a.ron"), "{text}");
+}

@@ -1,0 +1,501 @@
+//! Contour nodes of thesis §3.2.1–3.2.3: tracing (`imaging.contours`), hole removal
+//! (`imaging.hole_removal`), Douglas–Peucker simplification (`imaging.simplify_contours`),
+//! filled masks (`imaging.contour_mask`) and preview overlays (`imaging.contour_overlay`).
+
+use std::sync::Arc;
+
+use image::{GrayImage, Luma, Rgba};
+use imageproc::contours::find_contours;
+use imageproc::drawing::{draw_hollow_polygon_mut, draw_polygon_mut};
+use imageproc::geometry::contour_area;
+use imageproc::point::Point;
+use pyrograph_core::{Contour, Contours, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+
+use crate::convert::{from_rgba32f, gray8_to_mask, mask_to_gray8, to_rgba32f};
+
+const CATEGORY: &str = "Pre-processing";
+
+/// Shoelace area of a closed polygon (always positive), via imageproc.
+pub fn polygon_area(points: &[[f32; 2]]) -> f64 {
+    let pts: Vec<Point<f32>> = points.iter().map(|&[x, y]| Point::new(x, y)).collect();
+    contour_area(&pts)
+}
+
+/// Traces every border of `mask` (Suzuki–Abe border following, imageproc `find_contours`).
+///
+/// Depth counts enclosing borders (0 = outermost, 1 = a hole in it, 2 = an island in the hole …);
+/// parents precede their children. An empty mask gives an empty list, not an error.
+pub fn trace_contours(mask: &Mask) -> Contours {
+    let traced = find_contours::<i32>(&mask_to_gray8(mask));
+    let mut depths: Vec<u32> = Vec::with_capacity(traced.len());
+    let mut contours = Vec::with_capacity(traced.len());
+    for c in &traced {
+        // Suzuki–Abe finds a parent before its children in raster order, so its depth is known.
+        let depth = c.parent.and_then(|p| depths.get(p)).map_or(0, |d| d + 1);
+        depths.push(depth);
+        let points: Vec<[f32; 2]> = c.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
+        contours.push(Contour { area: contour_area(&c.points), points, depth, parent: c.parent });
+    }
+    Contours { width: mask.width(), height: mask.height(), contours }
+}
+
+/// Keeps contours with `depth <= max_depth` and `area >= min_area`; the children of a dropped
+/// contour are dropped too, and parents are re-indexed into the shorter list (thesis §3.2.2).
+pub fn remove_holes(contours: &Contours, max_depth: u32, min_area: f64) -> Contours {
+    let mut new_index: Vec<Option<usize>> = Vec::with_capacity(contours.contours.len());
+    let mut kept = Vec::new();
+    for c in &contours.contours {
+        let parent_kept = match c.parent {
+            None => Some(None),
+            Some(p) => new_index.get(p).copied().flatten().map(Some),
+        };
+        let keep = c.depth <= max_depth && c.area >= min_area;
+        match parent_kept {
+            Some(parent) if keep => {
+                new_index.push(Some(kept.len()));
+                kept.push(Contour { parent, ..c.clone() });
+            }
+            _ => new_index.push(None),
+        }
+    }
+    Contours { width: contours.width, height: contours.height, contours: kept }
+}
+
+/// Distance from `p` to the segment `a`–`b` (to `a` when the segment is a point).
+fn segment_distance(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> f64 {
+    let (px, py, ax, ay, bx, by) = (p[0] as f64, p[1] as f64, a[0] as f64, a[1] as f64, b[0] as f64, b[1] as f64);
+    let (dx, dy) = (bx - ax, by - ay);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 { (((px - ax) * dx + (py - ay) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    ((px - ax - t * dx).powi(2) + (py - ay - t * dy).powi(2)).sqrt()
+}
+
+/// Indices kept by Douglas–Peucker on the open polyline `points[first..=last]`.
+///
+/// Written by hand instead of calling imageproc's `approximate_polygon_dp` because that one
+/// measures distance to the infinite chord line, so a traced contour's one-pixel spur folding
+/// back along the chord is dropped though it lies far outside tolerance, and it panics on an
+/// empty curve or zero tolerance. This is the thesis's second method (§3.2.3): pending floating
+/// points wait on a stack instead of recursing.
+fn dp_open(points: &[[f32; 2]], first: usize, last: usize, tolerance: f64, keep: &mut [bool]) {
+    let mut stack = vec![(first, last)];
+    while let Some((anchor, floating)) = stack.pop() {
+        let (Some(&a), Some(&b)) = (points.get(anchor), points.get(floating)) else { continue };
+        let farthest = (anchor + 1..floating)
+            .filter_map(|i| points.get(i).map(|&p| (i, segment_distance(p, a, b))))
+            .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
+                Some((_, bd)) if bd >= d => best,
+                _ => Some((i, d)),
+            });
+        if let Some((i, d)) = farthest
+            && d > tolerance
+        {
+            if let Some(k) = keep.get_mut(i) {
+                *k = true;
+            }
+            stack.push((i, floating));
+            stack.push((anchor, i));
+        }
+    }
+}
+
+/// Douglas–Peucker on a closed curve: the result is a subsequence of `points` and every input
+/// point lies within `tolerance` of the closed simplified polygon. `tolerance <= 0` or fewer
+/// than four points return the input unchanged.
+///
+/// The curve is split at its first point and the point farthest from it (OpenCV does the same
+/// for closed curves), and each half is simplified as an open polyline.
+pub fn simplify_closed(points: &[[f32; 2]], tolerance: f64) -> Vec<[f32; 2]> {
+    if tolerance.is_nan() || tolerance <= 0.0 || points.len() < 4 {
+        return points.to_vec();
+    }
+    let Some(&start) = points.first() else { return Vec::new() };
+    let far = (1..points.len())
+        .filter_map(|i| points.get(i).map(|&p| (i, segment_distance(p, start, start))))
+        .fold((0, -1.0), |best, (i, d)| if d > best.1 { (i, d) } else { best })
+        .0;
+    if far == 0 {
+        return vec![start];
+    }
+    // Close the loop by appending the start point, simplify both halves, then drop the duplicate.
+    let mut ring = points.to_vec();
+    ring.push(start);
+    let mut keep = vec![false; ring.len()];
+    let last = ring.len() - 1;
+    for i in [0, far, last] {
+        if let Some(k) = keep.get_mut(i) {
+            *k = true;
+        }
+    }
+    dp_open(&ring, 0, far, tolerance, &mut keep);
+    dp_open(&ring, far, last, tolerance, &mut keep);
+    ring.iter().zip(&keep).take(last).filter(|(_, k)| **k).map(|(p, _)| *p).collect()
+}
+
+/// Simplifies every contour (closed Douglas–Peucker) and recomputes its area.
+pub fn simplify_contours(contours: &Contours, tolerance: f64) -> Contours {
+    let contours_out = contours
+        .contours
+        .iter()
+        .map(|c| {
+            let points = simplify_closed(&c.points, tolerance);
+            Contour { area: polygon_area(&points), points, ..c.clone() }
+        })
+        .collect();
+    Contours { width: contours.width, height: contours.height, contours: contours_out }
+}
+
+fn int_points(points: &[[f32; 2]]) -> Vec<Point<i32>> {
+    let mut pts: Vec<Point<i32>> = points.iter().map(|&[x, y]| Point::new(x.round() as i32, y.round() as i32)).collect();
+    // imageproc treats an explicitly repeated first point as the closing edge; drop it to keep one convention.
+    if pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    pts
+}
+
+/// Fills the contours into a mask: even depths fill, odd depths (holes) cut, parents before
+/// children. Hole borders are traced on inside pixels, so after cutting a hole its border is
+/// drawn back; a traced mask therefore round-trips.
+pub fn fill_contours(contours: &Contours) -> Mask {
+    let mut canvas = GrayImage::new(contours.width, contours.height);
+    let mut order: Vec<&Contour> = contours.contours.iter().collect();
+    order.sort_by_key(|c| c.depth);
+    for c in order {
+        let pts = int_points(&c.points);
+        if pts.is_empty() {
+            continue;
+        }
+        let fill = if c.is_hole() { 0 } else { 255 };
+        draw_polygon_mut(&mut canvas, &pts, Luma([fill]));
+        if c.is_hole() {
+            draw_outline(&mut canvas, &c.points, Luma([255]));
+        }
+    }
+    gray8_to_mask(canvas)
+}
+
+fn draw_outline<C: imageproc::drawing::Canvas>(canvas: &mut C, points: &[[f32; 2]], colour: C::Pixel) {
+    match points {
+        [] => {}
+        [[x, y]] => {
+            let (w, h) = canvas.dimensions();
+            if *x >= 0.0 && *y >= 0.0 && (*x as u32) < w && (*y as u32) < h {
+                canvas.draw_pixel(*x as u32, *y as u32, colour);
+            }
+        }
+        _ => {
+            let pts: Vec<Point<f32>> = points.iter().map(|&[x, y]| Point::new(x, y)).collect();
+            draw_hollow_polygon_mut(canvas, &pts, colour);
+        }
+    }
+}
+
+/// Draws contour outlines over an RGBA copy of `image`: outer borders (even depth) in `outer`,
+/// holes in `hole`.
+pub fn overlay_contours(image: &Image, contours: &Contours, outer: [f32; 4], hole: [f32; 4]) -> Image {
+    let mut canvas = to_rgba32f(image);
+    for c in &contours.contours {
+        let colour = if c.is_hole() { hole } else { outer };
+        draw_outline(&mut canvas, &c.points, Rgba(colour));
+    }
+    from_rgba32f(canvas)
+}
+
+fn contours_value(c: Contours) -> Vec<Value> {
+    vec![Value::Contours(Arc::new(c))]
+}
+
+/// Description of `imaging.contours`.
+pub fn contours_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.contours",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Traces the borders of a mask with their hierarchy depth and area (Eigenfires thesis §3.2.1, border following).\n\
+         Depth 0 is an outermost border, 1 a hole in it, 2 an island in that hole; area is the shoelace area of \
+         the pixel-centre polygon. An empty mask gives no contours (not an error).",
+    )
+    .input(PortDesc::new("mask", PortType::Mask, "Binary mask to trace"))
+    .output("contours", PortType::Contours, "Every border, parents before children")
+}
+
+fn contours_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    Ok(contours_value(trace_contours(inputs.mask("mask")?)))
+}
+
+/// Description of `imaging.hole_removal`.
+pub fn hole_removal_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.hole_removal",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Depth- and area-based Hole Removal (Eigenfires thesis §3.2.2).\n\
+         Keeps contours with depth ≤ max_depth and area ≥ min_area; children of a dropped contour are dropped too. \
+         max_depth 0 keeps only outer flame borders; max_depth 1 on a dark-background mask whose HSV ranges take \
+         in the smoke keeps two nested contours in one step: the outer one bounds the smoke or soot and the inner \
+         one the bright flame.",
+    )
+    .input(PortDesc::new("contours", PortType::Contours, "Traced contours"))
+    .input(PortDesc::int("max_depth", 0, (0, 1000), "Deepest nesting level kept (0 = outer borders only)"))
+    .input(PortDesc::float("min_area", 100.0, (0.0, 1.0e9), "Smallest area kept, in square pixels"))
+    .output("contours", PortType::Contours, "Kept contours, parents re-indexed")
+}
+
+fn hole_removal_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let contours = inputs.contours("contours")?;
+    let max_depth = u32::try_from(inputs.int("max_depth")?).map_err(|_| NodeError::port("max_depth", "must be in 0..=1000"))?;
+    let min_area = inputs.float("min_area")?;
+    Ok(contours_value(remove_holes(contours, max_depth, min_area)))
+}
+
+/// Description of `imaging.simplify_contours`.
+pub fn simplify_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.simplify_contours",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Contour optimization with the Douglas–Peucker algorithm on closed curves (Eigenfires thesis §3.2.3).\n\
+         Every removed point lies within `tolerance` pixels of the simplified polygon; areas are recomputed.",
+    )
+    .input(PortDesc::new("contours", PortType::Contours, "Contours to simplify"))
+    .input(PortDesc::float("tolerance", 2.0, (0.0, 1000.0), "Largest distance in pixels a removed point may lie from the result; 0 keeps all"))
+    .output("contours", PortType::Contours, "Simplified contours")
+}
+
+fn simplify_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let contours = inputs.contours("contours")?;
+    Ok(contours_value(simplify_contours(contours, inputs.float("tolerance")?)))
+}
+
+/// Description of `imaging.contour_mask`.
+pub fn contour_mask_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.contour_mask",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Fills contours into a mask of the traced image's size, holes cut by depth parity (Eigenfires thesis §3.3.1, Fig. 20d).\n\
+         Even depths fill, odd depths cut; the result protects the flame in Hermite background removal.",
+    )
+    .input(PortDesc::new("contours", PortType::Contours, "Contours to fill"))
+    .output("mask", PortType::Mask, "Filled mask")
+}
+
+fn contour_mask_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    Ok(vec![Value::Mask(Arc::new(fill_contours(inputs.contours("contours")?)))])
+}
+
+/// Description of `imaging.contour_overlay`.
+pub fn overlay_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.contour_overlay",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Draws contours over an image for previews (Eigenfires thesis §3.2, Fig. 18).\n\
+         Outer borders and holes get different colours; the output is RGBA.",
+    )
+    .input(PortDesc::new("image", PortType::Image, "Background image (gray or RGBA)"))
+    .input(PortDesc::new("contours", PortType::Contours, "Contours to draw"))
+    .input(PortDesc::color("color", [0.0, 1.0, 0.0, 1.0], "Colour of outer borders (even depth)"))
+    .input(PortDesc::color("hole_color", [1.0, 0.0, 1.0, 1.0], "Colour of hole borders (odd depth)"))
+    .output("image", PortType::Image, "RGBA preview")
+}
+
+fn overlay_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let image = inputs.image("image")?;
+    let contours = inputs.contours("contours")?;
+    let out = overlay_contours(image, contours, inputs.color("color")?, inputs.color("hole_color")?);
+    Ok(vec![Value::Image(Arc::new(out))])
+}
+
+/// The contour node types of this module.
+pub fn nodes() -> Vec<Arc<dyn Node>> {
+    vec![
+        FnNode::new(contours_desc(), contours_cook),
+        FnNode::new(hole_removal_desc(), hole_removal_cook),
+        FnNode::new(simplify_desc(), simplify_cook),
+        FnNode::new(contour_mask_desc(), contour_mask_cook),
+        FnNode::new(overlay_desc(), overlay_cook),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mask from rows of `#` (inside) and `.` (outside).
+    pub(crate) fn mask(rows: &[&str]) -> Mask {
+        let w = rows.first().map_or(0, |r| r.len()) as u32;
+        let data = rows.iter().flat_map(|r| r.bytes().map(|b| if b == b'#' { 255 } else { 0 })).collect();
+        Mask::from_vec(w, rows.len() as u32, data).unwrap()
+    }
+
+    /// A 9×9 square with a 3×3 hole, inside an 11×11 frame.
+    fn ring() -> Mask {
+        let rows: Vec<String> = (0..11)
+            .map(|y| (0..11).map(|x| if (1..=9).contains(&x) && (1..=9).contains(&y) && !((4..=6).contains(&x) && (4..=6).contains(&y)) { '#' } else { '.' }).collect())
+            .collect();
+        mask(&rows.iter().map(String::as_str).collect::<Vec<_>>())
+    }
+
+    fn contour(points: &[[f32; 2]], depth: u32, parent: Option<usize>, area: f64) -> Contour {
+        Contour { points: points.to_vec(), depth, parent, area }
+    }
+
+    #[test]
+    fn ring_has_an_outer_border_and_a_hole() {
+        let c = trace_contours(&ring());
+        assert_eq!((c.width, c.height, c.contours.len()), (11, 11, 2));
+        let (outer, hole) = (&c.contours[0], &c.contours[1]);
+        assert_eq!((outer.depth, outer.parent, outer.area), (0, None, 64.0));
+        // The hole border runs on the inside pixels around the 3×3 hole, cutting its corners: a 4×4 square minus 4 half-pixel corners.
+        assert_eq!((hole.depth, hole.parent, hole.area), (1, Some(0), 14.0));
+        assert!(hole.is_hole() && !outer.is_hole());
+    }
+
+    #[test]
+    fn empty_mask_gives_no_contours() {
+        let c = trace_contours(&Mask::new(4, 3));
+        assert_eq!((c.width, c.height), (4, 3));
+        assert!(c.contours.is_empty());
+        assert_eq!(fill_contours(&c), Mask::new(4, 3));
+    }
+
+    #[test]
+    fn filled_contours_round_trip_a_ring() {
+        let m = ring();
+        assert_eq!(fill_contours(&trace_contours(&m)), m);
+    }
+
+    fn nested() -> Contours {
+        // 0: big outer, 1: hole in it, 2: island in the hole, 3: small separate speck.
+        let sq = |a: f32, b: f32| [[a, a], [b, a], [b, b], [a, b]];
+        Contours {
+            width: 40,
+            height: 40,
+            contours: vec![
+                contour(&sq(0.0, 30.0), 0, None, 900.0),
+                contour(&sq(5.0, 25.0), 1, Some(0), 400.0),
+                contour(&sq(10.0, 20.0), 2, Some(1), 100.0),
+                contour(&sq(32.0, 34.0), 0, None, 4.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn hole_removal_by_depth() {
+        let c = nested();
+        let depth0 = remove_holes(&c, 0, 0.0);
+        assert_eq!(depth0.contours.iter().map(|c| c.area).collect::<Vec<_>>(), [900.0, 4.0]);
+        let depth1 = remove_holes(&c, 1, 0.0);
+        assert_eq!(depth1.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(), [(900.0, None), (400.0, Some(0)), (4.0, None)]);
+    }
+
+    #[test]
+    fn hole_removal_by_area_drops_children_and_reindexes() {
+        let c = nested();
+        let kept = remove_holes(&c, 5, 100.0);
+        assert_eq!(kept.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(), [(900.0, None), (400.0, Some(0)), (100.0, Some(1))]);
+        let no_hole = remove_holes(&c, 5, 500.0);
+        // The island's parent (the 400 px² hole) is gone, so the island goes with it.
+        assert_eq!(no_hole.contours.iter().map(|c| c.area).collect::<Vec<_>>(), [900.0]);
+    }
+
+    #[test]
+    fn simplify_keeps_the_corners_of_a_traced_square() {
+        let m = mask(&["......", ".####.", ".####.", ".####.", ".####.", "......"]);
+        let c = simplify_contours(&trace_contours(&m), 0.5);
+        let mut pts = c.contours[0].points.clone();
+        pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(pts, [[1.0, 1.0], [1.0, 4.0], [4.0, 1.0], [4.0, 4.0]]);
+        assert_eq!(c.contours[0].area, 9.0);
+    }
+
+    #[test]
+    fn a_spur_folding_back_along_the_chord_is_kept() {
+        // Out along x to 10 and back: an infinite-line distance would call every point on the chord.
+        let spur: Vec<[f32; 2]> = (0..=10).chain((1..10).rev()).map(|x| [x as f32, 0.0]).chain([[0.0, 1.0]]).collect();
+        let s = simplify_closed(&spur, 1.0);
+        assert!(s.contains(&[10.0, 0.0]), "{s:?}");
+    }
+
+    #[test]
+    fn simplify_with_zero_tolerance_or_few_points_is_identity() {
+        let pts = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.1], [1.0, 1.0]];
+        assert_eq!(simplify_closed(&pts, 0.0), pts);
+        assert_eq!(simplify_closed(&pts[..3], 5.0), &pts[..3]);
+        assert!(simplify_closed(&[], 1.0).is_empty());
+    }
+
+    #[test]
+    fn overlay_draws_outer_and_hole_colours() {
+        let c = trace_contours(&ring());
+        let img = Image::new(11, 11, pyrograph_core::Channels::Gray);
+        let out = overlay_contours(&img, &c, [0.0, 1.0, 0.0, 1.0], [1.0, 0.0, 1.0, 1.0]);
+        assert_eq!(out.channels(), pyrograph_core::Channels::Rgba);
+        assert_eq!(out.pixel(1, 1), [0.0, 1.0, 0.0, 1.0]);
+        assert_eq!(out.pixel(5, 3), [1.0, 0.0, 1.0, 1.0]);
+        assert_eq!(out.pixel(0, 0), [0.0, 0.0, 0.0, 1.0]);
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn arb_mask() -> impl Strategy<Value = Mask> {
+        (1u32..16, 1u32..16).prop_flat_map(|(w, h)| {
+            proptest::collection::vec(proptest::bool::weighted(0.55), (w * h) as usize)
+                .prop_map(move |bits| Mask::from_vec(w, h, bits.into_iter().map(|b| if b { 255 } else { 0 }).collect()).unwrap())
+        })
+    }
+
+    fn on_border(m: &Mask, x: i64, y: i64) -> bool {
+        let inside = |x: i64, y: i64| x >= 0 && y >= 0 && x < m.width() as i64 && y < m.height() as i64 && m.get(x as u32, y as u32);
+        if !inside(x, y) {
+            return false;
+        }
+        (-1..=1).any(|dy| (-1..=1).any(|dx| (dx, dy) != (0, 0) && !inside(x + dx, y + dy)))
+    }
+
+    fn dist_to_polygon(p: [f32; 2], poly: &[[f32; 2]]) -> f64 {
+        match poly {
+            [] => f64::INFINITY,
+            [a] => segment_distance(p, *a, *a),
+            _ => (0..poly.len()).map(|i| segment_distance(p, poly[i], poly[(i + 1) % poly.len()])).fold(f64::INFINITY, f64::min),
+        }
+    }
+
+    fn is_subsequence(sub: &[[f32; 2]], of: &[[f32; 2]]) -> bool {
+        let mut it = of.iter();
+        sub.iter().all(|p| it.any(|q| q == p))
+    }
+
+    proptest! {
+        #[test]
+        fn every_contour_point_lies_on_the_mask_border(m in arb_mask()) {
+            let c = trace_contours(&m);
+            for contour in &c.contours {
+                prop_assert!(!contour.points.is_empty());
+                for &[x, y] in &contour.points {
+                    prop_assert!(on_border(&m, x as i64, y as i64), "({x}, {y}) is not a border pixel");
+                }
+                let parent_ok = contour.parent.is_none_or(|p| c.contours.get(p).is_some_and(|q| q.depth + 1 == contour.depth));
+                prop_assert!(parent_ok);
+            }
+        }
+
+        #[test]
+        fn douglas_peucker_is_a_subsequence_within_tolerance(m in arb_mask(), tolerance in 0.1f64..4.0) {
+            for contour in trace_contours(&m).contours {
+                let s = simplify_closed(&contour.points, tolerance);
+                prop_assert!(is_subsequence(&s, &contour.points));
+                for &p in &contour.points {
+                    let d = dist_to_polygon(p, &s);
+                    prop_assert!(d <= tolerance + 1e-9, "{p:?} is {d} from {s:?}");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,391 @@
+//! `imaging.pose_normalize`: direction removal by a weighted least-squares line through the
+//! flame contour (thesis §3.4, eq. 7–11, remedies 1–3), or per-clip style centring and scaling.
+
+use std::sync::Arc;
+
+use image::{Luma, Rgba};
+use imageproc::geometric_transformations::{Border, Interpolation, Projection, warp};
+use pyrograph_core::{Channels, Contour, Contours, CookCtx, FnNode, Image, Inputs, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+
+use super::contours::simplify_closed;
+use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
+
+/// How contour points are weighted in the line fit (eq. 7–8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Weighting {
+    /// Every stretch of outline counts the same (vertices weighted by their share of the perimeter).
+    Uniform,
+    /// Remedy 3: weight grows towards the bottom of the flame (its root), `0.1 + t²` with
+    /// `t` 0 at the top of the contour and 1 at its bottom (times the perimeter share).
+    Root,
+    /// Remedy 1: simplify the contour with Douglas–Peucker at this tolerance first, then fit the
+    /// low-poly outline uniformly.
+    LowPoly(f64),
+}
+
+/// A fitted flame axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlameAxis {
+    /// Lower end point of the trimmed line (the rotation pivot), in pixels.
+    pub root: [f64; 2],
+    /// Upper end point.
+    pub tip: [f64; 2],
+    /// Lean of the axis from vertical in degrees, positive when the tip leans right (x grows).
+    pub angle_deg: f64,
+}
+
+/// Weighted least-squares line through `points` minimizing `Σ wᵢ rᵢ²` with perpendicular
+/// residuals (eq. 7). Returns the weighted centroid and a unit direction, or `None` with fewer
+/// than two distinct points or no positive weight.
+///
+/// Hand-written because neither imageproc nor image fits weighted lines. Using the principal axis
+/// of the weighted covariance instead of `y = mx + b` keeps vertical flames (infinite slope,
+/// the common case) well-defined.
+pub fn fit_line(points: &[[f64; 2]], weights: &[f64]) -> Option<([f64; 2], [f64; 2])> {
+    let total: f64 = weights.iter().sum();
+    if points.len() < 2 || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let (mut cx, mut cy) = (0.0, 0.0);
+    for (p, w) in points.iter().zip(weights) {
+        cx += w * p[0];
+        cy += w * p[1];
+    }
+    let (cx, cy) = (cx / total, cy / total);
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for (p, w) in points.iter().zip(weights) {
+        let (dx, dy) = (p[0] - cx, p[1] - cy);
+        sxx += w * dx * dx;
+        sxy += w * dx * dy;
+        syy += w * dy * dy;
+    }
+    if sxx + syy <= f64::EPSILON * total {
+        return None;
+    }
+    // Major axis of the symmetric 2×2 covariance: the direction minimizing perpendicular residuals.
+    let phi = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    Some(([cx, cy], [phi.cos(), phi.sin()]))
+}
+
+/// Projects every point on the line (eq. 9–11 in direction-vector form) and returns the two
+/// extreme projections, lower one (larger y) first.
+pub fn trim_line(points: &[[f64; 2]], centre: [f64; 2], dir: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let t = |p: &[f64; 2]| (p[0] - centre[0]) * dir[0] + (p[1] - centre[1]) * dir[1];
+    let (lo, hi) = points.iter().map(t).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let at = |s: f64| [centre[0] + s * dir[0], centre[1] + s * dir[1]];
+    let (a, b) = (at(lo), at(hi));
+    // Image y grows downwards, so the root is the end with the larger y; ties go to the left end.
+    if a[1] > b[1] || (a[1] == b[1] && a[0] <= b[0]) { (a, b) } else { (b, a) }
+}
+
+/// The contour the pose is taken from: the largest outermost one (as the OpenCV peer picks).
+pub fn main_contour(contours: &Contours) -> Option<&Contour> {
+    contours.contours.iter().filter(|c| c.depth == 0).max_by(|a, b| a.area.total_cmp(&b.area))
+}
+
+fn to_f64(points: &[[f32; 2]]) -> Vec<[f64; 2]> {
+    points.iter().map(|&[x, y]| [f64::from(x), f64::from(y)]).collect()
+}
+
+/// Each vertex's share of the closed polygon's perimeter (half of its two edges).
+///
+/// Traced borders sample diagonal runs at √2 px and straight runs at 1 px, and simplified
+/// polygons sample anything; weighting by arc length makes the fit follow the outline, not the
+/// sampling density (without it a 25° ellipse reads as 26°).
+fn arc_weights(points: &[[f64; 2]]) -> Vec<f64> {
+    let n = points.len();
+    let dist = |a: &[f64; 2], b: &[f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    (0..n)
+        .map(|i| match (points.get((i + n - 1) % n), points.get(i), points.get((i + 1) % n)) {
+            (Some(prev), Some(p), Some(next)) => 0.5 * (dist(prev, p) + dist(p, next)),
+            _ => 0.0,
+        })
+        .collect()
+}
+
+fn root_weights(points: &[[f64; 2]]) -> Vec<f64> {
+    let (top, bottom) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+    let span = (bottom - top).max(f64::EPSILON);
+    points.iter().map(|p| 0.1 + ((p[1] - top) / span).powi(2)).collect()
+}
+
+/// Fits the flame axis of `contour` with `weighting`; `None` when the contour is degenerate.
+pub fn flame_axis(contour: &Contour, weighting: Weighting) -> Option<FlameAxis> {
+    let all = to_f64(&contour.points);
+    let (fit_points, weights) = match weighting {
+        Weighting::Uniform => (all.clone(), arc_weights(&all)),
+        Weighting::Root => {
+            let w = arc_weights(&all).iter().zip(root_weights(&all)).map(|(a, r)| a * r).collect();
+            (all.clone(), w)
+        }
+        Weighting::LowPoly(tol) => {
+            let low = to_f64(&simplify_closed(&contour.points, tol));
+            let w = arc_weights(&low);
+            (low, w)
+        }
+    };
+    let (centre, dir) = fit_line(&fit_points, &weights)?;
+    let (root, tip) = trim_line(&all, centre, dir);
+    let angle_deg = (tip[0] - root[0]).atan2(root[1] - tip[1]).to_degrees();
+    Some(FlameAxis { root, tip, angle_deg })
+}
+
+/// Below this lean (degrees) rotation is skipped, so an upright flame passes through bit-exact.
+pub const UPRIGHT_EPSILON_DEG: f64 = 1e-3;
+
+/// Applies `projection` (input → output pixel coordinates) with bilinear sampling; uncovered
+/// pixels become black (transparent for RGBA).
+pub fn warp_image(image: &Image, projection: Projection) -> Image {
+    match image.channels() {
+        Channels::Gray => from_gray32f(warp(&to_gray32f(image), projection, Interpolation::Bilinear, Border::Constant(Luma([0.0])))),
+        Channels::Rgba => from_rgba32f(warp(&to_rgba32f(image), projection, Interpolation::Bilinear, Border::Constant(Rgba([0.0; 4])))),
+    }
+}
+
+/// Rotates `image` about the axis root so the flame stands vertical.
+pub fn rotate_upright(image: &Image, axis: &FlameAxis) -> Image {
+    if axis.angle_deg.abs() < UPRIGHT_EPSILON_DEG {
+        return image.clone();
+    }
+    let (px, py) = (axis.root[0] as f32, axis.root[1] as f32);
+    // imageproc's rotation turns clockwise on screen for positive angles; a right-leaning tip
+    // needs the opposite turn.
+    let theta = (-axis.angle_deg.to_radians()) as f32;
+    warp_image(image, Projection::translate(px, py) * Projection::rotate(theta) * Projection::translate(-px, -py))
+}
+
+/// Bounding box `[x_min, y_min, x_max, y_max]` of every outermost contour's points.
+pub fn flame_bounds(contours: &Contours) -> Option<[f64; 4]> {
+    let pts = contours.contours.iter().filter(|c| c.depth == 0).flat_map(|c| c.points.iter());
+    let b = pts.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, &[x, y]| {
+        [b[0].min(f64::from(x)), b[1].min(f64::from(y)), b[2].max(f64::from(x)), b[3].max(f64::from(y))]
+    });
+    (b[0] <= b[2]).then_some(b)
+}
+
+/// Translates the flame's bounding box to the image centre and scales it to `height_fraction`
+/// of the image height (the thesis does this once per clip via its UI, §3.4).
+pub fn center_scale(image: &Image, bounds: [f64; 4], height_fraction: f64) -> Image {
+    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+    let box_h = (bounds[3] - bounds[1]).max(1.0);
+    let s = (height_fraction * h / box_h) as f32;
+    let (bx, by) = (((bounds[0] + bounds[2]) / 2.0) as f32, ((bounds[1] + bounds[3]) / 2.0) as f32);
+    // Pixel centres sit at integer coordinates, so the image centre is at (w-1)/2, (h-1)/2.
+    let (cx, cy) = (((w - 1.0) / 2.0) as f32, ((h - 1.0) / 2.0) as f32);
+    warp_image(image, Projection::translate(cx, cy) * Projection::scale(s, s) * Projection::translate(-bx, -by))
+}
+
+/// Pose normalization mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PoseMode {
+    /// Rotate about the axis root so the flame stands vertical.
+    Rotate,
+    /// Centre the flame's bounding box and scale it to this fraction of the image height.
+    CenterScale(f64),
+}
+
+/// Result of [`pose_normalize`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// The normalized image.
+    pub image: Image,
+    /// The fitted axis; `None` when there were no usable contours (the image passes through).
+    pub axis: Option<FlameAxis>,
+}
+
+/// Normalizes the pose of the flame described by `contours` in `image`.
+///
+/// Without contours (or with a degenerate main contour) the image passes through unchanged and
+/// no axis is reported — an empty frame is normal in a clip, not an error.
+pub fn pose_normalize(image: &Image, contours: &Contours, mode: PoseMode, weighting: Weighting) -> Pose {
+    let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
+    let image = match (mode, axis) {
+        (PoseMode::Rotate, Some(a)) => rotate_upright(image, &a),
+        (PoseMode::CenterScale(f), Some(_)) => flame_bounds(contours).map_or_else(|| image.clone(), |b| center_scale(image, b, f)),
+        (_, None) => image.clone(),
+    };
+    Pose { image, axis }
+}
+
+/// Description of `imaging.pose_normalize`.
+pub fn desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.pose_normalize",
+        "Pre-processing",
+        TimeDep::PerFrame,
+        "Removes the flame's direction with a weighted least-squares line through its contour (Eigenfires thesis §3.4, eq. 7–11).\n\
+         The line is fitted to the largest outermost contour (weights: uniform; root = remedy 3, more weight near the \
+         bottom; lowpoly = remedy 1, Douglas–Peucker first), trimmed at the extreme projections of the contour points, \
+         and the image is rotated about the lower end so the flame stands vertical. Mode center_scale instead moves the \
+         flame's bounding box to the centre and scales it to target_height of the frame (angle and end points are \
+         still reported). With no contours the image passes through and angle is 0.",
+    )
+    .input(PortDesc::new("image", PortType::Image, "Frame to normalize (gray or RGBA)"))
+    .input(PortDesc::new("contours", PortType::Contours, "Flame contours traced from this frame"))
+    .input(PortDesc::choice("mode", &["rotate", "center_scale"], "rotate", "rotate: stand the flame upright; center_scale: centre and scale it"))
+    .input(PortDesc::choice("weights", &["uniform", "root", "lowpoly"], "uniform", "Point weighting of the line fit (remedies 3 and 1)"))
+    .input(PortDesc::float("lowpoly_tolerance", 8.0, (0.1, 1000.0), "Douglas–Peucker tolerance in pixels for weights = lowpoly"))
+    .input(PortDesc::float("target_height", 0.8, (0.01, 4.0), "Flame height as a fraction of the frame height in center_scale mode"))
+    .output("image", PortType::Image, "Normalized frame")
+    .output("angle", PortType::Float, "Lean of the flame from vertical in degrees, positive to the right; 0 without contours")
+    .output("root", PortType::Vec2, "Lower end of the fitted line (the pivot), in input pixels")
+    .output("tip", PortType::Vec2, "Upper end of the fitted line, in input pixels")
+}
+
+fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let image = inputs.image("image")?;
+    let contours = inputs.contours("contours")?;
+    if (contours.width, contours.height) != image.size() && !contours.contours.is_empty() {
+        return Err(NodeError::port(
+            "contours",
+            format!("traced in a {}×{} image but the image is {}×{}", contours.width, contours.height, image.width(), image.height()),
+        ));
+    }
+    let mode = match inputs.choice("mode")? {
+        "rotate" => PoseMode::Rotate,
+        "center_scale" => PoseMode::CenterScale(inputs.float("target_height")?),
+        other => return Err(NodeError::port("mode", format!("unknown mode '{other}'"))),
+    };
+    let weighting = match inputs.choice("weights")? {
+        "uniform" => Weighting::Uniform,
+        "root" => Weighting::Root,
+        "lowpoly" => Weighting::LowPoly(inputs.float("lowpoly_tolerance")?),
+        other => return Err(NodeError::port("weights", format!("unknown weighting '{other}'"))),
+    };
+    let pose = pose_normalize(image, contours, mode, weighting);
+    let (angle, root, tip) = pose.axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
+    Ok(vec![Value::Image(Arc::new(pose.image)), Value::Float(angle), Value::Vec2(root), Value::Vec2(tip)])
+}
+
+/// The `imaging.pose_normalize` node.
+pub fn node() -> Arc<dyn Node> {
+    FnNode::new(desc(), cook)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::preprocess::contours::trace_contours;
+    use pyrograph_core::Mask;
+
+    /// A filled ellipse with semi-axes `rx`, `ry` centred at `(cx, cy)`, its long axis leaning
+    /// `lean_deg` from vertical (positive: top to the right).
+    pub(crate) fn ellipse_mask(w: u32, h: u32, (cx, cy): (f64, f64), (rx, ry): (f64, f64), lean_deg: f64) -> Mask {
+        let (s, c) = lean_deg.to_radians().sin_cos();
+        let data = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (f64::from(x) - cx, f64::from(y) - cy)))
+            .map(|(dx, dy)| {
+                // Coordinates along the leaning axes: u across, v along the flame (up = -y).
+                let u = dx * c + dy * s;
+                let v = dx * s - dy * c;
+                if (u / rx).powi(2) + (v / ry).powi(2) <= 1.0 { 255 } else { 0 }
+            })
+            .collect();
+        Mask::from_vec(w, h, data).unwrap()
+    }
+
+    fn mask_image(m: &Mask) -> Image {
+        crate::convert::mask_to_image(m)
+    }
+
+    #[test]
+    fn recovers_the_angle_of_a_tilted_flame() {
+        for lean in [-35.0, -10.0, 0.0, 20.0, 40.0] {
+            let m = ellipse_mask(120, 120, (60.0, 60.0), (12.0, 40.0), lean);
+            let c = trace_contours(&m);
+            for weighting in [Weighting::Uniform, Weighting::LowPoly(2.0)] {
+                let axis = flame_axis(&c.contours[0], weighting).unwrap();
+                assert!((axis.angle_deg - lean).abs() < 1.0, "{weighting:?}: {} vs {lean}", axis.angle_deg);
+                assert!(axis.root[1] > axis.tip[1]);
+            }
+        }
+    }
+
+    #[test]
+    fn rotating_stands_the_flame_upright() {
+        let m = ellipse_mask(120, 120, (60.0, 60.0), (12.0, 40.0), 25.0);
+        let pose = pose_normalize(&mask_image(&m), &trace_contours(&m), PoseMode::Rotate, Weighting::Uniform);
+        let axis = pose.axis.unwrap();
+        assert!((axis.angle_deg - 25.0).abs() < 1.0, "{axis:?}");
+        let upright = Mask::from_vec(120, 120, pose.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let again = flame_axis(&trace_contours(&upright).contours[0], Weighting::Uniform).unwrap();
+        assert!(again.angle_deg.abs() < 1.0, "{}", again.angle_deg);
+        // The pivot stays where it was.
+        let (rx, ry) = (axis.root[0].round() as u32, axis.root[1].round() as u32 - 3);
+        assert!(pose.image.pixel(rx, ry)[0] > 0.5);
+    }
+
+    #[test]
+    fn vertical_line_fit_has_no_division_by_zero() {
+        let pts = [[5.0, 0.0], [5.0, 10.0], [5.0, 20.0]];
+        let (c, d) = fit_line(&pts, &[1.0; 3]).unwrap();
+        assert_eq!(c, [5.0, 10.0]);
+        assert!(d[0].abs() < 1e-12 && (d[1].abs() - 1.0).abs() < 1e-12);
+        let (root, tip) = trim_line(&pts, c, d);
+        let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9;
+        assert!(close(root, [5.0, 20.0]) && close(tip, [5.0, 0.0]), "{root:?} {tip:?}");
+        assert!(fit_line(&[[1.0, 1.0]; 3], &[1.0; 3]).is_none());
+    }
+
+    #[test]
+    fn root_weights_favour_the_bottom() {
+        let w = root_weights(&[[0.0, 0.0], [0.0, 10.0]]);
+        assert!((w[0] - 0.1).abs() < 1e-12 && (w[1] - 1.1).abs() < 1e-12);
+        let m = ellipse_mask(100, 100, (50.0, 50.0), (10.0, 35.0), -15.0);
+        let axis = flame_axis(&trace_contours(&m).contours[0], Weighting::Root).unwrap();
+        assert!((axis.angle_deg + 15.0).abs() < 3.0, "{}", axis.angle_deg);
+    }
+
+    #[test]
+    fn no_contours_pass_through_with_no_axis() {
+        let img = Image::gray_from_fn(6, 4, |x, y| (x + y) as f32 / 10.0);
+        let empty = Contours { width: 6, height: 4, contours: Vec::new() };
+        for mode in [PoseMode::Rotate, PoseMode::CenterScale(0.8)] {
+            let pose = pose_normalize(&img, &empty, mode, Weighting::Uniform);
+            assert_eq!(pose, Pose { image: img.clone(), axis: None });
+        }
+    }
+
+    #[test]
+    fn center_scale_moves_the_flame_to_the_middle() {
+        let m = ellipse_mask(100, 100, (25.0, 30.0), (6.0, 12.0), 0.0);
+        let c = trace_contours(&m);
+        let pose = pose_normalize(&mask_image(&m), &c, PoseMode::CenterScale(0.5), Weighting::Uniform);
+        let out = Mask::from_vec(100, 100, pose.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let b = flame_bounds(&trace_contours(&out)).unwrap();
+        assert!(((b[0] + b[2]) / 2.0 - 49.5).abs() <= 1.0 && ((b[1] + b[3]) / 2.0 - 49.5).abs() <= 1.0, "{b:?}");
+        assert!(((b[3] - b[1]) - 50.0).abs() <= 2.0, "{b:?}");
+    }
+
+    #[test]
+    fn gray_and_rgba_both_warp() {
+        let m = ellipse_mask(40, 40, (20.0, 20.0), (4.0, 12.0), 30.0);
+        let c = trace_contours(&m);
+        let rgba = mask_image(&m).to_rgba();
+        let pose = pose_normalize(&rgba, &c, PoseMode::Rotate, Weighting::Uniform);
+        assert_eq!(pose.image.channels(), Channels::Rgba);
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    use super::tests::ellipse_mask;
+    use super::*;
+    use crate::preprocess::contours::trace_contours;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        #[test]
+        fn an_upright_flame_is_left_unchanged(cx in 20u32..44, cy in 25u32..39, rx in 3u32..10, extra in 3u32..14, root in proptest::bool::ANY) {
+            let m = ellipse_mask(64, 64, (f64::from(cx), f64::from(cy)), (f64::from(rx), f64::from(rx + extra)), 0.0);
+            let img = crate::convert::mask_to_image(&m);
+            let weighting = if root { Weighting::Root } else { Weighting::Uniform };
+            let pose = pose_normalize(&img, &trace_contours(&m), PoseMode::Rotate, weighting);
+            let axis = pose.axis.unwrap();
+            prop_assert!(axis.angle_deg.abs() < 1e-6, "angle {}", axis.angle_deg);
+            let diff = pose.image.data().iter().zip(img.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+            prop_assert!(diff < 1e-6, "max difference {diff}");
+        }
+    }
+}

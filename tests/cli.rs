@@ -1,0 +1,170 @@
+//! The `pyrograph` binary over bad inputs (one fixture per validation class, plus bad image files)
+//! and over the shipped graphs: exit codes, specific messages, and never a panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pyrograph"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn fixture(name: &str) -> PathBuf {
+    root().join("tests/fixtures/bad").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).env_remove("PYROGRAPH_TEST_UNSET_VARIABLE").output().expect("the binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// Each bad fixture with the words its error must contain (node id, port, cause).
+const BAD: &[(&str, &[&str])] = &[
+    ("malformed.ron", &["malformed.ron", "line 5, column", "malformed graph"]),
+    ("unknown_type.ron", &["node 'gray'", "unknown node type 'imaging.to_grey'", "did you mean 'imaging.to_gray'"]),
+    ("unknown_port.ron", &["node 'gray', port 'img'", "has no input 'img'"]),
+    ("unknown_param.ron", &["node 'card', port 'colour'", "has no parameter 'colour'"]),
+    ("type_mismatch.ron", &["node 'out', port 'clip'", "type mismatch: needs Clip<Image>, got Image from 'card.image'"]),
+    ("cycle.ron", &["cycle through nodes 'a', 'b'"]),
+    ("missing_input.ron", &["node 'gray', port 'image'", "required input 'image' (Image) is not set"]),
+    ("wrong_kind.ron", &["node 'card', port 'width'", "needs an integer, got \"wide\""]),
+    ("out_of_range.ron", &["node 'card', port 'width'", "0 is outside the range 1..=16384"]),
+    ("duplicate_id.ron", &["node 'card'", "duplicate node id"]),
+    ("missing_node.ron", &["loader.clip -> gray.image", "node 'loader', which is not in the graph"]),
+    ("missing_image.ron", &["node 'load'", "no-such-image.png"]),
+    ("corrupt_png.ron", &["node 'load'", "corrupt.png"]),
+    ("empty_file.ron", &["node 'load'", "empty.png"]),
+    ("empty_graph_file.ron", &["empty_graph_file.ron", "malformed graph"]),
+    ("newer_version.ron", &["graph version 9 is newer"]),
+    ("unset_variable.ron", &["node 'frames', port 'path'", "environment variable PYROGRAPH_TEST_UNSET_VARIABLE is not set"]),
+];
+
+#[test]
+fn check_and_render_fail_with_the_specific_message_on_every_bad_fixture() {
+    let out_dir = tempfile::tempdir().unwrap();
+    for (file, needles) in BAD {
+        let path = fixture(file);
+        let path = path.to_str().unwrap();
+        for args in [vec!["check", path], vec!["render", path, "--out", out_dir.path().to_str().unwrap()]] {
+            let o = run(&args);
+            let all = text(&o);
+            assert!(!all.contains("panicked"), "{args:?} panicked:\n{all}");
+            assert_eq!(o.status.code(), Some(1), "{args:?} must exit 1:\n{all}");
+            for n in *needles {
+                assert!(all.contains(n), "{args:?}: expected {n:?} in:\n{all}");
+            }
+        }
+    }
+    assert_eq!(std::fs::read_dir(out_dir.path()).unwrap().count(), 0, "a failed render writes nothing");
+}
+
+#[test]
+fn check_json_lists_every_problem_with_its_location() {
+    let o = run(&["check", "--json", fixture("unknown_port.ron").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    assert_eq!(v["ok"], false);
+    assert_eq!(v["problems"][0]["location"], "node 'gray', port 'img'");
+    assert_eq!(v["problems"][0]["kind"], "UnknownPort");
+}
+
+#[test]
+fn no_bad_fixture_is_left_untested() {
+    let mut listed: Vec<&str> = BAD.iter().map(|(f, _)| *f).collect();
+    listed.sort_unstable();
+    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("tests/fixtures/bad"))
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".ron"))
+        .collect();
+    on_disk.sort();
+    assert_eq!(listed, on_disk);
+}
+
+#[test]
+fn check_accepts_every_shipped_graph_that_needs_no_footage() {
+    for entry in std::fs::read_dir(root().join("graphs")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap_or_default();
+        if path.extension().is_none_or(|e| e != "ron") || text.contains("${PYROGRAPH_FOOTAGE}") {
+            continue;
+        }
+        let o = run(&["check", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}:\n{}", path.display(), self::text(&o));
+    }
+}
+
+#[test]
+fn render_writes_with_set_and_frames_and_refuses_to_overwrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let graph = root().join("graphs/flame-cards.ron");
+    let graph = graph.to_str().unwrap();
+    let o = run(&["render", graph, "--out", out, "--frames", "2-4", "--set", "calm.width=32"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let calm: Vec<_> = std::fs::read_dir(dir.path().join("flame-cards")).unwrap().filter_map(|e| e.ok()).collect();
+    assert_eq!(calm.len(), 6, "3 frames from each of the two writers");
+    let img = image::open(dir.path().join("flame-cards/calm_0002.png")).unwrap();
+    assert_eq!(img.width(), 32, "--set reached the preset's exposed width");
+
+    let again = run(&["render", graph, "--out", out, "--frames", "2-4"]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(text(&again).contains("exists"), "{}", text(&again));
+    let forced = run(&["render", graph, "--out", out, "--frames", "2-4", "--overwrite"]);
+    assert!(forced.status.success(), "{}", text(&forced));
+}
+
+#[test]
+fn bad_set_arguments_are_errors_not_panics() {
+    let graph = root().join("graphs/demo.ron");
+    let graph = graph.to_str().unwrap();
+    for set in ["nobody.width=3", "flame.width=huge", "no-equals-sign"] {
+        let o = run(&["check", graph]);
+        assert!(o.status.success());
+        let o = run(&["render", graph, "--set", set, "--out", "/nonexistent-dir-never-written"]);
+        assert_eq!(o.status.code(), Some(1), "--set {set}: {}", text(&o));
+        assert!(!text(&o).contains("panicked"));
+    }
+}
+
+#[test]
+fn nodes_json_and_presets_list_what_is_there() {
+    let o = run(&["nodes", "--json"]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v.as_array().unwrap().iter().any(|n| n["type"] == "imaging.load_sequence"));
+
+    let o = bin().args(["presets", "--json"]).current_dir(root()).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let card = v.as_array().unwrap().iter().find(|p| p["file"].as_str().unwrap().ends_with("flame-card.ron")).expect("flame-card listed");
+    let params: Vec<&str> = card["params"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert!(params.contains(&"seed") && params.contains(&"turbulence"), "{params:?}");
+}
+
+#[test]
+fn demo_writes_frames_and_says_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = bin().current_dir(dir.path()).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("demo frames are in"), "{stdout}");
+    let frames = std::fs::read_dir(dir.path().join("pyrograph-out")).unwrap().count();
+    assert_eq!(frames, 48);
+    // A second run replaces the demo's own frames rather than failing.
+    assert!(bin().current_dir(dir.path()).output().unwrap().status.success());
+}
+
+#[test]
+fn info_describes_a_graph() {
+    let o = run(&["info", root().join("graphs/demo.ron").to_str().unwrap()]);
+    assert!(o.status.success());
+    let t = text(&o);
+    assert!(t.contains("flame") && t.contains("Clip<Image>") && t.contains("per frame over a clip"), "{t}");
+}

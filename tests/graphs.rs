@@ -1,0 +1,112 @@
+//! Every shipped graph round-trips through RON; old shapes migrate; the node reference is current;
+//! example graphs match their golden frames (regenerate on purpose with REGENERATE=1).
+
+use std::path::{Path, PathBuf};
+
+use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, Graph, GraphDoc, Value};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn ron_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            out.extend(ron_files(&path));
+        } else if path.extension().is_some_and(|e| e == "ron") {
+            out.push(path);
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn every_graph_round_trips_load_save_load() {
+    let files = ron_files(&root().join("graphs"));
+    assert!(files.len() >= 3, "graphs/ holds the demo, candle-gray and presets");
+    let dir = tempfile::tempdir().unwrap();
+    for file in files {
+        let doc = GraphDoc::load(&file).unwrap_or_else(|d| panic!("{d}"));
+        let saved = dir.path().join(file.file_name().unwrap());
+        doc.save(&saved, true).unwrap();
+        let again = GraphDoc::load(&saved).unwrap_or_else(|d| panic!("{}: {d}", saved.display()));
+        assert_eq!(doc, again, "{} changed in a round trip", file.display());
+    }
+}
+
+#[test]
+fn the_unversioned_shape_migrates_and_cooks() {
+    let path = root().join("tests/fixtures/migrate/v0.ron");
+    let (doc, graph) = Graph::load(&path, &pyrograph::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(doc.version, 1);
+    assert_eq!(doc.node("card").unwrap().pos, Some((10.0, 20.0)));
+    let gray = Evaluator::new().output(&graph, "gray.image", &CookCtx::new()).unwrap();
+    let Value::Image(img) = gray else { panic!("expected an image") };
+    assert_eq!(img.size(), (16, 8));
+    assert!((img.data()[0] - 0.5).abs() < 1e-6, "average of (1, 0.5, 0) is 0.5");
+    // Saving writes the current version, which loads as is.
+    let text = doc.to_ron();
+    assert!(text.contains("version: 1"));
+    assert_eq!(GraphDoc::from_ron(&text).unwrap(), doc);
+}
+
+#[test]
+fn docs_nodes_md_is_current() {
+    let expected = pyrograph::reference::markdown(&pyrograph::registry());
+    let path = root().join("docs/nodes.md");
+    if std::env::var_os("REGENERATE").is_some() {
+        std::fs::write(&path, &expected).unwrap();
+    }
+    let actual = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(actual == expected, "docs/nodes.md is stale: run `cargo run --release -- nodes --markdown > docs/nodes.md`");
+}
+
+#[test]
+fn every_registered_node_has_a_doc_and_documented_ports() {
+    for d in pyrograph::registry().descs() {
+        assert!(!d.doc.trim().is_empty(), "{} has no doc", d.type_name);
+        for p in d.inputs.iter().chain(&d.outputs) {
+            assert!(!p.doc.trim().is_empty(), "{}.{} has no doc", d.type_name, p.name);
+        }
+    }
+}
+
+/// Renders `graph` into a temp folder and compares chosen frames with tests/golden/.
+fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
+    let out = tempfile::tempdir().unwrap();
+    let path = root().join("graphs").join(graph);
+    let options = BuildOptions { output_dir: Some(out.path().to_path_buf()) };
+    let (_, g) = Graph::load(&path, &pyrograph::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
+    let sinks: Vec<String> = g.sinks().iter().map(|s| s.to_string()).collect();
+    let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
+    let ctx = CookCtx::new().with_settings(CookSettings { frames: Some(frames), overwrite: false });
+    let res = Evaluator::new().cook(&g, &targets, &ctx).unwrap();
+    assert!(res.is_ok(), "{:?}", res.root_errors());
+    let golden_dir = root().join("tests/golden");
+    for f in files {
+        let made = out.path().join(f);
+        let want = golden_dir.join(Path::new(f).file_name().unwrap());
+        if std::env::var_os("REGENERATE").is_some() {
+            std::fs::create_dir_all(&golden_dir).unwrap();
+            std::fs::copy(&made, &want).unwrap();
+        }
+        let a = image::open(&made).unwrap().to_rgba8();
+        let b = image::open(&want).unwrap_or_else(|e| panic!("{}: {e} (REGENERATE=1 creates it)", want.display())).to_rgba8();
+        assert_eq!(a.dimensions(), b.dimensions(), "{f}");
+        let worst = a.as_raw().iter().zip(b.as_raw()).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
+        assert!(worst <= 2, "{f} differs from its golden frame by up to {worst}/255");
+    }
+}
+
+#[test]
+fn demo_graph_matches_its_golden_frames() {
+    golden("demo.ron", (0, 24), &["demo_0000.png", "demo_0024.png"]);
+}
+
+#[test]
+fn flame_cards_match_their_golden_frames() {
+    golden("flame-cards.ron", (5, 5), &["flame-cards/calm_0005.png", "flame-cards/wild_0005.png"]);
+}

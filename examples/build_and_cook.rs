@@ -12,15 +12,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut doc = GraphDoc::new();
     doc.description = Some("Two procedural flames added together, written as PNG frames.".into());
-    doc.add_node("left", NodeDoc::new("imaging.turbulence_flame").param("seed", ParamValue::Int(1)).param("frames", ParamValue::Int(12)));
-    doc.add_node("right", NodeDoc::new("imaging.turbulence_flame").param("seed", ParamValue::Int(2)).param("frames", ParamValue::Int(12)));
+    doc.add_node(
+        "left",
+        NodeDoc::new("imaging.turbulence_flame").param("seed", ParamValue::Int(1)).param("frames", ParamValue::Int(12)),
+    );
+    doc.add_node(
+        "right",
+        NodeDoc::new("imaging.turbulence_flame").param("seed", ParamValue::Int(2)).param("frames", ParamValue::Int(12)),
+    );
     doc.add_node("add", NodeDoc::new("imaging.composite").param("mode", ParamValue::String("screen".into())));
     doc.add_node("gray", NodeDoc::new("imaging.to_gray"));
     doc.add_node(
         "write",
-        NodeDoc::new("imaging.write_sequence").param("pattern", ParamValue::String("frames/flame_####.png".into())).param("overwrite", ParamValue::Bool(true)),
+        NodeDoc::new("imaging.write_sequence")
+            .param("pattern", ParamValue::String("frames/flame_####.png".into()))
+            .param("overwrite", ParamValue::Bool(true)),
     );
-    doc.connect("left.clip", "add.a").connect("right.clip", "add.b").connect("add.image", "gray.image").connect("gray.image", "write.clip");
+    doc.connect("left.clip", "add.a")
+        .connect("right.clip", "add.b")
+        .connect("add.image", "gray.image")
+        .connect("gray.image", "write.clip");
 
     let graph = Graph::build(&doc, &pyrograph::registry(), out, &BuildOptions::default())?;
     let result = Evaluator::new().cook(&graph, &["write"], &CookCtx::new())?;

@@ -42,7 +42,8 @@ pub fn targets(shape: Shape, n: usize) -> Vec<String> {
 pub fn graph(registry: &Registry, shape: Shape, n: usize, tweak: f64) -> Graph {
     let doc = document(shape, n, tweak);
     // The benchmark documents are generated above and always valid.
-    Graph::build(&doc, registry, std::path::Path::new("."), &BuildOptions::default()).unwrap_or_else(|d| panic!("benchmark graph invalid: {d}"))
+    Graph::build(&doc, registry, std::path::Path::new("."), &BuildOptions::default())
+        .unwrap_or_else(|d| panic!("benchmark graph invalid: {d}"))
 }
 
 /// Which evaluator workload to time.

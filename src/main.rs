@@ -15,7 +15,11 @@ use pyrograph::core::{
 };
 
 #[derive(Parser)]
-#[command(name = "pyrograph", version, about = "Node-graph toolkit for procedural fire. With no command, cooks the built-in demo graph.")]
+#[command(
+    name = "pyrograph",
+    version,
+    about = "Node-graph toolkit for procedural fire. With no command, cooks the built-in demo graph."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -163,8 +167,8 @@ struct RenderOpts {
 fn apply_sets(doc: &mut GraphDoc, sets: &[String]) -> Result<(), Failure> {
     for s in sets {
         let (lhs, value) = s.split_once('=').ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
-        let (node, param) =
-            pyrograph::core::document::split_endpoint(lhs).ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
+        let (node, param) = pyrograph::core::document::split_endpoint(lhs)
+            .ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
         doc.set_param(node, param, ParamValue::parse_cli(value)).map_err(|e| Failure(format!("error: --set {s}: {e}")))?;
     }
     Ok(())
@@ -224,7 +228,13 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     report(&graph, &targets, &result, started.elapsed(), o.json)
 }
 
-fn report(graph: &Graph, targets: &[String], result: &CookResult, elapsed: std::time::Duration, json: bool) -> Result<(), Failure> {
+fn report(
+    graph: &Graph,
+    targets: &[String],
+    result: &CookResult,
+    elapsed: std::time::Duration,
+    json: bool,
+) -> Result<(), Failure> {
     let errors = result.root_errors();
     if json {
         let nodes: serde_json::Map<String, serde_json::Value> = targets
@@ -357,7 +367,10 @@ fn probe_sources(graph: &Graph) -> Vec<(serde_json::Value, String)> {
             .into_iter()
             .map(|(n, e)| {
                 let msg = explain(n, e);
-                (json!({"file": file, "location": format!("node '{n}'"), "kind": "Cook", "message": msg}), format!("error: {msg}"))
+                (
+                    json!({"file": file, "location": format!("node '{n}'"), "kind": "Cook", "message": msg}),
+                    format!("error: {msg}"),
+                )
             })
             .collect(),
         Err(e) => vec![(json!({"file": file, "kind": "Cook", "message": e.to_string()}), format!("error: {e}"))],
@@ -449,7 +462,12 @@ fn presets(registry: &Registry, dir: &Path, json_out: bool) -> Result<(), Failur
             println!("{}  {}", p["file"].as_str().unwrap_or(""), p["description"].as_str().unwrap_or(""));
             for kind in ["inputs", "params", "outputs"] {
                 for port in p[kind].as_array().into_iter().flatten() {
-                    println!("    {kind:<8} {:<18} {:<14} {}", port["name"].as_str().unwrap_or(""), port["type"].as_str().unwrap_or(""), port["default"].as_str().unwrap_or(""));
+                    println!(
+                        "    {kind:<8} {:<18} {:<14} {}",
+                        port["name"].as_str().unwrap_or(""),
+                        port["type"].as_str().unwrap_or(""),
+                        port["default"].as_str().unwrap_or("")
+                    );
                 }
             }
         }
@@ -465,7 +483,9 @@ fn preset_entry(registry: &Registry, file: &Path) -> Result<serde_json::Value, S
     let inputs: Vec<_> = desc.inputs.iter().filter(|p| iface.inputs.contains_key(&p.name)).map(port).collect();
     let params: Vec<_> = desc.inputs.iter().filter(|p| iface.params.contains_key(&p.name)).map(port).collect();
     let outputs: Vec<_> = desc.outputs.iter().map(port).collect();
-    Ok(json!({"file": file.display().to_string(), "description": desc.summary(), "inputs": inputs, "params": params, "outputs": outputs}))
+    Ok(
+        json!({"file": file.display().to_string(), "description": desc.summary(), "inputs": inputs, "params": params, "outputs": outputs}),
+    )
 }
 
 fn bench(registry: &Registry, iters: usize, json_out: bool) {

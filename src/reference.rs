@@ -31,7 +31,15 @@ fn node_section(out: &mut String, d: &NodeDesc) {
     if !d.inputs.is_empty() {
         let _ = writeln!(out, "| input | type | default | range / options | doc |\n|---|---|---|---|---|");
         for p in &d.inputs {
-            let _ = writeln!(out, "| `{}` | {} | {} | {} | {} |", p.name, p.ty, default_text(p), constraint_text(p), one_line(&p.doc));
+            let _ = writeln!(
+                out,
+                "| `{}` | {} | {} | {} | {} |",
+                p.name,
+                p.ty,
+                default_text(p),
+                constraint_text(p),
+                one_line(&p.doc)
+            );
         }
         out.push('\n');
     }

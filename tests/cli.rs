@@ -143,7 +143,12 @@ fn nodes_json_and_presets_list_what_is_there() {
     let o = bin().args(["presets", "--json"]).current_dir(root()).output().unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let card = v.as_array().unwrap().iter().find(|p| p["file"].as_str().unwrap().ends_with("flame-card.ron")).expect("flame-card listed");
+    let card = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["file"].as_str().unwrap().ends_with("flame-card.ron"))
+        .expect("flame-card listed");
     let params: Vec<&str> = card["params"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert!(params.contains(&"seed") && params.contains(&"turbulence"), "{params:?}");
 }

@@ -230,8 +230,7 @@ impl GraphDoc {
     /// Reads and parses a graph file.
     pub fn load(path: &Path) -> Result<GraphDoc, Diagnostics> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            Diagnostics::one(Diagnostic::new(DiagnosticKind::Io, Location::File, format!("cannot read graph: {e}")))
-                .in_file(path)
+            Diagnostics::one(Diagnostic::new(DiagnosticKind::Io, Location::File, format!("cannot read graph: {e}"))).in_file(path)
         })?;
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }

@@ -172,7 +172,12 @@ impl CookResult {
         let res = self.results.get(id).ok_or_else(|| NodeError::msg(format!("node '{id}' was not cooked")))?;
         let values = res.as_ref().map_err(Clone::clone)?;
         let idx = graph.index(id).ok_or_else(|| NodeError::msg(format!("no node '{id}'")))?;
-        let p = graph.node(idx).node.desc().output_index(port).ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
+        let p = graph
+            .node(idx)
+            .node
+            .desc()
+            .output_index(port)
+            .ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
         Ok(values[p].clone())
     }
 
@@ -265,13 +270,7 @@ impl Evaluator {
         self.cook(graph, &[id], ctx)?.output(graph, id, port)
     }
 
-    fn cook_node(
-        &self,
-        graph: &Graph,
-        idx: NodeIndex,
-        done: &Done,
-        ctx: &CookCtx,
-    ) -> Outcome {
+    fn cook_node(&self, graph: &Graph, idx: NodeIndex, done: &Done, ctx: &CookCtx) -> Outcome {
         let gn = graph.node(idx);
         let fail = |e| Outcome { result: Err(e), entry: None, cooked: false };
         let (values, fingerprint) = match gather_inputs(graph, gn, done) {
@@ -310,7 +309,9 @@ impl Evaluator {
 fn wrap(gn: &GraphNode, e: NodeError) -> NodeError {
     match e {
         NodeError::Upstream(_) | NodeError::InNode { .. } => e,
-        other => NodeError::InNode { node: gn.id.to_string(), type_name: gn.node.desc().type_name.clone(), source: Box::new(other) },
+        other => {
+            NodeError::InNode { node: gn.id.to_string(), type_name: gn.node.desc().type_name.clone(), source: Box::new(other) }
+        }
     }
 }
 
@@ -323,11 +324,7 @@ fn check_outputs(gn: &GraphNode, out: Vec<Value>) -> Result<Vec<Value>, NodeErro
 }
 
 /// Input values and the node's fingerprint; `Err` when an upstream node failed.
-fn gather_inputs(
-    graph: &Graph,
-    gn: &GraphNode,
-    done: &Done,
-) -> Result<(Vec<Value>, u64), NodeError> {
+fn gather_inputs(graph: &Graph, gn: &GraphNode, done: &Done) -> Result<(Vec<Value>, u64), NodeError> {
     let mut h = Fingerprinter::new();
     gn.node.desc().type_name.hash(&mut h);
     gn.lifted.hash(&mut h);
@@ -441,15 +438,14 @@ impl FrameSource for LiftedPort {
 
 fn lift(gn: &GraphNode, inputs: Vec<Value>, fingerprint: u64) -> Vec<Value> {
     let desc = gn.node.desc();
-    let lift: Vec<bool> = inputs
-        .iter()
-        .zip(&desc.inputs)
-        .map(|(v, p)| matches!(v, Value::Clip(_)) && !matches!(p.ty, PortType::Clip(_)))
-        .collect();
-    let clips = || inputs.iter().zip(&lift).filter(|(_, l)| **l).filter_map(|(v, _)| if let Value::Clip(c) = v { Some(c) } else { None });
+    let lift: Vec<bool> =
+        inputs.iter().zip(&desc.inputs).map(|(v, p)| matches!(v, Value::Clip(_)) && !matches!(p.ty, PortType::Clip(_))).collect();
+    let clips =
+        || inputs.iter().zip(&lift).filter(|(_, l)| **l).filter_map(|(v, _)| if let Value::Clip(c) = v { Some(c) } else { None });
     let len = clips().map(Clip::len).min().unwrap_or(0);
     let fps = clips().next().map_or(24.0, Clip::fps);
-    let lifted = Arc::new(Lifted { node: gn.node.clone(), id: gn.id.clone(), inputs, lift, len, recent: Mutex::new(VecDeque::new()) });
+    let lifted =
+        Arc::new(Lifted { node: gn.node.clone(), id: gn.id.clone(), inputs, lift, len, recent: Mutex::new(VecDeque::new()) });
     desc.outputs
         .iter()
         .enumerate()

@@ -168,7 +168,11 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
 
     for (id, nd) in &doc.nodes.0 {
         if !known.insert(id) {
-            diags.push(diag(DiagnosticKind::DuplicateNode, Location::Node(id.clone()), "duplicate node id: every node needs its own id"));
+            diags.push(diag(
+                DiagnosticKind::DuplicateNode,
+                Location::Node(id.clone()),
+                "duplicate node id: every node needs its own id",
+            ));
             continue;
         }
         let Some(node) = instantiate(id, nd, ctx, &mut diags) else { continue };
@@ -205,8 +209,7 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
         Some(iface) => resolve_interface(iface, &g, &ids, &mut diags),
         None => None,
     };
-    let fed: HashSet<(NodeIndex, usize)> =
-        interface.iter().flat_map(|i| i.inputs.iter().map(|(_, n, p)| (*n, *p))).collect();
+    let fed: HashSet<(NodeIndex, usize)> = interface.iter().flat_map(|i| i.inputs.iter().map(|(_, n, p)| (*n, *p))).collect();
     check_missing_inputs(&g, &fed, &mut diags);
 
     if !diags.is_empty() {
@@ -290,7 +293,11 @@ pub fn expand_vars(text: &str) -> Result<String, String> {
         let name = &after[..end];
         match std::env::var(name) {
             Ok(v) if !v.is_empty() => out.push_str(&v),
-            _ => return Err(format!("environment variable {name} is not set (used in \"{text}\"); set it, e.g. `export {name}=/path`")),
+            _ => {
+                return Err(format!(
+                    "environment variable {name} is not set (used in \"{text}\"); set it, e.g. `export {name}=/path`"
+                ));
+            }
         }
         rest = &after[end + 1..];
     }
@@ -360,7 +367,9 @@ pub(crate) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
         PortType::Color => {
             let c = match pv {
                 ParamValue::String(s) => parse_hex_color(s),
-                _ => numbers::<4>(pv).map(|c| c.map(|v| v as f32)).or_else(|| numbers::<3>(pv).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])),
+                _ => numbers::<4>(pv)
+                    .map(|c| c.map(|v| v as f32))
+                    .or_else(|| numbers::<3>(pv).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])),
             };
             c.map(Value::Color).ok_or_else(|| wrong("a colour: (r, g, b), (r, g, b, a) or \"#rrggbb\""))
         }
@@ -426,7 +435,11 @@ fn resolve_edge(
         let Some(&idx) = ids.get(node) else {
             // A node that exists but failed to instantiate already has its own diagnostic.
             if !known.contains(node) {
-                diags.push(diag(DiagnosticKind::MissingNode, loc.clone(), format!("edge names node '{node}', which is not in the graph")));
+                diags.push(diag(
+                    DiagnosticKind::MissingNode,
+                    loc.clone(),
+                    format!("edge names node '{node}', which is not in the graph"),
+                ));
             }
             return None;
         };
@@ -440,7 +453,11 @@ fn resolve_edge(
             diags.push(diag(
                 DiagnosticKind::UnknownPort,
                 Location::Port { node: node.to_string(), port: port.to_string() },
-                format!("'{}' has no {side} '{port}' (its {side}s: {}) — in edge {from} -> {to}", desc.type_name, names.join(", ")),
+                format!(
+                    "'{}' has no {side} '{port}' (its {side}s: {}) — in edge {from} -> {to}",
+                    desc.type_name,
+                    names.join(", ")
+                ),
             ));
         }
         found.map(|i| (idx, i))
@@ -463,7 +480,10 @@ fn check_cycles(g: &StableDiGraph<GraphNode, (usize, usize)>, diags: &mut Vec<Di
             diags.push(diag(
                 DiagnosticKind::Cycle,
                 Location::Node(first),
-                format!("cycle through nodes {}: a graph must not feed a node's output back into itself", names.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")),
+                format!(
+                    "cycle through nodes {}: a graph must not feed a node's output back into itself",
+                    names.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
+                ),
             ));
         }
     }
@@ -474,7 +494,8 @@ fn check_cycles(g: &StableDiGraph<GraphNode, (usize, usize)>, diags: &mut Vec<Di
 fn type_check(g: &mut StableDiGraph<GraphNode, (usize, usize)>, order: &[NodeIndex], diags: &mut Vec<Diagnostic>) {
     for &idx in order {
         let mut lifted = false;
-        let incoming: Vec<(NodeIndex, usize, usize)> = g.edges_directed(idx, petgraph::Direction::Incoming).map(|e| (e.source(), e.weight().0, e.weight().1)).collect();
+        let incoming: Vec<(NodeIndex, usize, usize)> =
+            g.edges_directed(idx, petgraph::Direction::Incoming).map(|e| (e.source(), e.weight().0, e.weight().1)).collect();
         for (src, out_port, in_port) in incoming {
             let have = g[src].out_types[out_port].clone();
             let node = &g[idx];
@@ -510,12 +531,17 @@ fn type_check(g: &mut StableDiGraph<GraphNode, (usize, usize)>, order: &[NodeInd
     }
 }
 
-fn check_missing_inputs(g: &StableDiGraph<GraphNode, (usize, usize)>, fed: &HashSet<(NodeIndex, usize)>, diags: &mut Vec<Diagnostic>) {
+fn check_missing_inputs(
+    g: &StableDiGraph<GraphNode, (usize, usize)>,
+    fed: &HashSet<(NodeIndex, usize)>,
+    diags: &mut Vec<Diagnostic>,
+) {
     for idx in g.node_indices() {
         let node = &g[idx];
         for (i, (src, port)) in node.inputs.iter().zip(&node.node.desc().inputs).enumerate() {
             if matches!(src, InputSource::Missing) && !fed.contains(&(idx, i)) {
-                let how = if port.ty.is_parameter() { "set it in params or connect a node" } else { "connect a node's output to it" };
+                let how =
+                    if port.ty.is_parameter() { "set it in params or connect a node" } else { "connect a node's output to it" };
                 diags.push(diag(
                     DiagnosticKind::MissingInput,
                     Location::Port { node: node.id.to_string(), port: port.name.clone() },
@@ -548,7 +574,10 @@ fn resolve_interface(
                 diags.push(diag(
                     DiagnosticKind::Include,
                     Location::File,
-                    format!("interface '{name}' points at '{target}', which is not a {} port of a node in this graph", if output { "output" } else { "input" }),
+                    format!(
+                        "interface '{name}' points at '{target}', which is not a {} port of a node in this graph",
+                        if output { "output" } else { "input" }
+                    ),
                 ));
             }
         }

@@ -58,12 +58,14 @@ pub(crate) fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Arc<d
     };
     let expanded = expand_vars(raw).map_err(|m| vec![include_diag(id, m)])?;
     let path = ctx.dir.join(&expanded);
-    let canon = std::fs::canonicalize(&path).map_err(|e| vec![include_diag(id, format!("cannot open included graph {}: {e}", path.display()))])?;
+    let canon = std::fs::canonicalize(&path)
+        .map_err(|e| vec![include_diag(id, format!("cannot open included graph {}: {e}", path.display()))])?;
     if ctx.include_stack.contains(&canon) {
         let chain: Vec<String> = ctx.include_stack.iter().chain([&canon]).map(|p| short(p)).collect();
         return Err(vec![include_diag(id, format!("include cycle: {}", chain.join(" -> ")))]);
     }
-    let text = std::fs::read_to_string(&canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
+    let text =
+        std::fs::read_to_string(&canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
     let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, &canon, d.0))?;
     let mut stack = ctx.include_stack.clone();
     stack.push(canon.clone());
@@ -120,7 +122,12 @@ fn describe(doc: &GraphDoc, sub: &Graph) -> Result<NodeDesc, String> {
             InputSource::Const(v) => Some(v.clone()),
             _ => None,
         };
-        desc.inputs.push(PortDesc { name: name.clone(), default, doc: format!("Feeds {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc), ..inner.clone() });
+        desc.inputs.push(PortDesc {
+            name: name.clone(),
+            default,
+            doc: format!("Feeds {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc),
+            ..inner.clone()
+        });
     }
     for (name, idx, port) in &iface.params {
         let inner = &sub.node(*idx).node.desc().inputs[*port];
@@ -131,12 +138,21 @@ fn describe(doc: &GraphDoc, sub: &Graph) -> Result<NodeDesc, String> {
             InputSource::Const(v) => Some(v.clone()),
             _ => return Err(format!("exposed parameter '{name}' is connected inside the graph")),
         };
-        desc.inputs.push(PortDesc { name: name.clone(), default: current, doc: format!("Sets {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc), ..inner.clone() });
+        desc.inputs.push(PortDesc {
+            name: name.clone(),
+            default: current,
+            doc: format!("Sets {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc),
+            ..inner.clone()
+        });
     }
     for (name, idx, port) in &iface.outputs {
         let ty = sub.node(*idx).out_types[*port].clone();
         only_per_frame &= !matches!(ty, PortType::Clip(_));
-        desc.outputs.push(PortDesc::new(name, ty, &format!("Output {}.{}", sub.node(*idx).id, sub.node(*idx).node.desc().outputs[*port].name)));
+        desc.outputs.push(PortDesc::new(
+            name,
+            ty,
+            &format!("Output {}.{}", sub.node(*idx).id, sub.node(*idx).node.desc().outputs[*port].name),
+        ));
     }
     desc.time = if only_per_frame { TimeDep::PerFrame } else { TimeDep::WholeClip };
     Ok(desc)

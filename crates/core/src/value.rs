@@ -113,8 +113,7 @@ impl Image {
 
     /// Wraps existing interleaved data; `None` when its length does not match the size.
     pub fn from_vec(width: u32, height: u32, channels: Channels, data: Vec<f32>) -> Option<Self> {
-        (data.len() == width as usize * height as usize * channels.count())
-            .then_some(Image { width, height, channels, data })
+        (data.len() == width as usize * height as usize * channels.count()).then_some(Image { width, height, channels, data })
     }
 
     /// Builds a gray image from a function of the pixel coordinates.
@@ -581,7 +580,7 @@ mod tests {
 
     #[test]
     fn clip_rejects_out_of_range_frames_and_materializes_in_order() {
-        let frames = (0..5).map(|i| Value::Int(i)).collect();
+        let frames = (0..5).map(Value::Int).collect();
         let clip = Clip::from_frames(PortType::Int, 24.0, frames);
         let ctx = CookCtx::default();
         assert!(clip.get(5, &ctx).is_err());

@@ -5,8 +5,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use pyrograph_core::{
-    BuildOptions, CancelToken, Clip, CookCtx, FnNode, Graph, GraphDoc, Inputs, NodeDesc, NodeDoc, NodeError, ParamValue, PortDesc,
-    PortType, Progress, Registry, TimeDep, Value,
+    BuildOptions, CancelToken, Clip, CookCtx, FnNode, Graph, GraphDoc, Inputs, NodeDesc, NodeDoc, NodeError, ParamValue,
+    PortDesc, PortType, Progress, Registry, TimeDep, Value,
 };
 
 fn registry() -> Registry {

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use image::imageops::{self, FilterType};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc,
-    PortType, Registry, TimeDep, Value,
+    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
+    Value,
 };
 
 use crate::convert;
@@ -59,10 +59,7 @@ impl GrayMode {
             "rec709" => Ok(GrayMode::Rec709),
             "average" => Ok(GrayMode::Average),
             "max" => Ok(GrayMode::Max),
-            other => Err(NodeError::port(
-                "mode",
-                format!("unknown mode '{other}' (rec601, rec709, average, max)"),
-            )),
+            other => Err(NodeError::port("mode", format!("unknown mode '{other}' (rec601, rec709, average, max)"))),
         }
     }
 
@@ -84,7 +81,12 @@ fn to_gray_desc() -> NodeDesc {
         "Converts an image to one gray channel.\n\nAlpha is dropped; a gray input passes through unchanged.",
     )
     .input(PortDesc::new("image", PortType::Image, "The image to convert."))
-    .input(PortDesc::choice("mode", &["rec601", "rec709", "average", "max"], "rec601", "Weights: rec601 (OpenCV), rec709, average or max of R, G, B."))
+    .input(PortDesc::choice(
+        "mode",
+        &["rec601", "rec709", "average", "max"],
+        "rec601",
+        "Weights: rec601 (OpenCV), rec709, average or max of R, G, B.",
+    ))
     .output("image", PortType::Image, "The gray image.")
 }
 
@@ -93,11 +95,7 @@ pub fn to_gray(img: &Image, mode: GrayMode) -> Image {
     match img.channels() {
         Channels::Gray => img.clone(),
         Channels::Rgba => {
-            let data = img
-                .data()
-                .chunks_exact(4)
-                .map(|p| mode.apply(p[0], p[1], p[2]))
-                .collect();
+            let data = img.data().chunks_exact(4).map(|p| mode.apply(p[0], p[1], p[2])).collect();
             Image::from_vec(img.width(), img.height(), Channels::Gray, data)
                 .unwrap_or_else(|| Image::new(img.width(), img.height(), Channels::Gray))
         }
@@ -106,10 +104,7 @@ pub fn to_gray(img: &Image, mode: GrayMode) -> Image {
 
 fn cook_to_gray(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
     let mode = GrayMode::parse(i.choice("mode")?)?;
-    Ok(vec![Value::Image(Arc::new(to_gray(
-        i.image("image")?,
-        mode,
-    )))])
+    Ok(vec![Value::Image(Arc::new(to_gray(i.image("image")?, mode)))])
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -117,67 +112,25 @@ fn cook_to_gray(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
 // ---------------------------------------------------------------------------------------------
 
 fn crop_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.crop",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Cuts a rectangle out of an image.",
-    )
-    .input(PortDesc::new(
-        "image",
-        PortType::Image,
-        "The image to crop.",
-    ))
-    .input(PortDesc::int(
-        "x",
-        0,
-        (0, MAX_OFFSET),
-        "Left edge of the rectangle, in pixels from the left.",
-    ))
-    .input(PortDesc::int(
-        "y",
-        0,
-        (0, MAX_OFFSET),
-        "Top edge of the rectangle, in pixels from the top.",
-    ))
-    .input(PortDesc::int(
-        "width",
-        0,
-        (0, MAX_OFFSET),
-        "Width of the rectangle; 0 = up to the right edge.",
-    ))
-    .input(PortDesc::int(
-        "height",
-        0,
-        (0, MAX_OFFSET),
-        "Height of the rectangle; 0 = up to the bottom edge.",
-    ))
-    .output("image", PortType::Image, "The cropped image.")
+    NodeDesc::new("imaging.crop", "Imaging", TimeDep::PerFrame, "Cuts a rectangle out of an image.")
+        .input(PortDesc::new("image", PortType::Image, "The image to crop."))
+        .input(PortDesc::int("x", 0, (0, MAX_OFFSET), "Left edge of the rectangle, in pixels from the left."))
+        .input(PortDesc::int("y", 0, (0, MAX_OFFSET), "Top edge of the rectangle, in pixels from the top."))
+        .input(PortDesc::int("width", 0, (0, MAX_OFFSET), "Width of the rectangle; 0 = up to the right edge."))
+        .input(PortDesc::int("height", 0, (0, MAX_OFFSET), "Height of the rectangle; 0 = up to the bottom edge."))
+        .output("image", PortType::Image, "The cropped image.")
 }
 
 /// Resolves one axis of a crop: `(start, length)` within `size`, or an error naming the ports.
-fn crop_span(
-    start: u32,
-    len: u32,
-    size: u32,
-    ports: (&str, &str),
-    img: &Image,
-) -> Result<(u32, u32), NodeError> {
+fn crop_span(start: u32, len: u32, size: u32, ports: (&str, &str), img: &Image) -> Result<(u32, u32), NodeError> {
     if start >= size {
-        return Err(NodeError::port(
-            ports.0,
-            format!("{start} is outside the {} image", image_size_text(img)),
-        ));
+        return Err(NodeError::port(ports.0, format!("{start} is outside the {} image", image_size_text(img))));
     }
     let len = if len == 0 { size - start } else { len };
     if u64::from(start) + u64::from(len) > u64::from(size) {
         return Err(NodeError::port(
             ports.1,
-            format!(
-                "{} + {len} reaches past the edge of the {} image",
-                start,
-                image_size_text(img)
-            ),
+            format!("{} + {len} reaches past the edge of the {} image", start, image_size_text(img)),
         ));
     }
     Ok((start, len))
@@ -194,15 +147,9 @@ pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Imag
         .chunks_exact(row_len)
         .skip(y as usize)
         .take(h as usize)
-        .flat_map(|row| {
-            row.iter()
-                .skip(x as usize * n)
-                .take(w as usize * n)
-                .copied()
-        })
+        .flat_map(|row| row.iter().skip(x as usize * n).take(w as usize * n).copied())
         .collect();
-    Image::from_vec(w, h, img.channels(), data)
-        .ok_or_else(|| NodeError::port("image", "image data does not match its size"))
+    Image::from_vec(w, h, img.channels(), data).ok_or_else(|| NodeError::port("image", "image data does not match its size"))
 }
 
 fn u32_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
@@ -211,13 +158,7 @@ fn u32_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
 }
 
 fn cook_crop(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = crop(
-        i.image("image")?,
-        u32_port(i, "x")?,
-        u32_port(i, "y")?,
-        u32_port(i, "width")?,
-        u32_port(i, "height")?,
-    )?;
+    let img = crop(i.image("image")?, u32_port(i, "x")?, u32_port(i, "y")?, u32_port(i, "width")?, u32_port(i, "height")?)?;
     Ok(vec![Value::Image(Arc::new(img))])
 }
 
@@ -246,10 +187,7 @@ pub fn parse_filter(name: &str) -> Result<FilterType, NodeError> {
         "bilinear" => Ok(FilterType::Triangle),
         "catmull_rom" => Ok(FilterType::CatmullRom),
         "lanczos3" => Ok(FilterType::Lanczos3),
-        other => Err(NodeError::port(
-            "filter",
-            format!("unknown filter '{other}' (nearest, bilinear, catmull_rom, lanczos3)"),
-        )),
+        other => Err(NodeError::port("filter", format!("unknown filter '{other}' (nearest, bilinear, catmull_rom, lanczos3)"))),
     }
 }
 
@@ -257,17 +195,11 @@ pub fn parse_filter(name: &str) -> Result<FilterType, NodeError> {
 pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32), NodeError> {
     let (w0, h0) = (f64::from(img.width()), f64::from(img.height()));
     if img.width() == 0 || img.height() == 0 {
-        return Err(NodeError::port(
-            "image",
-            format!("cannot resize an empty {} image", image_size_text(img)),
-        ));
+        return Err(NodeError::port("image", format!("cannot resize an empty {} image", image_size_text(img))));
     }
     let scaled = |v: f64| (v.round() as u32).max(1);
     match (width, height) {
-        (0, 0) => Err(NodeError::port(
-            "width",
-            "width and height are both 0; set at least one of them",
-        )),
+        (0, 0) => Err(NodeError::port("width", "width and height are both 0; set at least one of them")),
         (0, h) => Ok((scaled(w0 * f64::from(h) / h0), h)),
         (w, 0) => Ok((w, scaled(h0 * f64::from(w) / w0))),
         (w, h) => Ok((w, h)),
@@ -275,12 +207,7 @@ pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32),
 }
 
 /// `img` scaled to `width × height` (0 keeps the aspect ratio) with `filter`.
-pub fn resize(
-    img: &Image,
-    width: u32,
-    height: u32,
-    filter: FilterType,
-) -> Result<Image, NodeError> {
+pub fn resize(img: &Image, width: u32, height: u32, filter: FilterType) -> Result<Image, NodeError> {
     let (w, h) = resize_target(img, width, height)?;
     // imageops clamps float samples to 0..1; scaling into that range first keeps HDR values.
     let peak = img.data().iter().fold(1.0_f32, |m, &v| m.max(v));
@@ -293,30 +220,15 @@ pub fn resize(
     };
     let normalised = scale(img.clone(), 1.0 / peak);
     let resized = match img.channels() {
-        Channels::Gray => convert::from_gray32f(imageops::resize(
-            &convert::to_gray32f(&normalised),
-            w,
-            h,
-            filter,
-        )),
-        Channels::Rgba => convert::from_rgba32f(imageops::resize(
-            &convert::to_rgba32f(&normalised),
-            w,
-            h,
-            filter,
-        )),
+        Channels::Gray => convert::from_gray32f(imageops::resize(&convert::to_gray32f(&normalised), w, h, filter)),
+        Channels::Rgba => convert::from_rgba32f(imageops::resize(&convert::to_rgba32f(&normalised), w, h, filter)),
     };
     Ok(scale(resized, peak))
 }
 
 fn cook_resize(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
     let filter = parse_filter(i.choice("filter")?)?;
-    let img = resize(
-        i.image("image")?,
-        u32_port(i, "width")?,
-        u32_port(i, "height")?,
-        filter,
-    )?;
+    let img = resize(i.image("image")?, u32_port(i, "width")?, u32_port(i, "height")?, filter)?;
     Ok(vec![Value::Image(Arc::new(img))])
 }
 
@@ -333,7 +245,12 @@ fn time_range_desc() -> NodeDesc {
     )
     .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The clip to trim."))
     .input(PortDesc::int("first", 0, (0, 1 << 40), "First frame kept (0-based)."))
-    .input(PortDesc::int("last", -1, (-(1 << 40), 1 << 40), "Last frame kept, inclusive; negative counts from the end (-1 = last frame)."))
+    .input(PortDesc::int(
+        "last",
+        -1,
+        (-(1 << 40), 1 << 40),
+        "Last frame kept, inclusive; negative counts from the end (-1 = last frame).",
+    ))
     .output("clip", PortType::clip_of(PortType::Image), "The trimmed clip.")
 }
 
@@ -356,38 +273,20 @@ impl FrameSource for RangeSource {
 /// Resolves `first..=last` (negative `last` counts from the end) against a clip of `len` frames.
 pub fn resolve_range(len: usize, first: i64, last: i64) -> Result<(usize, usize), NodeError> {
     let frames = |len: usize| {
-        if len == 0 {
-            "it has no frames".to_string()
-        } else {
-            format!("frames 0-{}", len - 1)
-        }
+        if len == 0 { "it has no frames".to_string() } else { format!("frames 0-{}", len - 1) }
     };
     let len_i = i64::try_from(len).unwrap_or(i64::MAX);
     if first < 0 || first >= len_i {
-        return Err(NodeError::port(
-            "first",
-            format!(
-                "frame {first} is outside the {len}-frame clip ({})",
-                frames(len)
-            ),
-        ));
+        return Err(NodeError::port("first", format!("frame {first} is outside the {len}-frame clip ({})", frames(len))));
     }
     let last_abs = if last < 0 { len_i + last } else { last };
     if last_abs < 0 || last_abs >= len_i {
-        return Err(NodeError::port(
-            "last",
-            format!(
-                "frame {last} is outside the {len}-frame clip ({})",
-                frames(len)
-            ),
-        ));
+        return Err(NodeError::port("last", format!("frame {last} is outside the {len}-frame clip ({})", frames(len))));
     }
     if last_abs < first {
         return Err(NodeError::port(
             "last",
-            format!(
-                "the range {first}-{last_abs} is empty: last must not be before first (the clip has {len} frames)"
-            ),
+            format!("the range {first}-{last_abs} is empty: last must not be before first (the clip has {len} frames)"),
         ));
     }
     // Both are within 0..len, so they fit usize.
@@ -399,25 +298,12 @@ pub fn time_range(clip: &Clip, first: i64, last: i64) -> Result<Clip, NodeError>
     let (first, last) = resolve_range(clip.len(), first, last)?;
     let mut h = Fingerprinter::new();
     ("imaging.time_range", clip.fingerprint(), first, last).hash(&mut h);
-    let source = RangeSource {
-        clip: clip.clone(),
-        first,
-        len: last - first + 1,
-    };
-    Ok(Clip::new(
-        clip.element().clone(),
-        clip.fps(),
-        h.finish(),
-        Arc::new(source),
-    ))
+    let source = RangeSource { clip: clip.clone(), first, len: last - first + 1 };
+    Ok(Clip::new(clip.element().clone(), clip.fps(), h.finish(), Arc::new(source)))
 }
 
 fn cook_time_range(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Clip(time_range(
-        i.clip("clip")?,
-        i.int("first")?,
-        i.int("last")?,
-    )?)])
+    Ok(vec![Value::Clip(time_range(i.clip("clip")?, i.int("first")?, i.int("last")?)?)])
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -448,10 +334,7 @@ impl BlendMode {
             "screen" => Ok(BlendMode::Screen),
             "max" => Ok(BlendMode::Max),
             "multiply" => Ok(BlendMode::Multiply),
-            other => Err(NodeError::port(
-                "mode",
-                format!("unknown mode '{other}' (over, add, screen, max, multiply)"),
-            )),
+            other => Err(NodeError::port("mode", format!("unknown mode '{other}' (over, add, screen, max, multiply)"))),
         }
     }
 
@@ -506,46 +389,24 @@ pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<
     if a.size() != b.size() {
         return Err(NodeError::port(
             "b",
-            format!(
-                "b is {} but a is {}; composite needs images of the same size",
-                image_size_text(b),
-                image_size_text(a)
-            ),
+            format!("b is {} but a is {}; composite needs images of the same size", image_size_text(b), image_size_text(a)),
         ));
     }
     let (w, h) = a.size();
     let both_gray = a.channels() == Channels::Gray && b.channels() == Channels::Gray;
     let data: Vec<f32> = if both_gray {
-        a.data()
-            .iter()
-            .zip(b.data())
-            .map(|(&x, &y)| x + opacity * (mode.blend(x, y) - x))
-            .collect()
+        a.data().iter().zip(b.data()).map(|(&x, &y)| x + opacity * (mode.blend(x, y) - x)).collect()
     } else {
         let (a, b) = (a.to_rgba(), b.to_rgba());
-        a.data()
-            .chunks_exact(4)
-            .zip(b.data().chunks_exact(4))
-            .flat_map(|(p, q)| composite_rgba(p, q, mode, opacity))
-            .collect()
+        a.data().chunks_exact(4).zip(b.data().chunks_exact(4)).flat_map(|(p, q)| composite_rgba(p, q, mode, opacity)).collect()
     };
-    let channels = if both_gray {
-        Channels::Gray
-    } else {
-        Channels::Rgba
-    };
-    Image::from_vec(w, h, channels, data)
-        .ok_or_else(|| NodeError::port("a", "image data does not match its size"))
+    let channels = if both_gray { Channels::Gray } else { Channels::Rgba };
+    Image::from_vec(w, h, channels, data).ok_or_else(|| NodeError::port("a", "image data does not match its size"))
 }
 
 fn cook_composite(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
     let mode = BlendMode::parse(i.choice("mode")?)?;
-    let img = composite(
-        i.image("a")?,
-        i.image("b")?,
-        mode,
-        i.float("opacity")? as f32,
-    )?;
+    let img = composite(i.image("a")?, i.image("b")?, mode, i.float("opacity")? as f32)?;
     Ok(vec![Value::Image(Arc::new(img))])
 }
 
@@ -554,39 +415,17 @@ fn cook_composite(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> 
 // ---------------------------------------------------------------------------------------------
 
 fn constant_color_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.constant_color",
-        "Imaging",
-        TimeDep::Source,
-        "An RGBA image filled with one colour.",
-    )
-    .input(PortDesc::int(
-        "width",
-        512,
-        (1, MAX_SIZE),
-        "Width in pixels.",
-    ))
-    .input(PortDesc::int(
-        "height",
-        512,
-        (1, MAX_SIZE),
-        "Height in pixels.",
-    ))
-    .input(PortDesc::color(
-        "color",
-        [0.0, 0.0, 0.0, 1.0],
-        "The fill colour (linear RGBA, straight alpha).",
-    ))
-    .output("image", PortType::Image, "The filled image.")
+    NodeDesc::new("imaging.constant_color", "Imaging", TimeDep::Source, "An RGBA image filled with one colour.")
+        .input(PortDesc::int("width", 512, (1, MAX_SIZE), "Width in pixels."))
+        .input(PortDesc::int("height", 512, (1, MAX_SIZE), "Height in pixels."))
+        .input(PortDesc::color("color", [0.0, 0.0, 0.0, 1.0], "The fill colour (linear RGBA, straight alpha)."))
+        .output("image", PortType::Image, "The filled image.")
 }
 
 /// A `width × height` RGBA image of `color`.
 pub fn constant_color(width: u32, height: u32, color: [f32; 4]) -> Image {
-    let data = std::iter::repeat_n(color, width as usize * height as usize)
-        .flatten()
-        .collect();
-    Image::from_vec(width, height, Channels::Rgba, data)
-        .unwrap_or_else(|| Image::new(width, height, Channels::Rgba))
+    let data = std::iter::repeat_n(color, width as usize * height as usize).flatten().collect();
+    Image::from_vec(width, height, Channels::Rgba, data).unwrap_or_else(|| Image::new(width, height, Channels::Rgba))
 }
 
 fn size_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
@@ -598,11 +437,7 @@ fn size_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
 }
 
 fn cook_constant_color(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = constant_color(
-        size_port(i, "width")?,
-        size_port(i, "height")?,
-        i.color("color")?,
-    );
+    let img = constant_color(size_port(i, "width")?, size_port(i, "height")?, i.color("color")?);
     Ok(vec![Value::Image(Arc::new(img))])
 }
 
@@ -618,9 +453,7 @@ fn mask_to_image_desc() -> NodeDesc {
 }
 
 fn cook_mask_to_image(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Image(Arc::new(convert::mask_to_image(
-        i.mask("mask")?,
-    )))])
+    Ok(vec![Value::Image(Arc::new(convert::mask_to_image(i.mask("mask")?)))])
 }
 
 #[cfg(test)]
@@ -649,15 +482,7 @@ mod tests {
 
     fn ints(clip: &Clip) -> Vec<i64> {
         let ctx = CookCtx::new();
-        (0..clip.len())
-            .map(|i| {
-                if let Ok(Value::Int(v)) = clip.get(i, &ctx) {
-                    v
-                } else {
-                    -1
-                }
-            })
-            .collect()
+        (0..clip.len()).map(|i| if let Ok(Value::Int(v)) = clip.get(i, &ctx) { v } else { -1 }).collect()
     }
 
     #[test]
@@ -671,12 +496,7 @@ mod tests {
         assert_eq!(to_gray(&img, GrayMode::Max).channels(), Channels::Gray);
         let already = gray(2, 1, &[0.1, 0.2]);
         assert_eq!(to_gray(&already, GrayMode::Rec709), already);
-        assert!(
-            GrayMode::parse("luma")
-                .unwrap_err()
-                .to_string()
-                .contains("mode")
-        );
+        assert!(GrayMode::parse("luma").unwrap_err().to_string().contains("mode"));
     }
 
     #[test]
@@ -686,14 +506,7 @@ mod tests {
         assert_eq!((c.size(), c.data()), ((2, 2), &[5.0, 6.0, 9.0, 10.0][..]));
         let c = crop(&img, 2, 1, 0, 0).unwrap();
         assert_eq!((c.size(), c.data()), ((2, 2), &[6.0, 7.0, 10.0, 11.0][..]));
-        let c = crop(
-            &rgba(2, 1, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]),
-            1,
-            0,
-            1,
-            1,
-        )
-        .unwrap();
+        let c = crop(&rgba(2, 1, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]), 1, 0, 1, 1).unwrap();
         assert_eq!(c.data(), &[5.0, 6.0, 7.0, 8.0]);
     }
 
@@ -701,20 +514,11 @@ mod tests {
     fn crop_outside_the_image_names_port_and_size() {
         let img = Image::gray_from_fn(4, 3, |_, _| 0.0);
         let err = crop(&img, 4, 0, 0, 0).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, message } if port == "x" && message.contains("4x3")),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, message } if port == "x" && message.contains("4x3")), "{err}");
         let err = crop(&img, 1, 0, 4, 0).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, message } if port == "width" && message.contains("4x3")),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, message } if port == "width" && message.contains("4x3")), "{err}");
         let err = crop(&img, 0, 1, 0, 3).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, .. } if port == "height"),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, .. } if port == "height"), "{err}");
     }
 
     #[test]
@@ -722,12 +526,7 @@ mod tests {
         let img = Image::gray_from_fn(4, 2, |_, _| 0.5);
         assert_eq!(resize_target(&img, 2, 0).unwrap(), (2, 1));
         assert_eq!(resize_target(&img, 0, 4).unwrap(), (8, 4));
-        assert!(
-            resize_target(&img, 0, 0)
-                .unwrap_err()
-                .to_string()
-                .contains("both 0")
-        );
+        assert!(resize_target(&img, 0, 0).unwrap_err().to_string().contains("both 0"));
         let r = resize(&img, 2, 0, FilterType::Triangle).unwrap();
         assert_eq!((r.size(), r.channels()), ((2, 1), Channels::Gray));
         assert_close(r.data(), &[0.5, 0.5]);
@@ -745,12 +544,7 @@ mod tests {
         let r = resize(&hdr, 1, 1, FilterType::Triangle).unwrap();
         assert_close(r.data(), &[4.0]);
         assert_eq!(parse_filter("bilinear").unwrap(), FilterType::Triangle);
-        assert!(
-            parse_filter("cubic")
-                .unwrap_err()
-                .to_string()
-                .contains("filter")
-        );
+        assert!(parse_filter("cubic").unwrap_err().to_string().contains("filter"));
     }
 
     #[test]
@@ -761,30 +555,18 @@ mod tests {
         assert_eq!(ints(&time_range(&clip, 0, -2).unwrap()), [0, 1, 2, 3]);
         let trimmed = time_range(&clip, 4, 4).unwrap();
         assert_eq!((ints(&trimmed), trimmed.fps()), (vec![4], 12.0));
-        assert_ne!(
-            time_range(&clip, 0, 1).unwrap().fingerprint(),
-            time_range(&clip, 1, 2).unwrap().fingerprint()
-        );
+        assert_ne!(time_range(&clip, 0, 1).unwrap().fingerprint(), time_range(&clip, 1, 2).unwrap().fingerprint());
     }
 
     #[test]
     fn time_range_errors_name_port_and_length() {
         let clip = int_clip(5);
         let err = time_range(&clip, 5, -1).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, message } if port == "first" && message.contains("5-frame")),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, message } if port == "first" && message.contains("5-frame")), "{err}");
         let err = time_range(&clip, 0, 5).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("0-4")),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("0-4")), "{err}");
         let err = time_range(&clip, 3, 2).unwrap_err();
-        assert!(
-            matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("empty")),
-            "{err}"
-        );
+        assert!(matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("empty")), "{err}");
         assert!(time_range(&int_clip(0), 0, -1).is_err());
     }
 
@@ -798,59 +580,30 @@ mod tests {
         assert_close(&run(BlendMode::Screen), &[0.6, 0.7, 0.8, 1.0]);
         assert_close(&run(BlendMode::Max), &[0.5, 0.5, 0.6, 1.0]);
         assert_close(&run(BlendMode::Multiply), &[0.1, 0.2, 0.3, 1.0]);
-        assert_close(
-            &composite(&a, &b, BlendMode::Add, 0.5).unwrap().into_vec(),
-            &[0.45, 0.65, 0.85, 1.0],
-        );
+        assert_close(&composite(&a, &b, BlendMode::Add, 0.5).unwrap().into_vec(), &[0.45, 0.65, 0.85, 1.0]);
     }
 
     #[test]
     fn over_uses_straight_alpha() {
         let a = rgba(1, 1, &[0.2, 0.4, 0.6, 1.0]);
         let half = rgba(1, 1, &[1.0, 0.0, 0.0, 0.5]);
-        assert_close(
-            &composite(&a, &half, BlendMode::Over, 1.0)
-                .unwrap()
-                .into_vec(),
-            &[0.6, 0.2, 0.3, 1.0],
-        );
+        assert_close(&composite(&a, &half, BlendMode::Over, 1.0).unwrap().into_vec(), &[0.6, 0.2, 0.3, 1.0]);
         // Half-transparent red over half-transparent blue: alpha 0.75, colour weighted 2:1 to red.
         let blue = rgba(1, 1, &[0.0, 0.0, 1.0, 0.5]);
-        assert_close(
-            &composite(&blue, &half, BlendMode::Over, 1.0)
-                .unwrap()
-                .into_vec(),
-            &[2.0 / 3.0, 0.0, 1.0 / 3.0, 0.75],
-        );
+        assert_close(&composite(&blue, &half, BlendMode::Over, 1.0).unwrap().into_vec(), &[2.0 / 3.0, 0.0, 1.0 / 3.0, 0.75]);
         let clear = rgba(1, 1, &[0.0; 4]);
-        assert_close(
-            &composite(&clear, &clear, BlendMode::Over, 1.0)
-                .unwrap()
-                .into_vec(),
-            &[0.0; 4],
-        );
+        assert_close(&composite(&clear, &clear, BlendMode::Over, 1.0).unwrap().into_vec(), &[0.0; 4]);
     }
 
     #[test]
     fn composite_promotes_gray_and_checks_sizes() {
         let g = gray(1, 1, &[0.5]);
         let both = composite(&g, &gray(1, 1, &[0.25]), BlendMode::Add, 1.0).unwrap();
-        assert_eq!(
-            (both.channels(), both.data()),
-            (Channels::Gray, &[0.75][..])
-        );
-        let mixed = composite(
-            &g,
-            &rgba(1, 1, &[0.1, 0.2, 0.3, 1.0]),
-            BlendMode::Multiply,
-            1.0,
-        )
-        .unwrap();
+        assert_eq!((both.channels(), both.data()), (Channels::Gray, &[0.75][..]));
+        let mixed = composite(&g, &rgba(1, 1, &[0.1, 0.2, 0.3, 1.0]), BlendMode::Multiply, 1.0).unwrap();
         assert_eq!(mixed.channels(), Channels::Rgba);
         assert_close(mixed.data(), &[0.05, 0.1, 0.15, 1.0]);
-        let err = composite(&g, &gray(2, 1, &[0.0, 0.0]), BlendMode::Over, 1.0)
-            .unwrap_err()
-            .to_string();
+        let err = composite(&g, &gray(2, 1, &[0.0, 0.0]), BlendMode::Over, 1.0).unwrap_err().to_string();
         assert!(err.contains("2x1") && err.contains("1x1"), "{err}");
     }
 
@@ -864,36 +617,18 @@ mod tests {
     #[test]
     fn cooks_read_their_ports() {
         let desc = constant_color_desc();
-        let values: Vec<Value> = desc
-            .inputs
-            .iter()
-            .map(|p| p.default.clone().unwrap())
-            .collect();
+        let values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap()).collect();
         let out = cook_constant_color(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
-        assert!(
-            matches!(&out[0], Value::Image(img) if img.size() == (512, 512) && img.pixel(3, 3) == [0.0, 0.0, 0.0, 1.0])
-        );
+        assert!(matches!(&out[0], Value::Image(img) if img.size() == (512, 512) && img.pixel(3, 3) == [0.0, 0.0, 0.0, 1.0]));
 
         let desc = mask_to_image_desc();
-        let values = [Value::Mask(Arc::new(
-            Mask::from_vec(2, 1, vec![0, 255]).unwrap(),
-        ))];
+        let values = [Value::Mask(Arc::new(Mask::from_vec(2, 1, vec![0, 255]).unwrap()))];
         let out = cook_mask_to_image(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
-        assert!(
-            matches!(&out[0], Value::Image(img) if img.data() == [0.0, 1.0] && img.channels() == Channels::Gray)
-        );
+        assert!(matches!(&out[0], Value::Image(img) if img.data() == [0.0, 1.0] && img.channels() == Channels::Gray));
 
         let desc = crop_desc();
-        let values = [
-            Value::Image(Arc::new(gray(2, 2, &[0.0; 4]))),
-            Value::Int(0),
-            Value::Int(0),
-            Value::Int(3),
-            Value::Int(0),
-        ];
-        let err = cook_crop(&Inputs::new(&desc, &values), &CookCtx::new())
-            .unwrap_err()
-            .to_string();
+        let values = [Value::Image(Arc::new(gray(2, 2, &[0.0; 4]))), Value::Int(0), Value::Int(0), Value::Int(3), Value::Int(0)];
+        let err = cook_crop(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err().to_string();
         assert!(err.contains("width") && err.contains("2x2"), "{err}");
     }
 }

@@ -47,7 +47,8 @@ pub fn to_gray8(img: &Image) -> GrayImage {
 
 /// A mask as an imageproc-style gray image (0 / 255).
 pub fn mask_to_gray8(mask: &Mask) -> GrayImage {
-    GrayImage::from_raw(mask.width(), mask.height(), mask.data().to_vec()).unwrap_or_else(|| GrayImage::new(mask.width(), mask.height()))
+    GrayImage::from_raw(mask.width(), mask.height(), mask.data().to_vec())
+        .unwrap_or_else(|| GrayImage::new(mask.width(), mask.height()))
 }
 
 /// A gray image as a mask: every non-zero pixel is inside.
@@ -59,7 +60,8 @@ pub fn gray8_to_mask(buf: GrayImage) -> Mask {
 /// A mask as a gray image (0.0 / 1.0).
 pub fn mask_to_image(mask: &Mask) -> Image {
     let data = mask.data().iter().map(|&v| if v == 0 { 0.0 } else { 1.0 }).collect();
-    Image::from_vec(mask.width(), mask.height(), Channels::Gray, data).unwrap_or_else(|| Image::new(mask.width(), mask.height(), Channels::Gray))
+    Image::from_vec(mask.width(), mask.height(), Channels::Gray, data)
+        .unwrap_or_else(|| Image::new(mask.width(), mask.height(), Channels::Gray))
 }
 
 /// A decoded image: colour sources become RGBA, gray sources stay gray.

@@ -15,8 +15,8 @@ use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
 use pyrograph_core::document::write_atomic;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PathRole,
-    PortDesc, PortType, Registry, TimeDep, Value,
+    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PathRole, PortDesc, PortType, Registry,
+    TimeDep, Value,
 };
 use rayon::prelude::*;
 use std::hash::{Hash, Hasher};
@@ -28,6 +28,7 @@ pub fn register(registry: &mut Registry) {
     registry.add(FnNode::new(load_sequence_desc(), cook_load_sequence));
     registry.add(FnNode::new(load_image_desc(), cook_load_image));
     registry.add(FnNode::new(write_sequence_desc(), cook_write_sequence));
+    registry.add(FnNode::new(write_image_desc(), cook_write_image));
 }
 
 /// Extensions (lower case) of the still-image files the loaders read.
@@ -39,8 +40,7 @@ pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "mov", "avi", "mkv", "webm", "m4v
 /// Frame rate of image sequences when none is given.
 pub const DEFAULT_FPS: f64 = 24.0;
 
-const MISSING_FFMPEG: &str =
-    "install ffmpeg (apt-get install ffmpeg) or convert the video to PNG frames";
+const MISSING_FFMPEG: &str = "install ffmpeg (apt-get install ffmpeg) or convert the video to PNG frames";
 
 // ---------------------------------------------------------------------------------------------
 // Frame-number patterns
@@ -65,39 +65,24 @@ impl FramePattern {
         };
         let suffix = &name[end..];
         if find_placeholder(suffix).is_some() {
-            return Err(format!(
-                "'{name}' has more than one frame-number placeholder; use exactly one (#### or %04d)"
-            ));
+            return Err(format!("'{name}' has more than one frame-number placeholder; use exactly one (#### or %04d)"));
         }
-        Ok(Some(FramePattern {
-            prefix: name[..start].to_string(),
-            width,
-            suffix: suffix.to_string(),
-        }))
+        Ok(Some(FramePattern { prefix: name[..start].to_string(), width, suffix: suffix.to_string() }))
     }
 
     /// The file name of frame `number`.
     pub fn file_name(&self, number: u64) -> String {
-        format!(
-            "{}{:0width$}{}",
-            self.prefix,
-            number,
-            self.suffix,
-            width = self.width
-        )
+        format!("{}{:0width$}{}", self.prefix, number, self.suffix, width = self.width)
     }
 
     /// The frame number a file name carries, when it matches the pattern (same padding).
     pub fn number_of(&self, name: &str) -> Option<u64> {
-        let digits = name
-            .strip_prefix(&self.prefix)?
-            .strip_suffix(&self.suffix)?;
+        let digits = name.strip_prefix(&self.prefix)?.strip_suffix(&self.suffix)?;
         if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
             return None;
         }
         // A longer number is only the same padding when it did not need padding at all.
-        let padded_alike =
-            digits.len() == self.width || (digits.len() > self.width && !digits.starts_with('0'));
+        let padded_alike = digits.len() == self.width || (digits.len() > self.width && !digits.starts_with('0'));
         if self.width > 0 && !padded_alike {
             return None;
         }
@@ -114,8 +99,7 @@ fn find_placeholder(name: &str) -> Option<(usize, usize, usize)> {
     let printf = name.match_indices('%').find_map(|(s, _)| {
         let rest = &name[s + 1..];
         let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
-        (rest.as_bytes().get(digits) == Some(&b'd'))
-            .then(|| (s, s + digits + 2, rest[..digits].parse().unwrap_or(0)))
+        (rest.as_bytes().get(digits) == Some(&b'd')).then(|| (s, s + digits + 2, rest[..digits].parse().unwrap_or(0)))
     });
     match (hashes, printf) {
         (Some(h), Some(p)) => Some(if h.0 < p.0 { h } else { p }),
@@ -125,9 +109,7 @@ fn find_placeholder(name: &str) -> Option<(usize, usize, usize)> {
 
 /// Compares file names so that `frame_2` sorts before `frame_10`.
 pub fn natural_cmp(a: &str, b: &str) -> Ordering {
-    natural_chunks(a)
-        .cmp(&natural_chunks(b))
-        .then_with(|| a.cmp(b))
+    natural_chunks(a).cmp(&natural_chunks(b)).then_with(|| a.cmp(b))
 }
 
 #[derive(PartialEq, Eq, PartialOrd, Ord)]
@@ -141,9 +123,7 @@ fn natural_chunks(s: &str) -> Vec<Chunk<'_>> {
     let mut rest = s;
     while let Some(first) = rest.chars().next() {
         let is_digit = first.is_ascii_digit();
-        let len = rest
-            .find(|c: char| c.is_ascii_digit() != is_digit)
-            .unwrap_or(rest.len());
+        let len = rest.find(|c: char| c.is_ascii_digit() != is_digit).unwrap_or(rest.len());
         let (head, tail) = rest.split_at(len);
         chunks.push(match head.parse() {
             Ok(n) if is_digit => Chunk::Number(n),
@@ -168,16 +148,11 @@ pub enum InputFiles {
 }
 
 fn has_extension(path: &Path, list: &[&str]) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| list.contains(&e.to_ascii_lowercase().as_str()))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| list.contains(&e.to_ascii_lowercase().as_str()))
 }
 
 fn no_such(path: &Path) -> NodeError {
-    NodeError::port(
-        "path",
-        format!("{}: no such file or directory", path.display()),
-    )
+    NodeError::port("path", format!("{}: no such file or directory", path.display()))
 }
 
 /// Resolves a loader path: a directory, a `####` / `%04d` pattern, a video or a single image.
@@ -185,10 +160,7 @@ pub fn find_input_files(path: &Path) -> Result<InputFiles, NodeError> {
     if path.is_dir() {
         return list_directory(path).map(InputFiles::Images);
     }
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or_default();
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
     if let Some(pattern) = FramePattern::parse(name).map_err(|e| NodeError::port("path", e))? {
         return list_pattern(path, &pattern).map(InputFiles::Images);
     }
@@ -204,21 +176,14 @@ pub fn find_input_files(path: &Path) -> Result<InputFiles, NodeError> {
 
 /// The image files of a directory, in natural name order.
 pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, NodeError> {
-    let entries = std::fs::read_dir(dir)
-        .map_err(|e| NodeError::port("path", format!("{}: {e}", dir.display())))?;
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && has_extension(p, IMAGE_EXTENSIONS))
-        .collect();
+    let entries = std::fs::read_dir(dir).map_err(|e| NodeError::port("path", format!("{}: {e}", dir.display())))?;
+    let mut files: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && has_extension(p, IMAGE_EXTENSIONS)).collect();
     files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     if files.is_empty() {
         return Err(NodeError::port(
             "path",
-            format!(
-                "{} holds no image files (looked for {})",
-                dir.display(),
-                IMAGE_EXTENSIONS.join(", ")
-            ),
+            format!("{} holds no image files (looked for {})", dir.display(), IMAGE_EXTENSIONS.join(", ")),
         ));
     }
     Ok(files)
@@ -233,8 +198,7 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
     if !dir.is_dir() {
         return Err(no_such(dir));
     }
-    let entries = std::fs::read_dir(dir)
-        .map_err(|e| NodeError::port("path", format!("{}: {e}", dir.display())))?;
+    let entries = std::fs::read_dir(dir).map_err(|e| NodeError::port("path", format!("{}: {e}", dir.display())))?;
     let mut numbered: Vec<(u64, PathBuf)> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file())
@@ -245,10 +209,7 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
         .collect();
     numbered.sort();
     if numbered.is_empty() {
-        return Err(NodeError::port(
-            "path",
-            format!("no files match {}", path.display()),
-        ));
+        return Err(NodeError::port("path", format!("no files match {}", path.display())));
     }
     Ok(numbered.into_iter().map(|(_, p)| p).collect())
 }
@@ -257,15 +218,10 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
 pub fn fingerprint_files(files: &[PathBuf]) -> Result<u64, NodeError> {
     let mut h = Fingerprinter::new();
     for f in files {
-        let meta = std::fs::metadata(f)
-            .map_err(|e| NodeError::port("path", format!("{}: {e}", f.display())))?;
+        let meta = std::fs::metadata(f).map_err(|e| NodeError::port("path", format!("{}: {e}", f.display())))?;
         f.hash(&mut h);
         meta.len().hash(&mut h);
-        let mtime = meta
-            .modified()
-            .ok()
-            .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
-            .map(|d| d.as_nanos());
+        let mtime = meta.modified().ok().and_then(|t| t.duration_since(UNIX_EPOCH).ok()).map(|d| d.as_nanos());
         mtime.hash(&mut h);
     }
     Ok(h.finish())
@@ -285,10 +241,7 @@ pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
     if is_exr(path) {
         // The exr crate, not `image`, so gray (`Y`) files written by the writer read back too.
         let meta = exr::prelude::MetaData::read_from_file(path, false).map_err(|e| named(&e))?;
-        let header = meta
-            .headers
-            .first()
-            .ok_or_else(|| named(&"no image layer"))?;
+        let header = meta.headers.first().ok_or_else(|| named(&"no image layer"))?;
         let size = header.layer_size;
         return Ok((to_u32(size.0, path)?, to_u32(size.1, path)?));
     }
@@ -301,12 +254,7 @@ pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
 }
 
 fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
-    u32::try_from(v).map_err(|_| {
-        NodeError::msg(format!(
-            "{}: image too large ({v} pixels wide or high)",
-            path.display()
-        ))
-    })
+    u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
 }
 
 /// Decodes one image file: colour files become RGBA, gray files gray.
@@ -351,8 +299,7 @@ pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
 
 /// Reads every file's header (in parallel) and checks that all frames share one size.
 pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), NodeError> {
-    let sizes: Vec<Result<(u32, u32), NodeError>> =
-        files.par_iter().map(|f| image_dimensions(f)).collect();
+    let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f)).collect();
     let mut first: Option<((u32, u32), &PathBuf)> = None;
     for (size, file) in sizes.into_iter().zip(files) {
         let size = size.map_err(|e| NodeError::port("path", e.to_string()))?;
@@ -375,9 +322,7 @@ pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), NodeError> {
             Some(_) => {}
         }
     }
-    first
-        .map(|(s, _)| s)
-        .ok_or_else(|| NodeError::port("path", "no image files"))
+    first.map(|(s, _)| s).ok_or_else(|| NodeError::port("path", "no image files"))
 }
 
 /// Frames decoded lazily from a list of image files.
@@ -391,10 +336,7 @@ impl FrameSource for FileFrames {
         self.files.len()
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        let file = self
-            .files
-            .get(index)
-            .ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
+        let file = self.files.get(index).ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
         let img = decode_image(file)?;
         // The file may have been replaced since the headers were checked.
         if img.size() != self.size {
@@ -415,12 +357,7 @@ impl FrameSource for FileFrames {
 pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, NodeError> {
     let size = check_same_size(&files)?;
     let fingerprint = fingerprint_files(&files)?;
-    Ok(Clip::new(
-        PortType::Image,
-        fps,
-        fingerprint,
-        Arc::new(FileFrames { files, size }),
-    ))
+    Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(FileFrames { files, size })))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -442,18 +379,9 @@ pub struct VideoInfo {
 
 fn run_error(program: &str, path: &Path, e: &std::io::Error) -> NodeError {
     if e.kind() == std::io::ErrorKind::NotFound {
-        NodeError::port(
-            "path",
-            format!(
-                "{}: '{program}' is not on PATH; {MISSING_FFMPEG}",
-                path.display()
-            ),
-        )
+        NodeError::port("path", format!("{}: '{program}' is not on PATH; {MISSING_FFMPEG}", path.display()))
     } else {
-        NodeError::port(
-            "path",
-            format!("{}: could not run '{program}': {e}", path.display()),
-        )
+        NodeError::port("path", format!("{}: could not run '{program}': {e}", path.display()))
     }
 }
 
@@ -470,34 +398,19 @@ pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, NodeError> {
     let text = String::from_utf8_lossy(&out.stdout);
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr);
-        return Err(NodeError::port(
-            "path",
-            format!("{}: ffprobe failed: {}", path.display(), why.trim()),
-        ));
+        return Err(NodeError::port("path", format!("{}: ffprobe failed: {}", path.display(), why.trim())));
     }
-    parse_probe(&text).ok_or_else(|| {
-        NodeError::port("path", format!("{}: no video stream found", path.display()))
-    })
+    parse_probe(&text).ok_or_else(|| NodeError::port("path", format!("{}: no video stream found", path.display())))
 }
 
 /// Parses `key=value` lines printed by `ffprobe -show_entries stream=...`.
 pub fn parse_probe(text: &str) -> Option<VideoInfo> {
-    let field = |key: &str| {
-        text.lines()
-            .find_map(|l| l.trim().strip_prefix(key)?.strip_prefix('='))
-    };
+    let field = |key: &str| text.lines().find_map(|l| l.trim().strip_prefix(key)?.strip_prefix('='));
     let width = field("width")?.parse().ok().filter(|&w| w > 0)?;
     let height = field("height")?.parse().ok().filter(|&h| h > 0)?;
-    let fps = field("avg_frame_rate")
-        .and_then(parse_rate)
-        .or_else(|| field("r_frame_rate").and_then(parse_rate));
+    let fps = field("avg_frame_rate").and_then(parse_rate).or_else(|| field("r_frame_rate").and_then(parse_rate));
     let frames = field("nb_frames").and_then(|n| n.parse().ok());
-    Some(VideoInfo {
-        width,
-        height,
-        fps,
-        frames,
-    })
+    Some(VideoInfo { width, height, fps, frames })
 }
 
 /// `30000/1001` or `25` → frames per second; `None` for `0/0` and other non-rates.
@@ -510,18 +423,11 @@ fn parse_rate(text: &str) -> Option<f64> {
 }
 
 /// Decodes the first video stream to 8-bit RGB frames in memory with the `ffmpeg` executable.
-pub fn decode_video(
-    ffmpeg: &str,
-    path: &Path,
-    info: &VideoInfo,
-    ctx: &CookCtx,
-) -> Result<Vec<Box<[u8]>>, NodeError> {
+pub fn decode_video(ffmpeg: &str, path: &Path, info: &VideoInfo, ctx: &CookCtx) -> Result<Vec<Box<[u8]>>, NodeError> {
     let mut child = Command::new(ffmpeg)
         .args(["-v", "error", "-nostdin", "-noautorotate", "-i"])
         .arg(path)
-        .args([
-            "-map", "0:v:0", "-an", "-sn", "-dn", "-f", "rawvideo", "-pix_fmt", "rgb24", "-",
-        ])
+        .args(["-map", "0:v:0", "-an", "-sn", "-dn", "-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -546,33 +452,21 @@ pub fn decode_video(
     let why = stderr.and_then(|t| t.join().ok()).unwrap_or_default();
     let frames = frames?;
     if !status.success() {
-        return Err(NodeError::port(
-            "path",
-            format!("{}: ffmpeg failed: {}", path.display(), why.trim()),
-        ));
+        return Err(NodeError::port("path", format!("{}: ffmpeg failed: {}", path.display(), why.trim())));
     }
     if frames.is_empty() {
-        return Err(NodeError::port(
-            "path",
-            format!("{}: the video has no frames", path.display()),
-        ));
+        return Err(NodeError::port("path", format!("{}: the video has no frames", path.display())));
     }
     Ok(frames)
 }
 
-fn read_raw_frames(
-    stdout: &mut impl Read,
-    info: &VideoInfo,
-    ctx: &CookCtx,
-) -> Result<Vec<Box<[u8]>>, NodeError> {
+fn read_raw_frames(stdout: &mut impl Read, info: &VideoInfo, ctx: &CookCtx) -> Result<Vec<Box<[u8]>>, NodeError> {
     let frame_bytes = info.width as usize * info.height as usize * 3;
     let mut frames = Vec::with_capacity(info.frames.unwrap_or(0));
     loop {
         ctx.check_cancel()?;
         let mut buf = vec![0u8; frame_bytes];
-        if !read_full(stdout, &mut buf)
-            .map_err(|e| NodeError::msg(format!("reading ffmpeg output: {e}")))?
-        {
+        if !read_full(stdout, &mut buf).map_err(|e| NodeError::msg(format!("reading ffmpeg output: {e}")))? {
             break;
         }
         frames.push(buf.into_boxed_slice());
@@ -607,29 +501,15 @@ impl FrameSource for VideoFrames {
         self.frames.len()
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        let rgb = self
-            .frames
-            .get(index)
-            .ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
-        Ok(Value::Image(Arc::new(rgb24_to_image(
-            self.width,
-            self.height,
-            rgb,
-        )?)))
+        let rgb = self.frames.get(index).ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
+        Ok(Value::Image(Arc::new(rgb24_to_image(self.width, self.height, rgb)?)))
     }
 }
 
 /// Packed 8-bit RGB to an opaque f32 RGBA image.
 pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, NodeError> {
-    let data = rgb
-        .chunks_exact(3)
-        .flat_map(|p| {
-            [p[0], p[1], p[2]]
-                .map(|v| f32::from(v) / 255.0)
-                .into_iter()
-                .chain([1.0])
-        })
-        .collect();
+    let data =
+        rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2]].map(|v| f32::from(v) / 255.0).into_iter().chain([1.0])).collect();
     Image::from_vec(width, height, Channels::Rgba, data).ok_or_else(|| {
         NodeError::msg(format!(
             "a {width}x{height} frame needs {} bytes, got {}",
@@ -643,23 +523,10 @@ pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, Node
 pub fn video_clip(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
     let info = probe_video("ffprobe", path)?;
     let frames = decode_video("ffmpeg", path, &info, ctx)?;
-    let fps = if fps > 0.0 {
-        fps
-    } else {
-        info.fps.unwrap_or(DEFAULT_FPS)
-    };
+    let fps = if fps > 0.0 { fps } else { info.fps.unwrap_or(DEFAULT_FPS) };
     let fingerprint = fingerprint_files(&[path.to_path_buf()])?;
-    let source = VideoFrames {
-        width: info.width,
-        height: info.height,
-        frames,
-    };
-    Ok(Clip::new(
-        PortType::Image,
-        fps,
-        fingerprint,
-        Arc::new(source),
-    ))
+    let source = VideoFrames { width: info.width, height: info.height, frames };
+    Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(source)))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -686,9 +553,7 @@ fn load_sequence_desc() -> NodeDesc {
 pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
     match find_input_files(path)? {
         InputFiles::Video(video) => video_clip(&video, fps, ctx),
-        InputFiles::Images(files) => {
-            image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS })
-        }
+        InputFiles::Images(files) => image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS }),
     }
 }
 
@@ -713,10 +578,7 @@ pub fn load_image(path: &Path) -> Result<Image, NodeError> {
     if path.is_dir() {
         return Err(NodeError::port(
             "path",
-            format!(
-                "{} is a folder; give one image file, or use imaging.load_sequence",
-                path.display()
-            ),
+            format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display()),
         ));
     }
     if !path.is_file() {
@@ -763,17 +625,15 @@ fn encode_png(img: &Image, sixteen_bit: bool) -> Result<Vec<u8>, NodeError> {
         (Channels::Gray, false) => DynamicImage::ImageLuma8(convert::to_gray8(img)),
         (Channels::Gray, true) => {
             let data = img.data().iter().map(|&v| unit_to_u16(v)).collect();
-            let buf: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_raw(w, h, data)
-                .ok_or_else(|| NodeError::msg("image data does not match its size"))?;
+            let buf: ImageBuffer<Luma<u16>, Vec<u16>> =
+                ImageBuffer::from_raw(w, h, data).ok_or_else(|| NodeError::msg("image data does not match its size"))?;
             DynamicImage::ImageLuma16(buf)
         }
         (Channels::Rgba, false) => DynamicImage::ImageRgba8(convert::to_rgba8(img)),
         (Channels::Rgba, true) => DynamicImage::ImageRgba16(convert::to_rgba16(img)),
     };
     let mut bytes = Vec::new();
-    dynamic
-        .write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png)
-        .map_err(|e| NodeError::msg(format!("encoding PNG: {e}")))?;
+    dynamic.write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png).map_err(|e| NodeError::msg(format!("encoding PNG: {e}")))?;
     Ok(bytes)
 }
 
@@ -786,48 +646,29 @@ fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let n = img.channels().count();
     let data = img.data();
-    let sample =
-        move |x: usize, y: usize, c: usize| data.get((y * w + x) * n + c).copied().unwrap_or(0.0);
+    let sample = move |x: usize, y: usize, c: usize| data.get((y * w + x) * n + c).copied().unwrap_or(0.0);
     let mut bytes = Vec::new();
     let cursor = Cursor::new(&mut bytes);
     let result = match (img.channels(), half) {
         (Channels::Gray, true) => {
-            let pixels = SpecificChannels::build()
-                .with_channel("Y")
-                .with_pixel_fn(|p: Vec2<usize>| (f16::from_f32(sample(p.0, p.1, 0)),));
-            exr::image::Image::from_channels((w, h), pixels)
-                .write()
-                .to_buffered(cursor)
+            let pixels =
+                SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (f16::from_f32(sample(p.0, p.1, 0)),));
+            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
         }
         (Channels::Gray, false) => {
-            let pixels = SpecificChannels::build()
-                .with_channel("Y")
-                .with_pixel_fn(|p: Vec2<usize>| (sample(p.0, p.1, 0),));
-            exr::image::Image::from_channels((w, h), pixels)
-                .write()
-                .to_buffered(cursor)
+            let pixels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (sample(p.0, p.1, 0),));
+            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
         }
         (Channels::Rgba, true) => {
             let px = |p: Vec2<usize>| {
                 let s = |c| f16::from_f32(sample(p.0, p.1, c));
                 (s(0), s(1), s(2), s(3))
             };
-            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px))
-                .write()
-                .to_buffered(cursor)
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
         }
         (Channels::Rgba, false) => {
-            let px = |p: Vec2<usize>| {
-                (
-                    sample(p.0, p.1, 0),
-                    sample(p.0, p.1, 1),
-                    sample(p.0, p.1, 2),
-                    sample(p.0, p.1, 3),
-                )
-            };
-            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px))
-                .write()
-                .to_buffered(cursor)
+            let px = |p: Vec2<usize>| (sample(p.0, p.1, 0), sample(p.0, p.1, 1), sample(p.0, p.1, 2), sample(p.0, p.1, 3));
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
         }
     };
     result.map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;
@@ -848,7 +689,12 @@ fn write_sequence_desc() -> NodeDesc {
          frame, in parallel, each file atomically; refuses to replace existing files unless `overwrite` is on.",
     )
     .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The frames to write."))
-    .input(PortDesc::path("pattern", PathRole::Output, Some("frame_####.png"), "Output files: `####` or `%04d` is the frame number; .png or .exr."))
+    .input(PortDesc::path(
+        "pattern",
+        PathRole::Output,
+        Some("frame_####.png"),
+        "Output files: `####` or `%04d` is the frame number; .png or .exr.",
+    ))
     .input(PortDesc::choice("bit_depth", &["8", "16"], "8", "Bits per channel of PNG files."))
     .input(PortDesc::choice("exr_type", &["half", "float"], "half", "Sample type of EXR files."))
     .input(PortDesc::int("start", 0, (0, 999_999_999), "File number of the clip's frame 0 (frame i is written as start + i)."))
@@ -874,133 +720,71 @@ pub struct WriteOptions {
 
 /// The parsed pattern of a writer path, with the folder it writes into.
 pub fn output_pattern(pattern: &Path) -> Result<(PathBuf, FramePattern), NodeError> {
-    let name = pattern
-        .file_name()
-        .and_then(|n| n.to_str())
-        .ok_or_else(|| {
-            NodeError::port(
-                "pattern",
-                format!(
-                    "'{}' does not end in a file name like frame_####.png",
-                    pattern.display()
-                ),
-            )
-        })?;
-    let parsed = FramePattern::parse(name)
-        .map_err(|e| NodeError::port("pattern", e))?
-        .ok_or_else(|| {
-            NodeError::port(
-                "pattern",
-                format!(
-                    "'{name}' has no frame-number placeholder; add #### or %04d (frame_####.png)"
-                ),
-            )
-        })?;
+    let name = pattern.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
+        NodeError::port("pattern", format!("'{}' does not end in a file name like frame_####.png", pattern.display()))
+    })?;
+    let parsed = FramePattern::parse(name).map_err(|e| NodeError::port("pattern", e))?.ok_or_else(|| {
+        NodeError::port("pattern", format!("'{name}' has no frame-number placeholder; add #### or %04d (frame_####.png)"))
+    })?;
     let dir = pattern.parent().map(Path::to_path_buf).unwrap_or_default();
     Ok((dir, parsed))
 }
 
 /// The format named by the pattern's extension, with the PNG / EXR options.
-pub fn output_format(
-    pattern: &Path,
-    bit_depth: &str,
-    exr_type: &str,
-) -> Result<OutputFormat, NodeError> {
-    let ext = pattern
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
+pub fn output_format(pattern: &Path, bit_depth: &str, exr_type: &str) -> Result<OutputFormat, NodeError> {
+    let ext = pattern.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     match ext.as_str() {
         "png" => match bit_depth {
-            "8" | "16" => Ok(OutputFormat::Png {
-                sixteen_bit: bit_depth == "16",
-            }),
-            other => Err(NodeError::port(
-                "bit_depth",
-                format!("'{other}' is not 8 or 16"),
-            )),
+            "8" | "16" => Ok(OutputFormat::Png { sixteen_bit: bit_depth == "16" }),
+            other => Err(NodeError::port("bit_depth", format!("'{other}' is not 8 or 16"))),
         },
         "exr" => match exr_type {
-            "half" | "float" => Ok(OutputFormat::Exr {
-                half: exr_type == "half",
-            }),
-            other => Err(NodeError::port(
-                "exr_type",
-                format!("'{other}' is not half or float"),
-            )),
+            "half" | "float" => Ok(OutputFormat::Exr { half: exr_type == "half" }),
+            other => Err(NodeError::port("exr_type", format!("'{other}' is not half or float"))),
         },
-        _ => Err(NodeError::port(
-            "pattern",
-            format!("'{}' must end in .png or .exr", pattern.display()),
-        )),
+        _ => Err(NodeError::port("pattern", format!("'{}' must end in .png or .exr", pattern.display()))),
     }
 }
 
 /// The clip frames to write: the requested inclusive range (checked) or all of them.
-pub fn frames_to_write(
-    len: usize,
-    frames: Option<(usize, usize)>,
-) -> Result<Range<usize>, NodeError> {
+pub fn frames_to_write(len: usize, frames: Option<(usize, usize)>) -> Result<Range<usize>, NodeError> {
     if len == 0 {
         return Err(NodeError::port("clip", "the clip has no frames"));
     }
     match frames {
         None => Ok(0..len),
         Some((a, b)) if a <= b && b < len => Ok(a..b + 1),
-        Some((a, b)) => Err(NodeError::msg(format!(
-            "frame range {a}-{b} is outside the clip's frames 0-{}",
-            len - 1
-        ))),
+        Some((a, b)) => Err(NodeError::msg(format!("frame range {a}-{b} is outside the clip's frames 0-{}", len - 1))),
     }
 }
 
 /// Writes the frames of `clip` as files; returns the paths written, in frame order.
 ///
 /// Nothing is written when any target exists and `overwrite` is off.
-pub fn write_sequence(
-    clip: &Clip,
-    options: &WriteOptions,
-    ctx: &CookCtx,
-) -> Result<Vec<PathBuf>, NodeError> {
+pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, NodeError> {
     let (dir, pattern) = output_pattern(&options.pattern)?;
     let range = frames_to_write(clip.len(), options.frames)?;
-    let targets: Vec<(usize, PathBuf)> = range
-        .map(|i| (i, dir.join(pattern.file_name(options.start + i as u64))))
-        .collect();
+    let targets: Vec<(usize, PathBuf)> = range.map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
     if !options.overwrite {
         refuse_existing(&targets)?;
     }
     if !dir.as_os_str().is_empty() {
-        std::fs::create_dir_all(&dir).map_err(|e| {
-            NodeError::port("pattern", format!("cannot create {}: {e}", dir.display()))
-        })?;
+        std::fs::create_dir_all(&dir).map_err(|e| NodeError::port("pattern", format!("cannot create {}: {e}", dir.display())))?;
     }
     let done = AtomicUsize::new(0);
     targets.par_iter().try_for_each(|(i, path)| {
         ctx.check_cancel()?;
-        let img = clip.image(*i, ctx).map_err(|e| NodeError::Frame {
-            frame: *i,
-            source: Box::new(e),
-        })?;
+        let img = clip.image(*i, ctx).map_err(|e| NodeError::Frame { frame: *i, source: Box::new(e) })?;
         let bytes = encode_image(&img, options.format)?;
-        write_atomic(path, &bytes, options.overwrite)
-            .map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
-        ctx.frame_progress(
-            done.fetch_add(1, AtomicOrdering::Relaxed) + 1,
-            targets.len(),
-        );
+        write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+        ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
         Ok::<(), NodeError>(())
     })?;
     Ok(targets.into_iter().map(|(_, p)| p).collect())
 }
 
 fn refuse_existing(targets: &[(usize, PathBuf)]) -> Result<(), NodeError> {
-    let existing: Vec<&PathBuf> = targets
-        .iter()
-        .map(|(_, p)| p)
-        .filter(|p| p.exists())
-        .collect();
+    let existing: Vec<&PathBuf> = targets.iter().map(|(_, p)| p).filter(|p| p.exists()).collect();
     match existing.first() {
         None => Ok(()),
         Some(first) => Err(NodeError::port(
@@ -1030,9 +814,64 @@ fn cook_write_sequence(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, Node
     Ok(vec![Value::Int(written.len() as i64), Value::Path(first)])
 }
 
+fn write_image_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.write_image",
+        "Input/Output",
+        TimeDep::Sink,
+        "Writes one image (a still, a contact sheet) as a PNG or OpenEXR file.",
+    )
+    .input(PortDesc::new("image", PortType::Image, "The image to write."))
+    .input(PortDesc::path(
+        "path",
+        PathRole::Output,
+        Some("image.png"),
+        "Output file; the extension (.png or .exr) picks the format.",
+    ))
+    .input(PortDesc::choice("bit_depth", &["8", "16"], "8", "Bits per channel of PNG files."))
+    .input(PortDesc::choice("exr_type", &["half", "float"], "half", "Sample type of EXR files."))
+    .input(PortDesc::bool("overwrite", false, "Replace the file if it already exists."))
+    .output("path", PortType::Path, "The file written.")
+}
+
+/// Writes one image atomically; an existing file is an error unless `overwrite`.
+pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), NodeError> {
+    if !overwrite && path.exists() {
+        return Err(NodeError::port(
+            "overwrite",
+            format!("{} already exists; nothing was written. Set overwrite to true or render with --overwrite", path.display()),
+        ));
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| NodeError::port("path", format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let bytes = encode_image(img, format)?;
+    write_atomic(path, &bytes, overwrite).map_err(|e| NodeError::port("path", format!("writing {}: {e}", path.display())))
+}
+
+fn cook_write_image(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let path = i.path("path")?.to_path_buf();
+    let format = output_format(&path, i.choice("bit_depth")?, i.choice("exr_type")?)
+        .map_err(|e| if let NodeError::Port { message, .. } = e { NodeError::port("path", message) } else { e })?;
+    write_image(i.image("image")?, &path, format, i.bool("overwrite")? || ctx.settings().overwrite)?;
+    Ok(vec![Value::Path(path)])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn write_image_writes_once_and_refuses_to_overwrite() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("still.png");
+        let img = gray(2, 1, &[0.0, 1.0]);
+        let png = OutputFormat::Png { sixteen_bit: false };
+        write_image(&img, &path, png, false).unwrap();
+        assert_eq!(load_image(&path).unwrap(), img);
+        assert!(write_image(&img, &path, png, false).unwrap_err().to_string().contains("already exists"));
+        write_image(&img, &path, png, true).unwrap();
+    }
 
     fn rgba(w: u32, h: u32, data: &[f32]) -> Image {
         Image::from_vec(w, h, Channels::Rgba, data.to_vec()).unwrap()
@@ -1043,21 +882,12 @@ mod tests {
     }
 
     fn clip_of(images: Vec<Image>) -> Clip {
-        let frames = images
-            .into_iter()
-            .map(|i| Value::Image(Arc::new(i)))
-            .collect();
+        let frames = images.into_iter().map(|i| Value::Image(Arc::new(i))).collect();
         Clip::from_frames(PortType::Image, 24.0, frames)
     }
 
     fn options(pattern: PathBuf, format: OutputFormat) -> WriteOptions {
-        WriteOptions {
-            pattern,
-            format,
-            start: 0,
-            overwrite: false,
-            frames: None,
-        }
+        WriteOptions { pattern, format, start: 0, overwrite: false, frames: None }
     }
 
     fn assert_close(a: &[f32], b: &[f32], tol: f32) {
@@ -1070,25 +900,13 @@ mod tests {
     fn footage() -> PathBuf {
         std::env::var_os("PYROGRAPH_FOOTAGE")
             .map(PathBuf::from)
-            .unwrap_or_else(|| {
-                PathBuf::from(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/../../../shared/footage"
-                ))
-            })
+            .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/footage")))
     }
 
     #[test]
     fn hash_pattern_parses_and_formats() {
         let p = FramePattern::parse("frame_####.png").unwrap().unwrap();
-        assert_eq!(
-            p,
-            FramePattern {
-                prefix: "frame_".into(),
-                width: 4,
-                suffix: ".png".into()
-            }
-        );
+        assert_eq!(p, FramePattern { prefix: "frame_".into(), width: 4, suffix: ".png".into() });
         assert_eq!(p.file_name(7), "frame_0007.png");
         assert_eq!(p.file_name(12345), "frame_12345.png");
     }
@@ -1096,22 +914,9 @@ mod tests {
     #[test]
     fn printf_pattern_parses_and_formats() {
         let p = FramePattern::parse("f%04d.exr").unwrap().unwrap();
-        assert_eq!(
-            p,
-            FramePattern {
-                prefix: "f".into(),
-                width: 4,
-                suffix: ".exr".into()
-            }
-        );
+        assert_eq!(p, FramePattern { prefix: "f".into(), width: 4, suffix: ".exr".into() });
         assert_eq!(p.file_name(3), "f0003.exr");
-        assert_eq!(
-            FramePattern::parse("f%d.png")
-                .unwrap()
-                .unwrap()
-                .file_name(42),
-            "f42.png"
-        );
+        assert_eq!(FramePattern::parse("f%d.png").unwrap().unwrap().file_name(42), "f42.png");
     }
 
     #[test]
@@ -1119,10 +924,7 @@ mod tests {
         assert_eq!(FramePattern::parse("frame.png").unwrap(), None);
         assert!(FramePattern::parse("a_##_b_##.png").is_err());
         let err = output_pattern(Path::new("/tmp/out/frame.png")).unwrap_err();
-        assert!(
-            err.to_string().contains("no frame-number placeholder"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("no frame-number placeholder"), "{err}");
         assert!(err.to_string().contains("pattern"), "{err}");
     }
 
@@ -1150,19 +952,10 @@ mod tests {
         let img = rgba(2, 1, &[0.0, 0.5, 1.0, 1.0, 0.25, 0.75, 0.1, 0.5]);
         let clip = clip_of(vec![img.clone(), img.clone()]);
         let ctx = CookCtx::new();
-        let written = write_sequence(
-            &clip,
-            &options(
-                dir.path().join("c_####.png"),
-                OutputFormat::Png { sixteen_bit: false },
-            ),
-            &ctx,
-        )
-        .unwrap();
-        assert_eq!(
-            written,
-            [dir.path().join("c_0000.png"), dir.path().join("c_0001.png")]
-        );
+        let written =
+            write_sequence(&clip, &options(dir.path().join("c_####.png"), OutputFormat::Png { sixteen_bit: false }), &ctx)
+                .unwrap();
+        assert_eq!(written, [dir.path().join("c_0000.png"), dir.path().join("c_0001.png")]);
         let back = load_image(&written[1]).unwrap();
         assert_eq!(back.channels(), Channels::Rgba);
         assert_close(back.data(), img.data(), 0.5 / 255.0 + 1e-6);
@@ -1170,10 +963,7 @@ mod tests {
         let g = gray(3, 1, &[0.0, 0.5, 1.0]);
         write_sequence(
             &clip_of(vec![g.clone()]),
-            &options(
-                dir.path().join("g_%02d.png"),
-                OutputFormat::Png { sixteen_bit: false },
-            ),
+            &options(dir.path().join("g_%02d.png"), OutputFormat::Png { sixteen_bit: false }),
             &ctx,
         )
         .unwrap();
@@ -1189,23 +979,9 @@ mod tests {
         let img = rgba(1, 1, &[0.123_456, 0.5, 0.999, 0.3]);
         let g = gray(2, 1, &[0.333_333, 0.777_777]);
         let fmt = OutputFormat::Png { sixteen_bit: true };
-        write_sequence(
-            &clip_of(vec![img.clone()]),
-            &options(dir.path().join("c_#.png"), fmt),
-            &ctx,
-        )
-        .unwrap();
-        write_sequence(
-            &clip_of(vec![g.clone()]),
-            &options(dir.path().join("g_#.png"), fmt),
-            &ctx,
-        )
-        .unwrap();
-        assert_close(
-            load_image(&dir.path().join("c_0.png")).unwrap().data(),
-            img.data(),
-            0.5 / 65535.0 + 1e-6,
-        );
+        write_sequence(&clip_of(vec![img.clone()]), &options(dir.path().join("c_#.png"), fmt), &ctx).unwrap();
+        write_sequence(&clip_of(vec![g.clone()]), &options(dir.path().join("g_#.png"), fmt), &ctx).unwrap();
+        assert_close(load_image(&dir.path().join("c_0.png")).unwrap().data(), img.data(), 0.5 / 65535.0 + 1e-6);
         let back = load_image(&dir.path().join("g_0.png")).unwrap();
         assert_eq!(back.channels(), Channels::Gray);
         assert_close(back.data(), g.data(), 0.5 / 65535.0 + 1e-6);
@@ -1220,36 +996,17 @@ mod tests {
         for (half, tol) in [(true, 2e-3_f32), (false, 0.0)] {
             let fmt = OutputFormat::Exr { half };
             let tag = if half { "h" } else { "f" };
-            write_sequence(
-                &clip_of(vec![img.clone()]),
-                &options(dir.path().join(format!("{tag}c_####.exr")), fmt),
-                &ctx,
-            )
-            .unwrap();
-            write_sequence(
-                &clip_of(vec![g.clone()]),
-                &options(dir.path().join(format!("{tag}g_####.exr")), fmt),
-                &ctx,
-            )
-            .unwrap();
+            write_sequence(&clip_of(vec![img.clone()]), &options(dir.path().join(format!("{tag}c_####.exr")), fmt), &ctx)
+                .unwrap();
+            write_sequence(&clip_of(vec![g.clone()]), &options(dir.path().join(format!("{tag}g_####.exr")), fmt), &ctx).unwrap();
             let back = load_image(&dir.path().join(format!("{tag}c_0000.exr"))).unwrap();
             assert_eq!(back.size(), (2, 1));
             // Half floats keep about three significant digits.
-            let rel: Vec<f32> = back
-                .data()
-                .iter()
-                .zip(img.data())
-                .map(|(b, a)| (b - a) / a.max(1.0))
-                .collect();
+            let rel: Vec<f32> = back.data().iter().zip(img.data()).map(|(b, a)| (b - a) / a.max(1.0)).collect();
             assert_close(&rel, &[0.0; 8], tol);
             let back = load_image(&dir.path().join(format!("{tag}g_0000.exr"))).unwrap();
             assert_eq!(back.channels(), Channels::Gray);
-            let rel: Vec<f32> = back
-                .data()
-                .iter()
-                .zip(g.data())
-                .map(|(b, a)| (b - a) / a.max(1.0))
-                .collect();
+            let rel: Vec<f32> = back.data().iter().zip(g.data()).map(|(b, a)| (b - a) / a.max(1.0)).collect();
             assert_close(&rel, &[0.0; 2], tol);
         }
     }
@@ -1260,31 +1017,16 @@ mod tests {
         let ctx = CookCtx::new();
         std::fs::write(dir.path().join("f_0001.png"), b"keep me").unwrap();
         let clip = clip_of(vec![gray(1, 1, &[0.5]); 3]);
-        let opts = options(
-            dir.path().join("f_####.png"),
-            OutputFormat::Png { sixteen_bit: false },
-        );
+        let opts = options(dir.path().join("f_####.png"), OutputFormat::Png { sixteen_bit: false });
         let err = write_sequence(&clip, &opts, &ctx).unwrap_err().to_string();
-        assert!(
-            err.contains("f_0001.png") && err.contains("overwrite"),
-            "{err}"
-        );
+        assert!(err.contains("f_0001.png") && err.contains("overwrite"), "{err}");
         assert!(!dir.path().join("f_0000.png").exists());
         assert!(!dir.path().join("f_0002.png").exists());
-        assert_eq!(
-            std::fs::read(dir.path().join("f_0001.png")).unwrap(),
-            b"keep me"
-        );
+        assert_eq!(std::fs::read(dir.path().join("f_0001.png")).unwrap(), b"keep me");
 
-        let opts = WriteOptions {
-            overwrite: true,
-            ..opts
-        };
+        let opts = WriteOptions { overwrite: true, ..opts };
         assert_eq!(write_sequence(&clip, &opts, &ctx).unwrap().len(), 3);
-        assert_eq!(
-            load_image(&dir.path().join("f_0001.png")).unwrap().size(),
-            (1, 1)
-        );
+        assert_eq!(load_image(&dir.path().join("f_0001.png")).unwrap().size(), (1, 1));
     }
 
     #[test]
@@ -1295,52 +1037,20 @@ mod tests {
         let opts = WriteOptions {
             start: 100,
             frames: Some((1, 2)),
-            ..options(
-                dir.path().join("a/b/x_###.png"),
-                OutputFormat::Png { sixteen_bit: false },
-            )
+            ..options(dir.path().join("a/b/x_###.png"), OutputFormat::Png { sixteen_bit: false })
         };
         let written = write_sequence(&clip, &opts, &ctx).unwrap();
-        assert_eq!(
-            written,
-            [
-                dir.path().join("a/b/x_101.png"),
-                dir.path().join("a/b/x_102.png")
-            ]
-        );
-        assert_close(
-            load_image(&written[1]).unwrap().data(),
-            &[0.5],
-            0.5 / 255.0 + 1e-6,
-        );
-        let outside = WriteOptions {
-            frames: Some((3, 5)),
-            ..opts
-        };
-        assert!(
-            write_sequence(&clip, &outside, &ctx)
-                .unwrap_err()
-                .to_string()
-                .contains("0-4")
-        );
+        assert_eq!(written, [dir.path().join("a/b/x_101.png"), dir.path().join("a/b/x_102.png")]);
+        assert_close(load_image(&written[1]).unwrap().data(), &[0.5], 0.5 / 255.0 + 1e-6);
+        let outside = WriteOptions { frames: Some((3, 5)), ..opts };
+        assert!(write_sequence(&clip, &outside, &ctx).unwrap_err().to_string().contains("0-4"));
     }
 
     #[test]
     fn output_format_follows_the_extension() {
-        assert_eq!(
-            output_format(Path::new("a_#.PNG"), "16", "half").unwrap(),
-            OutputFormat::Png { sixteen_bit: true }
-        );
-        assert_eq!(
-            output_format(Path::new("a_#.exr"), "8", "float").unwrap(),
-            OutputFormat::Exr { half: false }
-        );
-        assert!(
-            output_format(Path::new("a_#.tif"), "8", "half")
-                .unwrap_err()
-                .to_string()
-                .contains("pattern")
-        );
+        assert_eq!(output_format(Path::new("a_#.PNG"), "16", "half").unwrap(), OutputFormat::Png { sixteen_bit: true });
+        assert_eq!(output_format(Path::new("a_#.exr"), "8", "float").unwrap(), OutputFormat::Exr { half: false });
+        assert!(output_format(Path::new("a_#.tif"), "8", "half").unwrap_err().to_string().contains("pattern"));
     }
 
     #[test]
@@ -1348,15 +1058,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ctx = CookCtx::new();
         let clip = clip_of((0..3).map(|i| gray(2, 2, &[i as f32 / 2.0; 4])).collect());
-        write_sequence(
-            &clip,
-            &options(
-                dir.path().join("s_####.png"),
-                OutputFormat::Png { sixteen_bit: false },
-            ),
-            &ctx,
-        )
-        .unwrap();
+        write_sequence(&clip, &options(dir.path().join("s_####.png"), OutputFormat::Png { sixteen_bit: false }), &ctx).unwrap();
         std::fs::write(dir.path().join("notes.txt"), b"ignored").unwrap();
 
         let from_dir = load_sequence(dir.path(), 0.0, &ctx).unwrap();
@@ -1366,11 +1068,7 @@ mod tests {
         let from_pattern = load_sequence(&dir.path().join("s_%04d.png"), 30.0, &ctx).unwrap();
         assert_eq!((from_pattern.len(), from_pattern.fps()), (3, 30.0));
         assert_eq!(from_pattern.fingerprint(), from_dir.fingerprint());
-        assert_close(
-            from_pattern.image(1, &ctx).unwrap().data(),
-            &[0.5; 4],
-            0.5 / 255.0 + 1e-6,
-        );
+        assert_close(from_pattern.image(1, &ctx).unwrap().data(), &[0.5; 4], 0.5 / 255.0 + 1e-6);
 
         let single = load_sequence(&dir.path().join("s_0001.png"), 0.0, &ctx).unwrap();
         assert_eq!(single.len(), 1);
@@ -1380,27 +1078,13 @@ mod tests {
     fn missing_paths_and_unmatched_patterns_are_errors() {
         let dir = tempfile::tempdir().unwrap();
         let ctx = CookCtx::new();
-        let err = load_sequence(&dir.path().join("nope.png"), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.contains("nope.png") && err.contains("no such file or directory"),
-            "{err}"
-        );
-        let err = load_sequence(&dir.path().join("f_####.png"), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
+        let err = load_sequence(&dir.path().join("nope.png"), 0.0, &ctx).unwrap_err().to_string();
+        assert!(err.contains("nope.png") && err.contains("no such file or directory"), "{err}");
+        let err = load_sequence(&dir.path().join("f_####.png"), 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("no files match"), "{err}");
-        let err = load_sequence(dir.path(), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
+        let err = load_sequence(dir.path(), 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("no image files"), "{err}");
-        assert!(
-            load_image(&dir.path().join("x.png"))
-                .unwrap_err()
-                .to_string()
-                .contains("no such file")
-        );
+        assert!(load_image(&dir.path().join("x.png")).unwrap_err().to_string().contains("no such file"));
     }
 
     #[test]
@@ -1408,21 +1092,15 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ctx = CookCtx::new();
         std::fs::write(dir.path().join("empty.png"), b"").unwrap();
-        let err = load_sequence(&dir.path().join("empty.png"), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
+        let err = load_sequence(&dir.path().join("empty.png"), 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("empty.png"), "{err}");
         // A PNG signature followed by garbage instead of an IHDR chunk.
         let mut corrupt = b"\x89PNG\r\n\x1a\n".to_vec();
         corrupt.extend_from_slice(&[0xde, 0xad, 0xbe, 0xef, 1, 2, 3, 4, 5, 6]);
         std::fs::write(dir.path().join("bad.png"), &corrupt).unwrap();
-        let err = load_sequence(&dir.path().join("bad.png"), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
+        let err = load_sequence(&dir.path().join("bad.png"), 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("bad.png"), "{err}");
-        let err = load_image(&dir.path().join("bad.png"))
-            .unwrap_err()
-            .to_string();
+        let err = load_image(&dir.path().join("bad.png")).unwrap_err().to_string();
         assert!(err.contains("bad.png"), "{err}");
     }
 
@@ -1431,53 +1109,27 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ctx = CookCtx::new();
         let fmt = OutputFormat::Png { sixteen_bit: false };
-        write_sequence(
-            &clip_of(vec![gray(2, 2, &[0.0; 4]); 2]),
-            &options(dir.path().join("m_####.png"), fmt),
-            &ctx,
-        )
-        .unwrap();
-        let odd = WriteOptions {
-            start: 2,
-            ..options(dir.path().join("m_####.png"), fmt)
-        };
+        write_sequence(&clip_of(vec![gray(2, 2, &[0.0; 4]); 2]), &options(dir.path().join("m_####.png"), fmt), &ctx).unwrap();
+        let odd = WriteOptions { start: 2, ..options(dir.path().join("m_####.png"), fmt) };
         write_sequence(&clip_of(vec![gray(3, 1, &[0.0; 3])]), &odd, &ctx).unwrap();
-        let err = load_sequence(dir.path(), 0.0, &ctx)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.contains("m_0002.png") && err.contains("3x1") && err.contains("2x2"),
-            "{err}"
-        );
+        let err = load_sequence(dir.path(), 0.0, &ctx).unwrap_err().to_string();
+        assert!(err.contains("m_0002.png") && err.contains("3x1") && err.contains("2x2"), "{err}");
     }
 
     #[test]
     fn probe_output_parses_size_rate_and_count() {
-        let info = parse_probe(
-            "width=480\nheight=270\nr_frame_rate=30/1\navg_frame_rate=30000/1001\nnb_frames=796\n",
-        )
-        .unwrap();
-        assert_eq!(
-            (info.width, info.height, info.frames),
-            (480, 270, Some(796))
-        );
+        let info = parse_probe("width=480\nheight=270\nr_frame_rate=30/1\navg_frame_rate=30000/1001\nnb_frames=796\n").unwrap();
+        assert_eq!((info.width, info.height, info.frames), (480, 270, Some(796)));
         assert!((info.fps.unwrap() - 29.97).abs() < 0.01);
-        let info =
-            parse_probe("width=4\nheight=2\navg_frame_rate=0/0\nr_frame_rate=25/1\nnb_frames=N/A")
-                .unwrap();
+        let info = parse_probe("width=4\nheight=2\navg_frame_rate=0/0\nr_frame_rate=25/1\nnb_frames=N/A").unwrap();
         assert_eq!((info.fps, info.frames), (Some(25.0), None));
         assert_eq!(parse_probe("height=2"), None);
     }
 
     #[test]
     fn missing_ffmpeg_names_the_fix() {
-        let err = probe_video("pyrograph-no-such-ffprobe", Path::new("/tmp/clip.mp4"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.contains("install ffmpeg (apt-get install ffmpeg)") && err.contains("PNG frames"),
-            "{err}"
-        );
+        let err = probe_video("pyrograph-no-such-ffprobe", Path::new("/tmp/clip.mp4")).unwrap_err().to_string();
+        assert!(err.contains("install ffmpeg (apt-get install ffmpeg)") && err.contains("PNG frames"), "{err}");
     }
 
     #[test]
@@ -1491,11 +1143,7 @@ mod tests {
     fn cook_reads_ports_and_reports_frames_written() {
         let dir = tempfile::tempdir().unwrap();
         let desc = write_sequence_desc();
-        let mut values: Vec<Value> = desc
-            .inputs
-            .iter()
-            .map(|p| p.default.clone().unwrap_or(Value::Int(0)))
-            .collect();
+        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
         values[0] = Value::Clip(clip_of(vec![gray(1, 1, &[1.0]); 2]));
         values[1] = Value::Path(dir.path().join("o_####.png"));
         let out = cook_write_sequence(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();

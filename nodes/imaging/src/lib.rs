@@ -7,6 +7,7 @@ pub mod convert;
 pub mod io;
 pub mod preprocess;
 pub mod procedural;
+pub mod sheet;
 
 use pyrograph_core::Registry;
 
@@ -16,4 +17,5 @@ pub fn register(registry: &mut Registry) {
     basic::register(registry);
     preprocess::register(registry);
     procedural::register(registry);
+    sheet::register(registry);
 }

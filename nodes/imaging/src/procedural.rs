@@ -10,7 +10,8 @@ use std::sync::Arc;
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
+    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
+    Value,
 };
 use rayon::prelude::*;
 
@@ -43,8 +44,13 @@ pub struct TurbulenceFlame {
 }
 
 /// Black → deep red → orange → yellow → near white: the colours of a hydrocarbon flame by temperature.
-const RAMP: [(f32, [f32; 3]); 5] =
-    [(0.0, [0.0, 0.0, 0.0]), (0.25, [0.45, 0.04, 0.0]), (0.5, [0.95, 0.32, 0.02]), (0.75, [1.0, 0.72, 0.18]), (1.0, [1.0, 0.97, 0.85])];
+const RAMP: [(f32, [f32; 3]); 5] = [
+    (0.0, [0.0, 0.0, 0.0]),
+    (0.25, [0.45, 0.04, 0.0]),
+    (0.5, [0.95, 0.32, 0.02]),
+    (0.75, [1.0, 0.72, 0.18]),
+    (1.0, [1.0, 0.97, 0.85]),
+];
 
 /// The flame colour at intensity `t` (0..1), linearly interpolated along [`RAMP`].
 pub fn flame_ramp(t: f32) -> [f32; 3] {

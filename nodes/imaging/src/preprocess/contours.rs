@@ -9,7 +9,9 @@ use imageproc::contours::find_contours;
 use imageproc::drawing::{draw_hollow_polygon_mut, draw_polygon_mut};
 use imageproc::geometry::contour_area;
 use imageproc::point::Point;
-use pyrograph_core::{Contour, Contours, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::{
+    Contour, Contours, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
+};
 
 use crate::convert::{from_rgba32f, gray8_to_mask, mask_to_gray8, to_rgba32f};
 
@@ -81,12 +83,13 @@ fn dp_open(points: &[[f32; 2]], first: usize, last: usize, tolerance: f64, keep:
     let mut stack = vec![(first, last)];
     while let Some((anchor, floating)) = stack.pop() {
         let (Some(&a), Some(&b)) = (points.get(anchor), points.get(floating)) else { continue };
-        let farthest = (anchor + 1..floating)
-            .filter_map(|i| points.get(i).map(|&p| (i, segment_distance(p, a, b))))
-            .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
+        let farthest = (anchor + 1..floating).filter_map(|i| points.get(i).map(|&p| (i, segment_distance(p, a, b)))).fold(
+            None,
+            |best: Option<(usize, f64)>, (i, d)| match best {
                 Some((_, bd)) if bd >= d => best,
                 _ => Some((i, d)),
-            });
+            },
+        );
         if let Some((i, d)) = farthest
             && d > tolerance
         {
@@ -259,7 +262,12 @@ pub fn simplify_desc() -> NodeDesc {
          Every removed point lies within `tolerance` pixels of the simplified polygon; areas are recomputed.",
     )
     .input(PortDesc::new("contours", PortType::Contours, "Contours to simplify"))
-    .input(PortDesc::float("tolerance", 2.0, (0.0, 1000.0), "Largest distance in pixels a removed point may lie from the result; 0 keeps all"))
+    .input(PortDesc::float(
+        "tolerance",
+        2.0,
+        (0.0, 1000.0),
+        "Largest distance in pixels a removed point may lie from the result; 0 keeps all",
+    ))
     .output("contours", PortType::Contours, "Simplified contours")
 }
 
@@ -333,7 +341,17 @@ mod tests {
     /// A 9×9 square with a 3×3 hole, inside an 11×11 frame.
     fn ring() -> Mask {
         let rows: Vec<String> = (0..11)
-            .map(|y| (0..11).map(|x| if (1..=9).contains(&x) && (1..=9).contains(&y) && !((4..=6).contains(&x) && (4..=6).contains(&y)) { '#' } else { '.' }).collect())
+            .map(|y| {
+                (0..11)
+                    .map(|x| {
+                        if (1..=9).contains(&x) && (1..=9).contains(&y) && !((4..=6).contains(&x) && (4..=6).contains(&y)) {
+                            '#'
+                        } else {
+                            '.'
+                        }
+                    })
+                    .collect()
+            })
             .collect();
         mask(&rows.iter().map(String::as_str).collect::<Vec<_>>())
     }
@@ -388,14 +406,20 @@ mod tests {
         let depth0 = remove_holes(&c, 0, 0.0);
         assert_eq!(depth0.contours.iter().map(|c| c.area).collect::<Vec<_>>(), [900.0, 4.0]);
         let depth1 = remove_holes(&c, 1, 0.0);
-        assert_eq!(depth1.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(), [(900.0, None), (400.0, Some(0)), (4.0, None)]);
+        assert_eq!(
+            depth1.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(),
+            [(900.0, None), (400.0, Some(0)), (4.0, None)]
+        );
     }
 
     #[test]
     fn hole_removal_by_area_drops_children_and_reindexes() {
         let c = nested();
         let kept = remove_holes(&c, 5, 100.0);
-        assert_eq!(kept.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(), [(900.0, None), (400.0, Some(0)), (100.0, Some(1))]);
+        assert_eq!(
+            kept.contours.iter().map(|c| (c.area, c.parent)).collect::<Vec<_>>(),
+            [(900.0, None), (400.0, Some(0)), (100.0, Some(1))]
+        );
         let no_hole = remove_holes(&c, 5, 500.0);
         // The island's parent (the 400 px² hole) is gone, so the island goes with it.
         assert_eq!(no_hole.contours.iter().map(|c| c.area).collect::<Vec<_>>(), [900.0]);
@@ -452,7 +476,8 @@ mod proptests {
     }
 
     fn on_border(m: &Mask, x: i64, y: i64) -> bool {
-        let inside = |x: i64, y: i64| x >= 0 && y >= 0 && x < m.width() as i64 && y < m.height() as i64 && m.get(x as u32, y as u32);
+        let inside =
+            |x: i64, y: i64| x >= 0 && y >= 0 && x < m.width() as i64 && y < m.height() as i64 && m.get(x as u32, y as u32);
         if !inside(x, y) {
             return false;
         }

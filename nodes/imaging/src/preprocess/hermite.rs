@@ -77,8 +77,11 @@ fn base_desc(type_name: &str, summary: &str) -> NodeDesc {
 
 /// Description of `imaging.hermite_background`.
 pub fn desc() -> NodeDesc {
-    base_desc("imaging.hermite_background", "Hermite background and smoke removal (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20b–c).")
-        .output("image", PortType::Image, "Gray image with the background darkened")
+    base_desc(
+        "imaging.hermite_background",
+        "Hermite background and smoke removal (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20b–c).",
+    )
+    .output("image", PortType::Image, "Gray image with the background darkened")
 }
 
 /// Description of `imaging.hermite_background_masked`.

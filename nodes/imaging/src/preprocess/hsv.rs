@@ -1,6 +1,8 @@
 //! `imaging.hsv_mask`: the multi-layer HSV colour mask of the Eigenfires thesis (§3.2, eq. 3–4, Fig. 17).
 
-use pyrograph_core::{Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::{
+    Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
+};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -67,7 +69,8 @@ impl HsvRange {
     /// Whether a pixel's `(h, s, v)` lies in the range (eq. 4).
     #[inline]
     pub fn contains(&self, [h, s, v]: [f32; 3]) -> bool {
-        let hue_ok = if self.h_min <= self.h_max { h >= self.h_min && h <= self.h_max } else { h >= self.h_min || h <= self.h_max };
+        let hue_ok =
+            if self.h_min <= self.h_max { h >= self.h_min && h <= self.h_max } else { h >= self.h_min || h <= self.h_max };
         hue_ok && s >= self.s_min && s <= self.s_max && v >= self.v_min && v <= self.v_max
     }
 }
@@ -138,7 +141,12 @@ fn layer_ports(desc: NodeDesc, n: usize, colour: &str, enabled: bool, r: &HsvRan
     let p = |s: &str| format!("layer{n}_{s}");
     let doc = |s: &str| format!("Layer {n} ({colour} by default): {s}");
     desc.input(PortDesc::bool(&p("enabled"), enabled, &doc("whether this layer contributes")))
-        .input(PortDesc::float(&p("h_min"), f64::from(r.h_min), (0.0, 360.0), &doc("lowest hue in degrees; above h_max wraps past red")))
+        .input(PortDesc::float(
+            &p("h_min"),
+            f64::from(r.h_min),
+            (0.0, 360.0),
+            &doc("lowest hue in degrees; above h_max wraps past red"),
+        ))
         .input(PortDesc::float(&p("h_max"), f64::from(r.h_max), (0.0, 360.0), &doc("highest hue in degrees")))
         .input(PortDesc::float(&p("s_min"), f64::from(r.s_min), (0.0, 255.0), &doc("lowest saturation (0–255)")))
         .input(PortDesc::float(&p("s_max"), f64::from(r.s_max), (0.0, 255.0), &doc("highest saturation (0–255)")))
@@ -166,10 +174,20 @@ pub fn desc() -> NodeDesc {
 
 fn read_range(inputs: &Inputs<'_>, n: usize) -> Result<HsvRange, NodeError> {
     let get = |s: &str| inputs.float(&format!("layer{n}_{s}")).map(|v| v as f32);
-    let r = HsvRange { h_min: get("h_min")?, h_max: get("h_max")?, s_min: get("s_min")?, s_max: get("s_max")?, v_min: get("v_min")?, v_max: get("v_max")? };
+    let r = HsvRange {
+        h_min: get("h_min")?,
+        h_max: get("h_max")?,
+        s_min: get("s_min")?,
+        s_max: get("s_max")?,
+        v_min: get("v_min")?,
+        v_max: get("v_max")?,
+    };
     for (what, lo, hi) in [("s", r.s_min, r.s_max), ("v", r.v_min, r.v_max)] {
         if lo > hi {
-            return Err(NodeError::port(format!("layer{n}_{what}_min"), format!("{lo} is above layer{n}_{what}_max {hi}; only hue ranges wrap")));
+            return Err(NodeError::port(
+                format!("layer{n}_{what}_min"),
+                format!("{lo} is above layer{n}_{what}_max {hi}; only hue ranges wrap"),
+            ));
         }
     }
     Ok(r)
@@ -282,7 +300,8 @@ mod tests {
 
     fn node_inputs(overrides: &[(&str, Value)]) -> (NodeDesc, Vec<Value>) {
         let d = desc();
-        let mut values: Vec<Value> = d.inputs.iter().map(|p| p.default.clone().unwrap_or_else(|| Value::Image(Arc::new(rgba(&[RED]))))).collect();
+        let mut values: Vec<Value> =
+            d.inputs.iter().map(|p| p.default.clone().unwrap_or_else(|| Value::Image(Arc::new(rgba(&[RED]))))).collect();
         for (name, v) in overrides {
             let i = d.input_index(name).unwrap();
             values[i] = v.clone();
@@ -292,7 +311,11 @@ mod tests {
 
     #[test]
     fn saturation_min_above_max_names_the_port() {
-        let (d, values) = node_inputs(&[("layer2_enabled", Value::Bool(true)), ("layer2_s_min", Value::Float(200.0)), ("layer2_s_max", Value::Float(100.0))]);
+        let (d, values) = node_inputs(&[
+            ("layer2_enabled", Value::Bool(true)),
+            ("layer2_s_min", Value::Float(200.0)),
+            ("layer2_s_max", Value::Float(100.0)),
+        ]);
         let err = cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap_err();
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "layer2_s_min"), "{err}");
     }

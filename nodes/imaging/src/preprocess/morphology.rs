@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use image::{GrayImage, Luma};
 use imageproc::morphology::{Mask as Element, grayscale_dilate, grayscale_erode};
-use pyrograph_core::{Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::{
+    Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
+};
 
 use crate::convert::{from_gray32f, from_rgba32f, gray8_to_mask, mask_to_gray8, to_gray32f, to_rgba32f};
 
@@ -123,7 +125,8 @@ fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
     let op_name = inputs.choice("op")?;
     let op = MorphOp::parse(op_name).ok_or_else(|| NodeError::port("op", format!("unknown operation '{op_name}'")))?;
     let shape_name = inputs.choice("shape")?;
-    let shape = KernelShape::parse(shape_name).ok_or_else(|| NodeError::port("shape", format!("unknown shape '{shape_name}'")))?;
+    let shape =
+        KernelShape::parse(shape_name).ok_or_else(|| NodeError::port("shape", format!("unknown shape '{shape_name}'")))?;
     let size = inputs.int("size")?;
     let size = u32::try_from(size).map_err(|_| NodeError::port("size", format!("must be odd and in 1..=99, got {size}")))?;
     let element = structuring_element(shape, size)?;
@@ -187,7 +190,8 @@ mod tests {
 
     #[test]
     fn ellipse_5x5_is_opencvs_element() {
-        let cells: Vec<String> = (0..5).map(|y| (0..5).map(|x| if KernelShape::Ellipse.contains(5, x, y) { '#' } else { '.' }).collect()).collect();
+        let cells: Vec<String> =
+            (0..5).map(|y| (0..5).map(|x| if KernelShape::Ellipse.contains(5, x, y) { '#' } else { '.' }).collect()).collect();
         assert_eq!(cells, ["..#..", "#####", "#####", "#####", "..#.."]);
         assert!((0..3).all(|y| (0..3).all(|x| KernelShape::Cross.contains(3, x, y) == (x == 1 || y == 1))));
     }

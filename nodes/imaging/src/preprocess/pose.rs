@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use image::{Luma, Rgba};
 use imageproc::geometric_transformations::{Border, Interpolation, Projection, warp};
-use pyrograph_core::{Channels, Contour, Contours, CookCtx, FnNode, Image, Inputs, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::{
+    Channels, Contour, Contours, CookCtx, FnNode, Image, Inputs, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
+};
 
 use super::contours::simplify_closed;
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
@@ -137,8 +139,12 @@ pub const UPRIGHT_EPSILON_DEG: f64 = 1e-3;
 /// pixels become black (transparent for RGBA).
 pub fn warp_image(image: &Image, projection: Projection) -> Image {
     match image.channels() {
-        Channels::Gray => from_gray32f(warp(&to_gray32f(image), projection, Interpolation::Bilinear, Border::Constant(Luma([0.0])))),
-        Channels::Rgba => from_rgba32f(warp(&to_rgba32f(image), projection, Interpolation::Bilinear, Border::Constant(Rgba([0.0; 4])))),
+        Channels::Gray => {
+            from_gray32f(warp(&to_gray32f(image), projection, Interpolation::Bilinear, Border::Constant(Luma([0.0]))))
+        }
+        Channels::Rgba => {
+            from_rgba32f(warp(&to_rgba32f(image), projection, Interpolation::Bilinear, Border::Constant(Rgba([0.0; 4]))))
+        }
     }
 }
 
@@ -201,7 +207,9 @@ pub fn pose_normalize(image: &Image, contours: &Contours, mode: PoseMode, weight
     let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
     let image = match (mode, axis) {
         (PoseMode::Rotate, Some(a)) => rotate_upright(image, &a),
-        (PoseMode::CenterScale(f), Some(_)) => flame_bounds(contours).map_or_else(|| image.clone(), |b| center_scale(image, b, f)),
+        (PoseMode::CenterScale(f), Some(_)) => {
+            flame_bounds(contours).map_or_else(|| image.clone(), |b| center_scale(image, b, f))
+        }
         (_, None) => image.clone(),
     };
     Pose { image, axis }
@@ -238,7 +246,13 @@ fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
     if (contours.width, contours.height) != image.size() && !contours.contours.is_empty() {
         return Err(NodeError::port(
             "contours",
-            format!("traced in a {}×{} image but the image is {}×{}", contours.width, contours.height, image.width(), image.height()),
+            format!(
+                "traced in a {}×{} image but the image is {}×{}",
+                contours.width,
+                contours.height,
+                image.width(),
+                image.height()
+            ),
         ));
     }
     let mode = match inputs.choice("mode")? {
@@ -307,7 +321,8 @@ pub(crate) mod tests {
         let pose = pose_normalize(&mask_image(&m), &trace_contours(&m), PoseMode::Rotate, Weighting::Uniform);
         let axis = pose.axis.unwrap();
         assert!((axis.angle_deg - 25.0).abs() < 1.0, "{axis:?}");
-        let upright = Mask::from_vec(120, 120, pose.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let upright =
+            Mask::from_vec(120, 120, pose.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
         let again = flame_axis(&trace_contours(&upright).contours[0], Weighting::Uniform).unwrap();
         assert!(again.angle_deg.abs() < 1.0, "{}", again.angle_deg);
         // The pivot stays where it was.

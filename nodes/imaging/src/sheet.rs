@@ -1,0 +1,108 @@
+//! Contact sheets: frames of a clip laid out in a grid, for reviews, READMEs and previews.
+
+use pyrograph_core::{
+    Channels, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
+};
+
+/// Adds this module's node types.
+pub fn register(registry: &mut Registry) {
+    registry.add(FnNode::new(contact_sheet_desc(), cook_contact_sheet));
+}
+
+/// Indices of `count` frames spread evenly over `len` frames, first and last included.
+pub fn pick_frames(len: usize, count: usize) -> Vec<usize> {
+    match (len, count) {
+        (0, _) | (_, 0) => Vec::new(),
+        (_, 1) => vec![0],
+        _ => {
+            let count = count.min(len);
+            (0..count).map(|i| (i * (len - 1) + (count - 1) / 2) / (count - 1)).collect()
+        }
+    }
+}
+
+/// Lays `frames` (all the same size) out left→right, top→bottom on a `background`, `gap` pixels apart.
+pub fn contact_sheet(frames: &[&Image], columns: usize, gap: u32, background: [f32; 4]) -> Result<Image, String> {
+    let first = frames.first().ok_or("no frames to lay out")?;
+    let (w, h) = first.size();
+    if let Some(odd) = frames.iter().find(|f| f.size() != (w, h)) {
+        return Err(format!("frames differ in size: {}x{} and {}x{}", w, h, odd.width(), odd.height()));
+    }
+    let columns = columns.clamp(1, frames.len());
+    let rows = frames.len().div_ceil(columns);
+    let sheet_w = columns as u32 * w + (columns as u32 + 1) * gap;
+    let sheet_h = rows as u32 * h + (rows as u32 + 1) * gap;
+    let mut data: Vec<f32> = std::iter::repeat_n(background, sheet_w as usize * sheet_h as usize).flatten().collect();
+    for (k, frame) in frames.iter().enumerate() {
+        let rgba = frame.to_rgba();
+        let x0 = gap + (k % columns) as u32 * (w + gap);
+        let y0 = gap + (k / columns) as u32 * (h + gap);
+        for (y, row) in rgba.data().chunks_exact(w as usize * 4).enumerate() {
+            let start = (((y0 + y as u32) * sheet_w + x0) * 4) as usize;
+            data[start..start + row.len()].copy_from_slice(row);
+        }
+    }
+    Image::from_vec(sheet_w, sheet_h, Channels::Rgba, data).ok_or_else(|| "sheet size overflow".to_string())
+}
+
+fn contact_sheet_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.contact_sheet",
+        "Imaging",
+        TimeDep::WholeClip,
+        "Lays frames of a clip out in a grid (left→right, top→bottom), picked evenly from first to last.",
+    )
+    .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The clip to sample."))
+    .input(PortDesc::int("count", 8, (1, 1024), "How many frames to show (fewer if the clip is shorter)."))
+    .input(PortDesc::int("columns", 8, (1, 1024), "Frames per row."))
+    .input(PortDesc::int("gap", 4, (0, 256), "Pixels between and around frames."))
+    .input(PortDesc::color("background", [0.08, 0.08, 0.08, 1.0], "Colour of the gaps."))
+    .output("image", PortType::Image, "The sheet (RGBA).")
+}
+
+fn cook_contact_sheet(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let clip = i.clip("clip")?;
+    if clip.is_empty() {
+        return Err(NodeError::port("clip", "the clip has no frames"));
+    }
+    let picks = pick_frames(clip.len(), i.usize("count")?);
+    let frames = picks.iter().map(|&f| clip.image(f, ctx)).collect::<Result<Vec<_>, _>>()?;
+    let refs: Vec<&Image> = frames.iter().map(|f| f.as_ref()).collect();
+    let sheet = contact_sheet(&refs, i.usize("columns")?, i.usize("gap")? as u32, i.color("background")?)
+        .map_err(|m| NodeError::port("clip", m))?;
+    Ok(vec![Value::Image(std::sync::Arc::new(sheet))])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn picks_spread_evenly_including_both_ends() {
+        assert_eq!(pick_frames(10, 4), vec![0, 3, 6, 9]);
+        assert_eq!(pick_frames(3, 8), vec![0, 1, 2]);
+        assert_eq!(pick_frames(5, 1), vec![0]);
+        assert!(pick_frames(0, 3).is_empty());
+    }
+
+    #[test]
+    fn frames_land_in_reading_order_with_gaps() {
+        let a = Image::gray_from_fn(1, 1, |_, _| 0.25);
+        let b = Image::gray_from_fn(1, 1, |_, _| 0.5);
+        let c = Image::gray_from_fn(1, 1, |_, _| 0.75);
+        let sheet = contact_sheet(&[&a, &b, &c], 2, 1, [0.0, 0.0, 0.0, 1.0]).unwrap();
+        assert_eq!(sheet.size(), (5, 5));
+        assert_eq!(sheet.pixel(1, 1)[0], 0.25);
+        assert_eq!(sheet.pixel(3, 1)[0], 0.5);
+        assert_eq!(sheet.pixel(1, 3)[0], 0.75);
+        assert_eq!(sheet.pixel(3, 3), &[0.0, 0.0, 0.0, 1.0], "empty cell keeps the background");
+        assert_eq!(sheet.pixel(0, 0), &[0.0, 0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn mismatched_sizes_are_an_error() {
+        let a = Image::gray_from_fn(1, 1, |_, _| 0.0);
+        let b = Image::gray_from_fn(2, 1, |_, _| 0.0);
+        assert!(contact_sheet(&[&a, &b], 2, 0, [0.0; 4]).unwrap_err().contains("differ in size"));
+    }
+}

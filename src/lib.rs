@@ -10,11 +10,17 @@ pub mod demo;
 pub mod reference;
 
 pub use pyrograph_core as core;
+pub use pyrograph_nodes_cloth as cloth;
+pub use pyrograph_nodes_eigen as eigen;
 pub use pyrograph_nodes_imaging as imaging;
+pub use pyrograph_nodes_particles as particles;
 
 /// A registry with every node type pyrograph ships.
 pub fn registry() -> core::Registry {
     let mut r = core::Registry::with_builtins();
     imaging::register(&mut r);
+    eigen::register(&mut r);
+    particles::register(&mut r);
+    cloth::register(&mut r);
     r
 }

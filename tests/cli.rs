@@ -65,6 +65,13 @@ fn check_and_render_fail_with_the_specific_message_on_every_bad_fixture() {
 }
 
 #[test]
+fn a_rejected_required_parameter_is_one_problem_not_two() {
+    let o = run(&["check", "--json", fixture("unset_variable.ron").to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    assert_eq!(v["problems"].as_array().unwrap().len(), 1, "{v}");
+}
+
+#[test]
 fn check_json_lists_every_problem_with_its_location() {
     let o = run(&["check", "--json", fixture("unknown_port.ron").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));

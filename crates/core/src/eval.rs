@@ -345,6 +345,9 @@ fn gather_inputs(graph: &Graph, gn: &GraphNode, done: &Done) -> Result<(Vec<Valu
                 _ => return Err(NodeError::Upstream(graph.node(*from).id.to_string())),
             },
             InputSource::Missing => return Err(NodeError::port(&port.name, "required input is not connected")),
+            InputSource::Invalid => {
+                return Err(NodeError::port(&port.name, "parameter value was rejected when the graph loaded"));
+            }
         }
     }
     Ok((values, h.finish()))

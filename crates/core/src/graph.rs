@@ -29,6 +29,8 @@ pub enum InputSource {
     /// A required input that is neither set nor connected (only inside sub-graphs, whose
     /// interface inputs are fed when the include cooks; validation rejects it anywhere else).
     Missing,
+    /// A parameter whose value was rejected (already reported; the graph does not build).
+    Invalid,
     /// Output `port` of another node.
     Edge {
         /// The upstream node.
@@ -246,6 +248,7 @@ fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx, diags: &mut Vec<Diagnostic
 fn node_inputs(id: &str, nd: &NodeDoc, node: &dyn Node, ctx: &LoadCtx, diags: &mut Vec<Diagnostic>) -> Vec<InputSource> {
     let desc = node.desc();
     let mut inputs: Vec<Option<Value>> = desc.inputs.iter().map(|p| resolve_default(p, ctx)).collect();
+    let mut invalid = vec![false; desc.inputs.len()];
     for (name, pv) in &nd.params {
         let loc = Location::Port { node: id.to_string(), port: name.clone() };
         let Some(i) = desc.input_index(name) else {
@@ -259,10 +262,21 @@ fn node_inputs(id: &str, nd: &NodeDoc, node: &dyn Node, ctx: &LoadCtx, diags: &m
         };
         match param_to_value(pv, &desc.inputs[i], ctx) {
             Ok(v) => inputs[i] = Some(v),
-            Err((kind, message)) => diags.push(diag(kind, loc, message)),
+            Err((kind, message)) => {
+                invalid[i] = true;
+                diags.push(diag(kind, loc, message));
+            }
         }
     }
-    inputs.into_iter().map(|v| v.map_or(InputSource::Missing, InputSource::Const)).collect()
+    inputs
+        .into_iter()
+        .zip(invalid)
+        .map(|(v, bad)| match (v, bad) {
+            (_, true) => InputSource::Invalid,
+            (Some(v), false) => InputSource::Const(v),
+            (None, false) => InputSource::Missing,
+        })
+        .collect()
 }
 
 fn resolve_default(port: &PortDesc, ctx: &LoadCtx) -> Option<Value> {
@@ -393,7 +407,16 @@ pub(crate) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
             }
             _ => Err(wrong("a path string")),
         },
-        PortType::Image | PortType::Mask | PortType::Contours | PortType::Clip(_) => Err((
+        PortType::Image
+        | PortType::Mask
+        | PortType::Contours
+        | PortType::WindField
+        | PortType::Particles
+        | PortType::ClothState
+        | PortType::Basis
+        | PortType::Weights
+        | PortType::FrameList
+        | PortType::Clip(_) => Err((
             DiagnosticKind::WrongKind,
             format!("is a {} input: connect another node's output to it instead of writing a value", port.ty),
         )),
@@ -411,7 +434,18 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         Value::Vec3(c) => ParamValue::List(c.iter().map(|x| ParamValue::Float(*x)).collect()),
         Value::String(s) | Value::Enum(s) => ParamValue::String(s.clone()),
         Value::Path(p) => ParamValue::String(p.display().to_string()),
-        Value::Image(_) | Value::Mask(_) | Value::Contours(_) | Value::Clip(_) => return None,
+        Value::Image(_)
+        | Value::Mask(_)
+        | Value::Contours(_)
+        | Value::WindField(_)
+        | Value::Particles(_)
+        | Value::ClothState(_)
+        | Value::Basis(_)
+        | Value::Weights(_)
+        | Value::FrameList(_)
+        | Value::Clip(_) => {
+            return None;
+        }
     })
 }
 

@@ -20,4 +20,7 @@ pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progre
 pub use graph::{BuildOptions, Graph};
 pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
 pub use registry::Registry;
-pub use value::{Channels, Clip, Contour, Contours, FrameSource, Image, Mask, PortType, Value};
+pub use value::{
+    Basis, Channels, Clip, ClothState, Contour, Contours, FrameItem, FrameList, FrameRef, FrameSource, Image, LargeWind, Mask,
+    Particle, Particles, PortType, Value, Weights, WindField,
+};

@@ -335,6 +335,62 @@ impl<'a> Inputs<'a> {
         }
     }
 
+    /// A wind field.
+    pub fn wind_field(&self, name: &str) -> Result<&'a Arc<crate::value::WindField>, NodeError> {
+        match self.get(name)? {
+            Value::WindField(v) => Ok(v),
+            other => Err(self.wrong(name, "WindField", other)),
+        }
+    }
+
+    /// Particles.
+    pub fn particles(&self, name: &str) -> Result<&'a Arc<crate::value::Particles>, NodeError> {
+        match self.get(name)? {
+            Value::Particles(v) => Ok(v),
+            other => Err(self.wrong(name, "Particles", other)),
+        }
+    }
+
+    /// Mass-spring flame cloths.
+    pub fn cloth_state(&self, name: &str) -> Result<&'a Arc<crate::value::ClothState>, NodeError> {
+        match self.get(name)? {
+            Value::ClothState(v) => Ok(v),
+            other => Err(self.wrong(name, "ClothState", other)),
+        }
+    }
+
+    /// An Eigenfires basis.
+    pub fn basis(&self, name: &str) -> Result<&'a Arc<crate::value::Basis>, NodeError> {
+        match self.get(name)? {
+            Value::Basis(v) => Ok(v),
+            other => Err(self.wrong(name, "Basis", other)),
+        }
+    }
+
+    /// Eigenfires weights.
+    pub fn weights(&self, name: &str) -> Result<&'a Arc<crate::value::Weights>, NodeError> {
+        match self.get(name)? {
+            Value::Weights(v) => Ok(v),
+            other => Err(self.wrong(name, "Weights", other)),
+        }
+    }
+
+    /// A frame list.
+    pub fn frame_list(&self, name: &str) -> Result<&'a Arc<crate::value::FrameList>, NodeError> {
+        match self.get(name)? {
+            Value::FrameList(v) => Ok(v),
+            other => Err(self.wrong(name, "FrameList", other)),
+        }
+    }
+
+    /// A Vec3.
+    pub fn vec3(&self, name: &str) -> Result<[f64; 3], NodeError> {
+        match self.get(name)? {
+            Value::Vec3(v) => Ok(*v),
+            other => Err(self.wrong(name, "Vec3", other)),
+        }
+    }
+
     /// A Clip.
     pub fn clip(&self, name: &str) -> Result<&'a Clip, NodeError> {
         match self.get(name)? {

@@ -76,3 +76,9 @@ fn unset_environment_variables_are_named() {
     );
     assert!(found[0].2.contains("PYROGRAPH_SURELY_UNSET_VAR is not set"), "{found:?}");
 }
+
+#[test]
+fn a_rejected_parameter_is_reported_once_not_also_as_missing() {
+    let found = problems(r#"(version: 1, nodes: {"v": (type: "value.int", params: {"value": "x"})})"#);
+    assert_eq!(found.len(), 1, "{found:?}");
+}

@@ -6,8 +6,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use pyrograph_core::{Channels, Image};
 use pyrograph_nodes_imaging::preprocess::contours::{remove_holes, simplify_closed, trace_contours};
-use pyrograph_nodes_imaging::preprocess::hsv::{Blend, HsvLayer, HsvRange, hsv_mask};
-use pyrograph_nodes_imaging::preprocess::morphology::{KernelShape, MorphOp, morphology, structuring_element};
+use pyrograph_nodes_imaging::preprocess::hsv::{Blend, HsvLayer, HsvRange, hsv_mask, rgb_to_hsv};
+use pyrograph_nodes_imaging::preprocess::morphology::{Element, KernelShape, MorphOp, morphology, structuring_element};
 use pyrograph_nodes_imaging::preprocess::pose::{Weighting, flame_axis, main_contour};
 use std::hint::black_box;
 
@@ -68,7 +68,7 @@ fn layers() -> Vec<HsvLayer> {
 
 /// One frame of the chain; returns the numbers the peer reports (kept contours, polygon and
 /// contour sizes, line angle) so nothing is optimized away.
-fn process(frame: &Image, layers: &[HsvLayer], element: &imageproc::morphology::Mask) -> (usize, usize, usize, f64) {
+fn process(frame: &Image, layers: &[HsvLayer], element: &Element) -> (usize, usize, usize, f64) {
     let mask = hsv_mask(frame, layers).expect("RGBA frame");
     let mask = morphology(&morphology(&mask, MorphOp::Open, element), MorphOp::Close, element);
     // The peer traces the whole tree (RETR_TREE) and only drops small areas.
@@ -79,6 +79,36 @@ fn process(frame: &Image, layers: &[HsvLayer], element: &imageproc::morphology::
     (kept.contours.len(), poly.len(), largest.points.len(), angle)
 }
 
+/// Checks once, before timing, that the fast stages give exactly what the definitions give on the
+/// bench frames: the per-pixel HSV fold, imageproc's grayscale morphology and `find_contours`.
+fn check_against_reference(frame: &Image, layers: &[HsvLayer], element: &Element) {
+    use imageproc::morphology::{grayscale_dilate, grayscale_erode};
+    let mask = hsv_mask(frame, layers).expect("RGBA frame");
+    let want: Vec<u8> = frame
+        .data()
+        .chunks_exact(4)
+        .map(|px| {
+            let hsv = rgb_to_hsv(px[0], px[1], px[2]);
+            if layers.iter().fold(false, |acc, l| l.blend.apply(acc, l.range.contains(hsv))) { 255 } else { 0 }
+        })
+        .collect();
+    assert!(mask.data() == want.as_slice(), "hsv_mask differs from the per-pixel definition");
+    let (w, h) = (mask.width(), mask.height());
+    let gray = image::GrayImage::from_raw(w, h, mask.data().to_vec()).expect("mask size");
+    let e = element.to_imageproc();
+    let reference = grayscale_erode(&grayscale_dilate(&grayscale_dilate(&grayscale_erode(&gray, &e), &e), &e), &e);
+    let closed = morphology(&morphology(&mask, MorphOp::Open, element), MorphOp::Close, element);
+    assert!(closed.data() == reference.as_raw().as_slice(), "open + close differs from imageproc");
+    let traced = trace_contours(&closed);
+    let reference = imageproc::contours::find_contours::<i32>(&reference);
+    assert_eq!(traced.contours.len(), reference.len(), "contour count differs from imageproc");
+    for (c, r) in traced.contours.iter().zip(&reference) {
+        let pts: Vec<[f32; 2]> = r.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
+        assert!(c.points == pts && c.parent == r.parent, "a contour differs from imageproc's");
+        assert_eq!(c.area, imageproc::geometry::contour_area(&r.points));
+    }
+}
+
 fn bench_chain(c: &mut Criterion) {
     let element = structuring_element(KernelShape::Ellipse, 5).expect("odd size");
     let layers = layers();
@@ -87,8 +117,20 @@ fn bench_chain(c: &mut Criterion) {
     for (w, h) in [(1280, 720), (480, 480)] {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ u64::from(w));
         let frames: Vec<Image> = (0..4).map(|_| flame_frame(&mut rng, w, h)).collect();
+        for frame in &frames {
+            check_against_reference(frame, &layers, &element);
+        }
         group.throughput(Throughput::Elements(1));
         group.bench_with_input(BenchmarkId::from_parameter(format!("{w}x{h}")), &frames, |b, frames| {
+            let mut i = 0;
+            b.iter(|| {
+                i = (i + 1) % frames.len();
+                black_box(process(black_box(&frames[i]), &layers, &element))
+            })
+        });
+    }
+    if let Some(frames) = tealight_frames(100) {
+        group.bench_with_input(BenchmarkId::from_parameter("tealight_480x480"), &frames, |b, frames| {
             let mut i = 0;
             b.iter(|| {
                 i = (i + 1) % frames.len();
@@ -99,5 +141,60 @@ fn bench_chain(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_chain);
+/// The first `count` frames of the real tealight clip (`$PYROGRAPH_FOOTAGE/tealight-candle/candle.mp4`,
+/// else `<workspace>/../shared/footage`), decoded through `imaging.load_sequence`'s loader; `None`
+/// (the case is skipped, with a note) when the footage or ffmpeg is missing.
+fn tealight_frames(count: usize) -> Option<Vec<Image>> {
+    let root = std::env::var_os("PYROGRAPH_FOOTAGE")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/footage"));
+    let ctx = pyrograph_core::CookCtx::new();
+    let clip = match pyrograph_nodes_imaging::io::load_sequence(&root.join("tealight-candle/candle.mp4"), 0.0, &ctx) {
+        Ok(clip) => clip,
+        Err(e) => {
+            eprintln!("skipping the tealight case: {e}");
+            return None;
+        }
+    };
+    (0..count.min(clip.len())).map(|i| clip.image(i, &ctx).ok().map(|img| (*img).clone())).collect()
+}
+
+/// Each stage of [`process`] on its own, fed with the previous stage's real output, so a
+/// regression (or the hot spot) shows up by name.
+fn bench_stages(c: &mut Criterion) {
+    let element = structuring_element(KernelShape::Ellipse, 5).expect("odd size");
+    let layers = layers();
+    let mut group = c.benchmark_group("hsv_contour_stages");
+    group.sample_size(20);
+    for (w, h) in [(1280, 720), (480, 480)] {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ u64::from(w));
+        let frame = flame_frame(&mut rng, w, h);
+        let raw = hsv_mask(&frame, &layers).expect("RGBA frame");
+        let opened = morphology(&raw, MorphOp::Open, &element);
+        let closed = morphology(&opened, MorphOp::Close, &element);
+        let traced = trace_contours(&closed);
+        let size = format!("{w}x{h}");
+        group.bench_with_input(BenchmarkId::new("hsv_mask", &size), &frame, |b, f| b.iter(|| hsv_mask(black_box(f), &layers)));
+        group.bench_with_input(BenchmarkId::new("open", &size), &raw, |b, m| {
+            b.iter(|| morphology(black_box(m), MorphOp::Open, &element))
+        });
+        group.bench_with_input(BenchmarkId::new("close", &size), &opened, |b, m| {
+            b.iter(|| morphology(black_box(m), MorphOp::Close, &element))
+        });
+        group
+            .bench_with_input(BenchmarkId::new("trace_contours", &size), &closed, |b, m| b.iter(|| trace_contours(black_box(m))));
+        group.bench_with_input(BenchmarkId::new("filter_simplify_fit", &size), &traced, |b, t| {
+            b.iter(|| {
+                let kept = remove_holes(black_box(t), u32::MAX, 100.0);
+                let Some(largest) = main_contour(&kept) else { return (0, 0, 0.0) };
+                let poly = simplify_closed(&largest.points, 2.0);
+                let angle = flame_axis(largest, Weighting::Uniform).map_or(0.0, |a| a.angle_deg);
+                (kept.contours.len(), poly.len(), angle)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_chain, bench_stages);
 criterion_main!(benches);

@@ -21,6 +21,7 @@ use pyrograph_core::{
 use rayon::prelude::*;
 use std::hash::{Hash, Hasher};
 
+use crate::color::{AlphaMode, premultiply};
 use crate::convert;
 
 /// Adds the loaders and the sequence writer.
@@ -686,7 +687,8 @@ fn write_sequence_desc() -> NodeDesc {
         TimeDep::Sink,
         "Writes a clip as a numbered PNG or OpenEXR sequence.\n\nThe pattern's `####` (or `%04d`) is the zero-padded \
          frame number and its extension picks the format. Writes the render's frame range (`--frames`) or every \
-         frame, in parallel, each file atomically; refuses to replace existing files unless `overwrite` is on.",
+         frame, in parallel, each file atomically; refuses to replace existing files unless `overwrite` is on. \
+         `alpha` writes RGBA frames with straight or premultiplied alpha; the `alpha` output states which.",
     )
     .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The frames to write."))
     .input(PortDesc::path(
@@ -699,8 +701,15 @@ fn write_sequence_desc() -> NodeDesc {
     .input(PortDesc::choice("exr_type", &["half", "float"], "half", "Sample type of EXR files."))
     .input(PortDesc::int("start", 0, (0, 999_999_999), "File number of the clip's frame 0 (frame i is written as start + i)."))
     .input(PortDesc::bool("overwrite", false, "Replace files that already exist."))
+    .input(PortDesc::choice(
+        "alpha",
+        &["straight", "premultiplied"],
+        "straight",
+        "Alpha convention of RGBA files: straight (PNG's own) or premultiplied (colour × alpha, usual for EXR).",
+    ))
     .output("frames", PortType::Int, "How many files were written.")
     .output("first", PortType::Path, "The first file written.")
+    .output("alpha", PortType::String, "The alpha convention of the files written (straight or premultiplied).")
 }
 
 /// What and where [`write_sequence`] writes.
@@ -716,6 +725,8 @@ pub struct WriteOptions {
     pub overwrite: bool,
     /// Inclusive range of clip frames to write; every frame when `None`.
     pub frames: Option<(usize, usize)>,
+    /// Alpha convention of the files (frames are straight in memory; gray frames have no alpha).
+    pub alpha: AlphaMode,
 }
 
 /// The parsed pattern of a writer path, with the folder it writes into.
@@ -775,7 +786,10 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
     targets.par_iter().try_for_each(|(i, path)| {
         ctx.check_cancel()?;
         let img = clip.image(*i, ctx).map_err(|e| NodeError::Frame { frame: *i, source: Box::new(e) })?;
-        let bytes = encode_image(&img, options.format)?;
+        let bytes = match options.alpha {
+            AlphaMode::Straight => encode_image(&img, options.format)?,
+            AlphaMode::Premultiplied => encode_image(&premultiply(&img), options.format)?,
+        };
         write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
         ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
         Ok::<(), NodeError>(())
@@ -807,11 +821,12 @@ fn cook_write_sequence(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, Node
         start: i.usize("start")? as u64,
         overwrite: i.bool("overwrite")? || ctx.settings().overwrite,
         frames: ctx.settings().frames,
+        alpha: AlphaMode::parse(i.choice("alpha")?, "alpha")?,
         pattern,
     };
     let written = write_sequence(i.clip("clip")?, &options, ctx)?;
     let first = written.first().cloned().unwrap_or_default();
-    Ok(vec![Value::Int(written.len() as i64), Value::Path(first)])
+    Ok(vec![Value::Int(written.len() as i64), Value::Path(first), Value::String(options.alpha.name().to_string())])
 }
 
 fn write_image_desc() -> NodeDesc {
@@ -887,7 +902,7 @@ mod tests {
     }
 
     fn options(pattern: PathBuf, format: OutputFormat) -> WriteOptions {
-        WriteOptions { pattern, format, start: 0, overwrite: false, frames: None }
+        WriteOptions { pattern, format, start: 0, overwrite: false, frames: None, alpha: AlphaMode::Straight }
     }
 
     fn assert_close(a: &[f32], b: &[f32], tol: f32) {
@@ -1027,6 +1042,20 @@ mod tests {
         let opts = WriteOptions { overwrite: true, ..opts };
         assert_eq!(write_sequence(&clip, &opts, &ctx).unwrap().len(), 3);
         assert_eq!(load_image(&dir.path().join("f_0001.png")).unwrap().size(), (1, 1));
+    }
+
+    #[test]
+    fn writer_premultiplies_rgba_when_asked() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = CookCtx::new();
+        let clip = clip_of(vec![rgba(1, 1, &[0.8, 0.4, 1.0, 0.5])]);
+        let fmt = OutputFormat::Exr { half: false };
+        let straight = options(dir.path().join("s_#.exr"), fmt);
+        let pre = WriteOptions { alpha: AlphaMode::Premultiplied, ..options(dir.path().join("p_#.exr"), fmt) };
+        let s = write_sequence(&clip, &straight, &ctx).unwrap();
+        let p = write_sequence(&clip, &pre, &ctx).unwrap();
+        assert_close(load_image(&s[0]).unwrap().data(), &[0.8, 0.4, 1.0, 0.5], 1e-6);
+        assert_close(load_image(&p[0]).unwrap().data(), &[0.4, 0.2, 0.5, 0.5], 1e-6);
     }
 
     #[test]

@@ -3,11 +3,16 @@
 #![deny(missing_docs)]
 
 pub mod basic;
+pub mod bloom;
+pub mod color;
 pub mod convert;
+pub mod flipbook;
 pub mod io;
+pub mod masks;
 pub mod preprocess;
 pub mod procedural;
 pub mod sheet;
+pub mod smoke;
 
 use pyrograph_core::Registry;
 
@@ -15,7 +20,12 @@ use pyrograph_core::Registry;
 pub fn register(registry: &mut Registry) {
     io::register(registry);
     basic::register(registry);
+    masks::register(registry);
     preprocess::register(registry);
     procedural::register(registry);
     sheet::register(registry);
+    color::register(registry);
+    bloom::register(registry);
+    smoke::register(registry);
+    flipbook::register(registry);
 }

@@ -7,6 +7,53 @@ use pyrograph_core::{
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
     registry.add(FnNode::new(contact_sheet_desc(), cook_contact_sheet));
+    registry.add(FnNode::new(stack_desc(), cook_stack));
+}
+
+/// Puts `b` below (or right of) `a`, `gap` pixels apart, on `background`; narrower (shorter)
+/// images are left-aligned (top-aligned). Gray inputs are promoted to RGBA.
+pub fn stack(a: &Image, b: &Image, vertical: bool, gap: u32, background: [f32; 4]) -> Image {
+    let (a, b) = (a.to_rgba(), b.to_rgba());
+    let (w, h) = if vertical {
+        (a.width().max(b.width()), a.height() + gap + b.height())
+    } else {
+        (a.width() + gap + b.width(), a.height().max(b.height()))
+    };
+    let mut data: Vec<f32> = std::iter::repeat_n(background, w as usize * h as usize).flatten().collect();
+    let offset_b = if vertical { (0, a.height() + gap) } else { (a.width() + gap, 0) };
+    for (img, (x0, y0)) in [(&a, (0, 0)), (&b, offset_b)] {
+        for (y, row) in img.data().chunks_exact(img.width() as usize * 4).enumerate() {
+            let start = (((y0 + y as u32) * w + x0) * 4) as usize;
+            data[start..start + row.len()].copy_from_slice(row);
+        }
+    }
+    Image::from_vec(w, h, Channels::Rgba, data).unwrap_or_else(|| Image::new(w, h, Channels::Rgba))
+}
+
+fn stack_desc() -> NodeDesc {
+    NodeDesc::new(
+        "imaging.stack",
+        "Imaging",
+        TimeDep::PerFrame,
+        "Stacks two images, b below a (or right of it), for multi-row sheets and side-by-side comparisons.",
+    )
+    .input(PortDesc::new("a", PortType::Image, "First (top or left) image."))
+    .input(PortDesc::new("b", PortType::Image, "Second (bottom or right) image."))
+    .input(PortDesc::choice(
+        "direction",
+        &["vertical", "horizontal"],
+        "vertical",
+        "vertical puts b below a, horizontal to its right.",
+    ))
+    .input(PortDesc::int("gap", 4, (0, 4096), "Pixels between the two."))
+    .input(PortDesc::color("background", [0.08, 0.08, 0.08, 1.0], "Colour of the gap and of padding."))
+    .output("image", PortType::Image, "The stacked image (RGBA).")
+}
+
+fn cook_stack(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let vertical = i.choice("direction")? == "vertical";
+    let out = stack(i.image("a")?, i.image("b")?, vertical, i.usize("gap")? as u32, i.color("background")?);
+    Ok(vec![Value::Image(std::sync::Arc::new(out))])
 }
 
 /// Indices of `count` frames spread evenly over `len` frames, first and last included.
@@ -97,6 +144,21 @@ mod tests {
         assert_eq!(sheet.pixel(1, 3)[0], 0.75);
         assert_eq!(sheet.pixel(3, 3), &[0.0, 0.0, 0.0, 1.0], "empty cell keeps the background");
         assert_eq!(sheet.pixel(0, 0), &[0.0, 0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn stack_places_b_below_or_right_of_a_and_pads() {
+        let a = Image::gray_from_fn(2, 1, |_, _| 0.25);
+        let b = Image::gray_from_fn(1, 2, |_, _| 0.75);
+        let v = stack(&a, &b, true, 1, [0.0; 4]);
+        assert_eq!(v.size(), (2, 4));
+        assert_eq!(v.pixel(1, 0)[0], 0.25);
+        assert_eq!(v.pixel(0, 1), &[0.0; 4], "gap row");
+        assert_eq!(v.pixel(0, 3)[0], 0.75);
+        assert_eq!(v.pixel(1, 3), &[0.0; 4], "padding right of the narrower b");
+        let h = stack(&a, &b, false, 0, [0.0; 4]);
+        assert_eq!(h.size(), (3, 2));
+        assert_eq!(h.pixel(2, 1)[0], 0.75);
     }
 
     #[test]

@@ -5,7 +5,6 @@
 use std::sync::Arc;
 
 use image::{GrayImage, Luma, Rgba};
-use imageproc::contours::find_contours;
 use imageproc::drawing::{draw_hollow_polygon_mut, draw_polygon_mut};
 use imageproc::geometry::contour_area;
 use imageproc::point::Point;
@@ -13,7 +12,7 @@ use pyrograph_core::{
     Contour, Contours, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
 };
 
-use crate::convert::{from_rgba32f, gray8_to_mask, mask_to_gray8, to_rgba32f};
+use crate::convert::{from_rgba32f, gray8_to_mask, to_rgba32f};
 
 const CATEGORY: &str = "Pre-processing";
 
@@ -23,20 +22,153 @@ pub fn polygon_area(points: &[[f32; 2]]) -> f64 {
     contour_area(&pts)
 }
 
-/// Traces every border of `mask` (Suzuki–Abe border following, imageproc `find_contours`).
+/// Neighbour steps in the order imageproc's `find_contours` searches them: W, NW, N, NE, E, SE, S, SW
+/// (clockwise on screen); the opposite of direction `d` is `(d + 4) % 8`.
+const STEPS: [(i32, i32); 8] = [(-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1)];
+/// Index of east in [`STEPS`].
+const EAST: usize = 4;
+
+/// One traced border: its points, whether it is an outer border, and its parent's index.
+struct Traced {
+    points: Vec<[i32; 2]>,
+    outer: bool,
+    parent: Option<usize>,
+}
+
+/// Suzuki–Abe border following, step for step as imageproc 0.27's `find_contours` (same borders,
+/// same order, same points, same parents; a proptest compares the two on random masks).
+///
+/// Written by hand because imageproc's version spends most of its time in bookkeeping rather
+/// than in following borders: it reads the mask pixel by pixel through `get_pixel`, keeps the
+/// search directions in a `VecDeque` rotated by a linear search at every contour step, and
+/// bounds-checks every neighbour. Here the labels carry a one-pixel zero border (so neighbours
+/// need no bounds checks), directions are indices mod 8, and runs of background are skipped
+/// eight bytes at a time on the mask (background pixels are never relabelled).
+fn suzuki_abe(mask: &Mask) -> Vec<Traced> {
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    let mut traced: Vec<Traced> = Vec::new();
+    if w == 0 || h == 0 {
+        return traced;
+    }
+    let pw = w + 2;
+    let mut labels = vec![0i32; pw * (h + 2)];
+    for (dst, src) in labels.chunks_exact_mut(pw).skip(1).zip(mask.data().chunks_exact(w)) {
+        for (d, &s) in dst[1..=w].iter_mut().zip(src) {
+            *d = i32::from(s != 0);
+        }
+    }
+    let offsets: [isize; 8] = STEPS.map(|(dx, dy)| dy as isize * pw as isize + dx as isize);
+    let at = |labels: &[i32], i: usize, d: usize| -> (usize, i32) {
+        let j = i.wrapping_add_signed(offsets[d]);
+        (j, labels.get(j).copied().unwrap_or(0))
+    };
+    let mut curr_border_num: i32 = 1;
+    for (y, row) in mask.data().chunks_exact(w).enumerate() {
+        let mut parent_border_num: i32 = 1;
+        let mut x = 0;
+        while x < w {
+            // Skip background (untouched by tracing) eight pixels at a time.
+            if let Some(chunk) = row.get(x..x + 8)
+                && chunk.iter().all(|&v| v == 0)
+            {
+                x += 8;
+                continue;
+            }
+            let i = (y + 1) * pw + x + 1;
+            let value = labels[i];
+            if value == 0 {
+                x += 1;
+                continue;
+            }
+            let start = if value == 1 && x > 0 && labels[i - 1] == 0 {
+                Some((0, true))
+            } else if value > 0 && x + 1 < w && labels[i + 1] == 0 {
+                if value > 1 {
+                    parent_border_num = value;
+                }
+                Some((EAST, false))
+            } else {
+                None
+            };
+            if let Some((adj, outer)) = start {
+                curr_border_num += 1;
+                let parent = if parent_border_num > 1 {
+                    let parent_index = (parent_border_num - 2) as usize;
+                    traced.get(parent_index).and_then(|p| if outer ^ p.outer { Some(parent_index) } else { p.parent })
+                } else {
+                    None
+                };
+                let mut points = Vec::new();
+                let first = (0..8).map(|k| (adj + k) % 8).find(|&d| at(&labels, i, d).1 != 0);
+                if let Some(d1) = first {
+                    let pos1 = at(&labels, i, d1).0;
+                    // pos3 is the current border pixel, `back` the direction from it to the previous one.
+                    let (mut pos3, mut x3, mut y3, mut back) = (i, x as i32, y as i32, d1);
+                    loop {
+                        points.push([x3, y3]);
+                        // Counter-clockwise from just before `back`; `back` itself is non-zero, so this finds one.
+                        let d4 = (1..=8).map(|k| (back + 8 - k) % 8).find(|&d| at(&labels, pos3, d).1 != 0).unwrap_or(back);
+                        let is_right_edge = (1..=8).map(|k| (back + 8 - k) % 8).take_while(|&d| d != d4).any(|d| d == EAST);
+                        if x3 as usize + 1 == w || is_right_edge {
+                            labels[pos3] = -curr_border_num;
+                        } else if labels[pos3] == 1 {
+                            labels[pos3] = curr_border_num;
+                        }
+                        let pos4 = at(&labels, pos3, d4).0;
+                        if pos4 == i && pos3 == pos1 {
+                            break;
+                        }
+                        pos3 = pos4;
+                        x3 += STEPS[d4].0;
+                        y3 += STEPS[d4].1;
+                        back = (d4 + 4) % 8;
+                    }
+                } else {
+                    points.push([x as i32, y as i32]);
+                    labels[i] = -curr_border_num;
+                }
+                traced.push(Traced { points, outer, parent });
+            }
+            if labels[i] != 1 {
+                parent_border_num = labels[i].abs();
+            }
+            x += 1;
+        }
+    }
+    traced
+}
+
+/// imageproc's `contour_area` (shoelace, same order of f64 operations) on integer points.
+fn traced_area(points: &[[i32; 2]]) -> f64 {
+    let Some(&last) = points.last() else { return 0.0 };
+    if points.len() < 3 {
+        return 0.0;
+    }
+    let mut prev = [f64::from(last[0]), f64::from(last[1])];
+    let mut accum = 0.0;
+    for p in points {
+        let p = [f64::from(p[0]), f64::from(p[1])];
+        accum += prev[0] * p[1] - prev[1] * p[0];
+        prev = p;
+    }
+    (0.5 * accum).abs()
+}
+
+/// Traces every border of `mask` (Suzuki–Abe border following, as imageproc's `find_contours`).
 ///
 /// Depth counts enclosing borders (0 = outermost, 1 = a hole in it, 2 = an island in the hole …);
 /// parents precede their children. An empty mask gives an empty list, not an error.
 pub fn trace_contours(mask: &Mask) -> Contours {
-    let traced = find_contours::<i32>(&mask_to_gray8(mask));
+    let traced = suzuki_abe(mask);
     let mut depths: Vec<u32> = Vec::with_capacity(traced.len());
     let mut contours = Vec::with_capacity(traced.len());
-    for c in &traced {
+    for c in traced {
         // Suzuki–Abe finds a parent before its children in raster order, so its depth is known.
         let depth = c.parent.and_then(|p| depths.get(p)).map_or(0, |d| d + 1);
         depths.push(depth);
-        let points: Vec<[f32; 2]> = c.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
-        contours.push(Contour { area: contour_area(&c.points), points, depth, parent: c.parent });
+        let area = traced_area(&c.points);
+        let points: Vec<[f32; 2]> = c.points.iter().map(|p| [p[0] as f32, p[1] as f32]).collect();
+        contours.push(Contour { area, points, depth, parent: c.parent });
     }
     Contours { width: mask.width(), height: mask.height(), contours }
 }
@@ -44,16 +176,35 @@ pub fn trace_contours(mask: &Mask) -> Contours {
 /// Keeps contours with `depth <= max_depth` and `area >= min_area`; the children of a dropped
 /// contour are dropped too, and parents are re-indexed into the shorter list (thesis §3.2.2).
 pub fn remove_holes(contours: &Contours, max_depth: u32, min_area: f64) -> Contours {
+    retain_contours(contours, |_, c| c.depth <= max_depth && c.area >= min_area)
+}
+
+/// Keeps the `n` largest outermost contours (by area) with everything nested in them; `n = 0`
+/// keeps all. Reflections and glowing surroundings that survive the HSV mask as separate blobs
+/// go, the flame stays.
+pub fn keep_largest(contours: &Contours, n: usize) -> Contours {
+    if n == 0 {
+        return contours.clone();
+    }
+    let mut outer: Vec<(usize, f64)> =
+        contours.contours.iter().enumerate().filter(|(_, c)| c.parent.is_none()).map(|(i, c)| (i, c.area)).collect();
+    outer.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let chosen: Vec<usize> = outer.into_iter().take(n).map(|(i, _)| i).collect();
+    retain_contours(contours, |i, c| c.parent.is_some() || chosen.contains(&i))
+}
+
+/// Drops the contours `keep` refuses, with all their descendants, re-indexing parents.
+/// Relies on parents coming before their children in the list (as traced).
+fn retain_contours(contours: &Contours, keep: impl Fn(usize, &Contour) -> bool) -> Contours {
     let mut new_index: Vec<Option<usize>> = Vec::with_capacity(contours.contours.len());
     let mut kept = Vec::new();
-    for c in &contours.contours {
+    for (i, c) in contours.contours.iter().enumerate() {
         let parent_kept = match c.parent {
             None => Some(None),
             Some(p) => new_index.get(p).copied().flatten().map(Some),
         };
-        let keep = c.depth <= max_depth && c.area >= min_area;
         match parent_kept {
-            Some(parent) if keep => {
+            Some(parent) if keep(i, c) => {
                 new_index.push(Some(kept.len()));
                 kept.push(Contour { parent, ..c.clone() });
             }
@@ -242,6 +393,12 @@ pub fn hole_removal_desc() -> NodeDesc {
     .input(PortDesc::new("contours", PortType::Contours, "Traced contours"))
     .input(PortDesc::int("max_depth", 0, (0, 1000), "Deepest nesting level kept (0 = outer borders only)"))
     .input(PortDesc::float("min_area", 100.0, (0.0, 1.0e9), "Smallest area kept, in square pixels"))
+    .input(PortDesc::int(
+        "keep_largest",
+        0,
+        (0, 1_000_000),
+        "Then keep only this many largest outer contours with their holes (0 = all); drops reflections and glow blobs",
+    ))
     .output("contours", PortType::Contours, "Kept contours, parents re-indexed")
 }
 
@@ -249,7 +406,8 @@ fn hole_removal_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, 
     let contours = inputs.contours("contours")?;
     let max_depth = u32::try_from(inputs.int("max_depth")?).map_err(|_| NodeError::port("max_depth", "must be in 0..=1000"))?;
     let min_area = inputs.float("min_area")?;
-    Ok(contours_value(remove_holes(contours, max_depth, min_area)))
+    let largest = inputs.usize("keep_largest")?;
+    Ok(contours_value(keep_largest(&remove_holes(contours, max_depth, min_area), largest)))
 }
 
 /// Description of `imaging.simplify_contours`.
@@ -330,6 +488,33 @@ pub fn nodes() -> Vec<Arc<dyn Node>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn square(x0: f32, y0: f32, side: f32, depth: u32, parent: Option<usize>) -> Contour {
+        let points = vec![[x0, y0], [x0 + side, y0], [x0 + side, y0 + side], [x0, y0 + side]];
+        Contour { area: polygon_area(&points), points, depth, parent }
+    }
+
+    #[test]
+    fn keep_largest_keeps_the_biggest_outer_contours_with_their_holes() {
+        let contours = Contours {
+            width: 100,
+            height: 100,
+            contours: vec![
+                square(0.0, 0.0, 10.0, 0, None),
+                square(20.0, 20.0, 30.0, 0, None),
+                square(25.0, 25.0, 5.0, 1, Some(1)),
+                square(60.0, 60.0, 20.0, 0, None),
+            ],
+        };
+        let one = keep_largest(&contours, 1);
+        assert_eq!(one.contours.len(), 2, "the 30-px square and its hole");
+        assert_eq!(one.contours[0].area, 900.0);
+        assert_eq!(one.contours[1].parent, Some(0), "hole re-indexed to its parent");
+        let two = keep_largest(&contours, 2);
+        let areas: Vec<f64> = two.contours.iter().map(|c| c.area).collect();
+        assert_eq!(areas, vec![900.0, 25.0, 400.0]);
+        assert_eq!(keep_largest(&contours, 0), contours);
+    }
 
     /// A mask from rows of `#` (inside) and `.` (outside).
     pub(crate) fn mask(rows: &[&str]) -> Mask {
@@ -497,7 +682,49 @@ mod proptests {
         sub.iter().all(|p| it.any(|q| q == p))
     }
 
+    /// The reference: imageproc's `find_contours` as `trace_contours` used it before the hand-written tracer.
+    fn reference_trace(mask: &Mask) -> Contours {
+        let traced = imageproc::contours::find_contours::<i32>(&crate::convert::mask_to_gray8(mask));
+        let mut depths: Vec<u32> = Vec::with_capacity(traced.len());
+        let mut contours = Vec::with_capacity(traced.len());
+        for c in &traced {
+            let depth = c.parent.and_then(|p| depths.get(p)).map_or(0, |d| d + 1);
+            depths.push(depth);
+            let points: Vec<[f32; 2]> = c.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
+            contours.push(Contour { area: contour_area(&c.points), points, depth, parent: c.parent });
+        }
+        Contours { width: mask.width(), height: mask.height(), contours }
+    }
+
+    fn arb_sized_mask(max_side: u32) -> impl Strategy<Value = Mask> {
+        (1u32..max_side, 1u32..max_side, 0.05f64..0.95).prop_flat_map(|(w, h, p)| {
+            proptest::collection::vec(proptest::bool::weighted(p), (w * h) as usize)
+                .prop_map(move |bits| Mask::from_vec(w, h, bits.into_iter().map(|b| if b { 255 } else { 0 }).collect()).unwrap())
+        })
+    }
+
+    #[test]
+    fn tracer_equals_imageprocs_on_blobs_touching_every_edge() {
+        let m = super::tests::mask(&[
+            "##..##########..#",
+            "##..#........#..#",
+            "....#..###...#...",
+            "#...#..#.#...#..#",
+            "##..##########.##",
+        ]);
+        assert_eq!(trace_contours(&m), reference_trace(&m));
+        let full = Mask::from_vec(37, 5, vec![255; 185]).unwrap();
+        assert_eq!(trace_contours(&full), reference_trace(&full));
+        assert!(trace_contours(&Mask::new(0, 3)).contours.is_empty());
+    }
+
     proptest! {
+        /// Same borders, points, order, parents, depths and areas as imageproc's `find_contours`.
+        #[test]
+        fn tracer_equals_imageprocs(m in arb_sized_mask(48)) {
+            prop_assert_eq!(trace_contours(&m), reference_trace(&m));
+        }
+
         #[test]
         fn every_contour_point_lies_on_the_mask_border(m in arb_mask()) {
             let c = trace_contours(&m);

@@ -109,23 +109,182 @@ pub fn rgb_to_hsv(r: f32, g: f32, b: f32) -> [f32; 3] {
     [if h < 0.0 { h + 360.0 } else { h }, s, v]
 }
 
+/// Pixels per block of the fused pass: each stage runs over a whole block so it vectorizes.
+const BLOCK: usize = 64;
+
+/// `floor(y)` for `0 ≤ y < 2²²` in plain f32 arithmetic, so it vectorizes on baseline x86-64
+/// (where `f32::floor` is a libm call and Rust's saturating `as i32` stays scalar): adding and
+/// subtracting 2²³ rounds to the nearest integer, then one is taken off if that rounded up.
+#[inline(always)]
+fn floor_small(y: f32) -> f32 {
+    const MAGIC: f32 = 8_388_608.0; // 2^23
+    let nearest = (y + MAGIC) - MAGIC;
+    if nearest > y { nearest - 1.0 } else { nearest }
+}
+
+/// `x` if above 0, else 0 (also for NaN): one `maxps`, where `f32::max` needs NaN fix-ups.
+#[inline(always)]
+fn positive(x: f32) -> f32 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// The larger of two non-NaN values, as one `maxps`.
+#[inline(always)]
+fn larger(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// [`unit_to_u8`] as an f32, in a form that vectorizes: the clamp is two selects (NaN gives 0,
+/// as `as u8` does there) and the truncation is [`floor_small`].
+#[inline(always)]
+fn quantize(x: f32) -> f32 {
+    let x = positive(x);
+    let x = if x < 1.0 { x } else { 1.0 };
+    floor_small(x * 255.0 + 0.5)
+}
+
+/// The quantized channels of a block of pixels and their value `max(R, G, B)`.
+struct Block {
+    r: [f32; BLOCK],
+    g: [f32; BLOCK],
+    b: [f32; BLOCK],
+    v: [f32; BLOCK],
+}
+
+impl Block {
+    /// An all-black block (allocated once per row; the loads overwrite it).
+    fn new() -> Block {
+        Block { r: [0.0; BLOCK], g: [0.0; BLOCK], b: [0.0; BLOCK], v: [0.0; BLOCK] }
+    }
+
+    /// The quantized value `max(R, G, B)` of up to [`BLOCK`] RGBA pixels of `src`; lanes past its
+    /// end keep stale pixels, whose results are never written out. Quantizing is monotone, so
+    /// the value is the quantized maximum of the raw channels (made non-NaN first, as quantizing
+    /// maps NaN and negatives to 0 alike): one quantization per pixel instead of three.
+    #[inline(always)]
+    fn load_value(&mut self, src: &[f32]) {
+        for (v, px) in self.v.iter_mut().zip(src.chunks_exact(4)) {
+            *v = quantize(larger(larger(positive(px[0]), positive(px[1])), positive(px[2])));
+        }
+    }
+
+    /// The quantized channels of the same pixels as [`Block::load_value`].
+    #[inline(always)]
+    fn load_channels(&mut self, src: &[f32]) {
+        for (i, px) in src.chunks_exact(4).take(BLOCK).enumerate() {
+            self.r[i] = quantize(px[0]);
+            self.g[i] = quantize(px[1]);
+            self.b[i] = quantize(px[2]);
+        }
+    }
+
+    /// Whether some lane's value lies in some layer's value range. A pixel outside every layer's
+    /// value range is selected by none, and blending only unselected layers into the empty start
+    /// mask leaves it outside, so such a block (dark background) needs no hue or saturation.
+    /// Lanes are OR-ed without early exit so the test vectorizes.
+    #[inline(always)]
+    fn any_in_value_range(&self, layers: &[HsvLayer]) -> bool {
+        let mut alive = [false; BLOCK];
+        for l in layers {
+            for (a, &v) in alive.iter_mut().zip(&self.v) {
+                *a |= (v >= l.range.v_min) & (v <= l.range.v_max);
+            }
+        }
+        alive.iter().fold(false, |any, &a| any | a)
+    }
+
+    /// Hue and saturation, computed branch-free with exactly the f32 operations of
+    /// [`rgb_to_hsv`] (so bit-identical up to the sign of a zero hue, which no comparison sees).
+    /// `round` (a libm call on baseline x86-64, and not vectorizable there) is `floor` plus one
+    /// when the exact fraction `x − floor(x)` is at least ½, which equals `round` for `0 ≤ x ≤ 255`.
+    #[inline(always)]
+    fn hue_saturation(&self, h: &mut [f32; BLOCK], s: &mut [f32; BLOCK]) {
+        for i in 0..BLOCK {
+            let (r, g, b, max) = (self.r[i], self.g[i], self.b[i], self.v[i]);
+            let min = if r < g { r } else { g };
+            let delta = max - if min < b { min } else { b };
+            let sat = 255.0 * delta / max;
+            let floor = floor_small(sat);
+            let sat = floor + if sat - floor >= 0.5 { 1.0 } else { 0.0 };
+            let (num, offset) = if max == r {
+                (g - b, 0.0)
+            } else if max == g {
+                (b - r, 120.0)
+            } else {
+                (r - g, 240.0)
+            };
+            let q = 60.0 * num / delta;
+            let hue = if max == r { q } else { offset + q };
+            let hue = if hue < 0.0 { hue + 360.0 } else { hue };
+            let chromatic = delta > 0.0;
+            h[i] = if chromatic { hue } else { 0.0 };
+            s[i] = if chromatic { sat } else { 0.0 };
+        }
+    }
+}
+
+/// Blends one layer into the block's running mask, one loop per blend mode and hue form so each vectorizes.
+#[inline(always)]
+fn blend_block(acc: &mut [bool; BLOCK], layer: &HsvLayer, h: &[f32; BLOCK], s: &[f32; BLOCK], v: &[f32; BLOCK]) {
+    let r = &layer.range;
+    let sv = |i: usize| (s[i] >= r.s_min) & (s[i] <= r.s_max) & (v[i] >= r.v_min) & (v[i] <= r.v_max);
+    macro_rules! fold {
+        ($hue_ok:expr) => {
+            match layer.blend {
+                Blend::Add => (0..BLOCK).for_each(|i| acc[i] |= $hue_ok(h[i]) & sv(i)),
+                Blend::Subtract => (0..BLOCK).for_each(|i| acc[i] &= !($hue_ok(h[i]) & sv(i))),
+                Blend::Difference => (0..BLOCK).for_each(|i| acc[i] ^= $hue_ok(h[i]) & sv(i)),
+                Blend::Intersect => (0..BLOCK).for_each(|i| acc[i] &= $hue_ok(h[i]) & sv(i)),
+            }
+        };
+    }
+    if r.h_min <= r.h_max {
+        fold!(|h: f32| (h >= r.h_min) & (h <= r.h_max))
+    } else {
+        fold!(|h: f32| (h >= r.h_min) | (h <= r.h_max))
+    }
+}
+
+/// Rows per rayon task in [`hsv_mask`].
+const ROWS_PER_TASK: usize = 8;
+
 /// The mask of eq. 4 repeated over `layers` and blended in order, starting from an empty mask.
 ///
 /// Errors if `image` is not RGBA (the hue of a gray image is undefined), naming port `image`.
+///
+/// Per pixel this is `layers` folded over [`HsvRange::contains`] of [`rgb_to_hsv`], fused into
+/// one pass over blocks of pixels that never builds an HSV image and has no data-dependent
+/// branches (noisy flame edges made the per-pixel branches mispredict). Tests check it against
+/// that definition on a grid of colours, random colours and random layers.
 pub fn hsv_mask(image: &Image, layers: &[HsvLayer]) -> Result<Mask, NodeError> {
     if image.channels() != Channels::Rgba {
         return Err(NodeError::port("image", "needs an RGBA image: hue is undefined for a gray image"));
     }
     let (w, h) = image.size();
     let mut out = vec![0u8; w as usize * h as usize];
-    // Rows are independent, so one rayon task per row keeps 1280×720 frames well under a millisecond per core.
-    out.par_chunks_mut(w.max(1) as usize).zip(image.data().par_chunks(w.max(1) as usize * 4)).for_each(|(row, src)| {
-        for (m, px) in row.iter_mut().zip(src.chunks_exact(4)) {
-            let hsv = rgb_to_hsv(px[0], px[1], px[2]);
-            let inside = layers.iter().fold(false, |acc, l| l.blend.apply(acc, l.range.contains(hsv)));
-            *m = if inside { 255 } else { 0 };
-        }
-    });
+    // Rows are independent: a few rows per rayon task.
+    out.par_chunks_mut(w.max(1) as usize)
+        .zip(image.data().par_chunks(w.max(1) as usize * 4))
+        .with_min_len(ROWS_PER_TASK)
+        .for_each(|(row, src)| {
+            let (mut hb, mut sb, mut blk) = ([0f32; BLOCK], [0f32; BLOCK], Block::new());
+            for (dst, px) in row.chunks_mut(BLOCK).zip(src.chunks(BLOCK * 4)) {
+                blk.load_value(px);
+                if !blk.any_in_value_range(layers) {
+                    dst.fill(0);
+                    continue;
+                }
+                blk.load_channels(px);
+                blk.hue_saturation(&mut hb, &mut sb);
+                let mut acc = [false; BLOCK];
+                for layer in layers {
+                    blend_block(&mut acc, layer, &hb, &sb, &blk.v);
+                }
+                for (d, &a) in dst.iter_mut().zip(&acc) {
+                    *d = if a { 255 } else { 0 };
+                }
+            }
+        });
     Mask::from_vec(w, h, out).ok_or_else(|| NodeError::msg("internal: mask size mismatch"))
 }
 
@@ -222,6 +381,7 @@ pub fn node() -> Arc<dyn Node> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     fn rgba(pixels: &[[f32; 3]]) -> Image {
         let data = pixels.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
@@ -291,6 +451,95 @@ mod tests {
         assert_eq!(bits(&hsv_mask(&img, &layers).unwrap()), [1, 1, 1, 0]);
     }
 
+    /// The definition the fused pass must equal: fold the layers over `contains(rgb_to_hsv(..))`.
+    fn reference_mask(image: &Image, layers: &[HsvLayer]) -> Vec<u8> {
+        image
+            .data()
+            .chunks_exact(4)
+            .map(|px| {
+                let hsv = rgb_to_hsv(px[0], px[1], px[2]);
+                let inside = layers.iter().fold(false, |acc, l| l.blend.apply(acc, l.range.contains(hsv)));
+                if inside { 255 } else { 0 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn block_hsv_equals_rgb_to_hsv_on_every_max_min_pair_and_hue_order() {
+        // Every (max, min) byte pair with the middle channel at min, max and between, in all six
+        // channel orders: covers every saturation the rounding can produce and every hue branch.
+        let mut pixels = Vec::new();
+        for hi in 0..=255u8 {
+            for lo in 0..=hi {
+                for mid in [lo, hi, lo + (hi - lo) / 3] {
+                    let (a, b, c) = (f32::from(hi) / 255.0, f32::from(mid) / 255.0, f32::from(lo) / 255.0);
+                    pixels.extend([[a, b, c], [a, c, b], [b, a, c], [c, a, b], [b, c, a], [c, b, a]]);
+                }
+            }
+        }
+        let data: Vec<f32> = pixels.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let (mut h, mut s) = ([0f32; BLOCK], [0f32; BLOCK]);
+        for (chunk, px) in data.chunks(BLOCK * 4).zip(pixels.chunks(BLOCK)) {
+            let mut blk = Block::new();
+            blk.load_value(chunk);
+            blk.load_channels(chunk);
+            assert!((0..chunk.len() / 4).all(|i| blk.v[i] == blk.r[i].max(blk.g[i]).max(blk.b[i])));
+            blk.hue_saturation(&mut h, &mut s);
+            let v = blk.v;
+            for (i, p) in px.iter().enumerate() {
+                let want = rgb_to_hsv(p[0], p[1], p[2]);
+                // `==` treats the two zeros as equal, as every range comparison does.
+                assert!([h[i], s[i], v[i]] == want, "{p:?}: {:?} vs {want:?}", [h[i], s[i], v[i]]);
+            }
+        }
+    }
+
+    #[test]
+    fn floor_small_is_floor() {
+        let edges = (0..=1024).flat_map(|i| {
+            let y = i as f32 / 4.0;
+            [y, y.next_down(), y.next_up()]
+        });
+        for y in edges.chain([0.0, 255.5, 255.49998, 4_194_303.5]).filter(|y| *y >= 0.0) {
+            assert_eq!(floor_small(y), y.floor(), "{y}");
+        }
+    }
+
+    #[test]
+    fn quantize_is_unit_to_u8() {
+        for x in (-300..1300).map(|i| i as f32 / 1000.0).chain([f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, 0.5 / 255.0]) {
+            assert_eq!(quantize(x), f32::from(unit_to_u8(x)), "{x}");
+        }
+    }
+
+    #[test]
+    fn fused_mask_equals_the_definition_on_every_hue_step() {
+        // Every (max, mid, min) ordering over a coarse byte grid plus out-of-range and NaN inputs.
+        let steps: Vec<f32> = (0..=255).step_by(5).map(|v| v as f32 / 255.0).chain([-0.5, 1.5, f32::NAN]).collect();
+        let mut pixels = Vec::new();
+        for &r in &steps {
+            for &g in &steps {
+                for &b in steps.iter().step_by(3) {
+                    pixels.push([r, g, b]);
+                }
+            }
+        }
+        let img = rgba(&pixels);
+        let layers: Vec<HsvLayer> = DEFAULTS.iter().map(|(_, _, r)| HsvLayer { range: *r, blend: Blend::Add }).collect();
+        let odd = [
+            HsvLayer { range: range(290.0, 20.0), blend: Blend::Add },
+            HsvLayer {
+                range: HsvRange { h_min: 0.0, h_max: 0.0, s_min: 0.0, s_max: 0.0, v_min: 0.0, v_max: 255.0 },
+                blend: Blend::Difference,
+            },
+            HsvLayer { range: range(100.0, 200.0), blend: Blend::Subtract },
+            HsvLayer { range: range(0.0, 360.0), blend: Blend::Intersect },
+        ];
+        for ls in [&layers[..], &odd[..], &odd[1..], &[]] {
+            assert_eq!(hsv_mask(&img, ls).unwrap().data(), reference_mask(&img, ls));
+        }
+    }
+
     #[test]
     fn gray_image_is_an_error_naming_the_image_port() {
         let gray = Image::new(2, 2, Channels::Gray);
@@ -326,5 +575,52 @@ mod tests {
         let out = cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap();
         let Value::Mask(m) = &out[0] else { panic!("not a mask") };
         assert_eq!(bits(m), [1]);
+    }
+
+    proptest! {
+        /// Random colours (including out-of-range values) and random layers, thresholds put on
+        /// and between byte levels: the fused pass equals the definition.
+        #[test]
+        fn fused_mask_equals_the_definition(
+            pixels in proptest::collection::vec(proptest::array::uniform3(-0.1f32..1.1), 1..200),
+            ranges in proptest::collection::vec((0.0f32..360.0, 0.0f32..360.0, 0.0f32..255.0, 0.0f32..255.0, 0.0f32..255.0, 0.0f32..255.0, 0usize..4), 0..4),
+        ) {
+            let layers: Vec<HsvLayer> = ranges
+                .into_iter()
+                .map(|(h_min, h_max, s0, s1, v0, v1, blend)| HsvLayer {
+                    range: HsvRange { h_min, h_max, s_min: s0.min(s1).round(), s_max: s0.max(s1), v_min: v0.min(v1), v_max: v0.max(v1).round() },
+                    blend: [Blend::Add, Blend::Subtract, Blend::Difference, Blend::Intersect][blend],
+                })
+                .collect();
+            let img = rgba(&pixels);
+            let fused = hsv_mask(&img, &layers).unwrap();
+            prop_assert_eq!(fused.data(), &reference_mask(&img, &layers)[..]);
+        }
+
+        /// Mostly dark rows with a few bright pixels, value ranges around them: blocks skipped as
+        /// dark and blocks computed in full both equal the definition.
+        #[test]
+        fn dark_blocks_equal_the_definition(
+            w in 1u32..200,
+            bright in proptest::collection::vec((0usize..200, proptest::array::uniform3(0.0f32..1.0)), 0..4),
+            ranges in proptest::collection::vec((0.0f32..360.0, 0.0f32..360.0, 0.0f32..255.0, 0.0f32..255.0, 0.0f32..120.0, 0usize..4), 1..4),
+        ) {
+            let mut pixels: Vec<[f32; 3]> = (0..w).map(|i| [0.02 * (i % 7) as f32, 0.03, 0.01 * (i % 5) as f32]).collect();
+            for (i, p) in bright {
+                if let Some(px) = pixels.get_mut(i) {
+                    *px = p;
+                }
+            }
+            let layers: Vec<HsvLayer> = ranges
+                .into_iter()
+                .map(|(h_min, h_max, s0, s1, v_min, blend)| HsvLayer {
+                    range: HsvRange { h_min, h_max, s_min: s0.min(s1), s_max: s0.max(s1), v_min: v_min.round(), v_max: 255.0 },
+                    blend: [Blend::Add, Blend::Subtract, Blend::Difference, Blend::Intersect][blend],
+                })
+                .collect();
+            let img = rgba(&pixels);
+            let fused = hsv_mask(&img, &layers).unwrap();
+            prop_assert_eq!(fused.data(), &reference_mask(&img, &layers)[..]);
+        }
     }
 }

@@ -1,0 +1,23 @@
+//! pyrograph-editor: the node editor, an eframe app that is a thin view over the core graph
+//! document.
+//!
+//! - [`state::Editor`] holds everything that is not drawing: the [`GraphDoc`](pyrograph::core::GraphDoc)
+//!   (which owns the graph), undo/redo snapshots, validation mapped to nodes, the node palette,
+//!   files, and cook requests to a background worker ([`cook::Cooker`]) that keeps one
+//!   evaluator alive across edits.
+//! - [`canvas::Canvas`] mirrors the document in an egui-snarl widget; connection requests go back
+//!   through the core type checker.
+//! - [`app::EditorApp`] lays out menus, canvas, inspector and preview.
+//!
+//! Tests drive [`state::Editor`] directly and the UI headlessly with egui_kittest.
+#![deny(missing_docs)]
+
+pub mod app;
+pub mod canvas;
+pub mod cook;
+pub mod history;
+pub mod params;
+pub mod state;
+
+pub use app::EditorApp;
+pub use state::Editor;

@@ -1,0 +1,53 @@
+//! `pyrograph-editor [GRAPH]`: opens the node editor, optionally on a graph file.
+
+use std::path::PathBuf;
+
+use pyrograph_editor::{Editor, EditorApp};
+
+fn recent_file() -> Option<PathBuf> {
+    let base = std::env::var_os("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))?;
+    Some(base.join("pyrograph").join("recent.txt"))
+}
+
+fn main() {
+    let mut graph = None;
+    let mut select = None;
+    let mut args = std::env::args_os().skip(1);
+    while let Some(a) = args.next() {
+        if a == "--help" || a == "-h" {
+            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE]");
+            return;
+        } else if a == "--select" {
+            select = args.next().map(|s| s.to_string_lossy().into_owned());
+        } else {
+            graph = Some(PathBuf::from(a));
+        }
+    }
+    let mut editor = Editor::with_default_registry();
+    if let Some(f) = recent_file() {
+        editor.use_recent_file(f);
+    }
+    if let Some(g) = &graph {
+        if let Some(dir) = g.parent().map(|d| d.join("presets")) {
+            editor.add_preset_dir(dir);
+        }
+        // Problems are shown in the window; the editor opens either way.
+        let _ = editor.open(g);
+    }
+    if let Some(id) = &select {
+        editor.select(id);
+    }
+    let mut app = EditorApp::new(editor);
+    app.canvas.frame_all();
+    let options = eframe::NativeOptions {
+        viewport: eframe::egui::ViewportBuilder::default().with_inner_size([1600.0, 1000.0]).with_title("pyrograph editor"),
+        renderer: eframe::Renderer::Glow,
+        ..Default::default()
+    };
+    if let Err(e) = eframe::run_native("pyrograph editor", options, Box::new(move |_cc| Ok(Box::new(app)))) {
+        eprintln!("pyrograph-editor: cannot open a window: {e}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,135 @@
+//! Parameter widgets: one per port type, honouring the port's range and options.
+
+use eframe::egui;
+use pyrograph::core::{ParamValue, PortDesc, PortType};
+
+fn number(pv: &ParamValue) -> Option<f64> {
+    match pv {
+        ParamValue::Int(v) => Some(*v as f64),
+        ParamValue::Float(v) => Some(*v),
+        _ => None,
+    }
+}
+
+fn numbers(pv: &ParamValue) -> Option<Vec<f64>> {
+    match pv {
+        ParamValue::List(items) => items.iter().map(number).collect(),
+        _ => None,
+    }
+}
+
+fn hex_color(s: &str) -> Option<[f32; 4]> {
+    let hex = s.strip_prefix('#')?;
+    if !(hex.len() == 6 || hex.len() == 8) || !hex.is_ascii() {
+        return None;
+    }
+    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok().map(|b| b as f32 / 255.0);
+    let a = if hex.len() == 8 { byte(6)? } else { 1.0 };
+    Some([byte(0)?, byte(2)?, byte(4)?, a])
+}
+
+/// A colour from its file form: `(r, g, b)`, `(r, g, b, a)` or `"#rrggbb"`.
+pub fn as_color(pv: &ParamValue) -> Option<[f32; 4]> {
+    match pv {
+        ParamValue::String(s) => hex_color(s),
+        _ => match numbers(pv)?.as_slice() {
+            [r, g, b] => Some([*r as f32, *g as f32, *b as f32, 1.0]),
+            [r, g, b, a] => Some([*r as f32, *g as f32, *b as f32, *a as f32]),
+            _ => None,
+        },
+    }
+}
+
+/// A drag speed suited to a range.
+fn speed(range: Option<(f64, f64)>, v: f64) -> f64 {
+    match range {
+        Some((lo, hi)) if (hi - lo).is_finite() && hi - lo <= 1e4 => ((hi - lo) / 300.0).max(1e-4),
+        _ => (v.abs() / 100.0).max(0.01),
+    }
+}
+
+/// Whether a range is small enough for a slider.
+fn slider_range(range: Option<(f64, f64)>) -> Option<(f64, f64)> {
+    range.filter(|(lo, hi)| lo.is_finite() && hi.is_finite() && hi - lo <= 1000.0 && hi > lo)
+}
+
+/// Shows the widget for `port` with the current `value`; returns the new value when the user
+/// changed it. Values of the wrong kind (from a hand-edited file) get a raw text field.
+pub fn param_widget(ui: &mut egui::Ui, id: egui::Id, port: &PortDesc, value: &ParamValue) -> Option<ParamValue> {
+    match &port.ty {
+        PortType::Float => {
+            let mut v = number(value)?;
+            let changed = match slider_range(port.range) {
+                Some((lo, hi)) => ui.add(egui::Slider::new(&mut v, lo..=hi).clamping(egui::SliderClamping::Always)).changed(),
+                None => {
+                    let (lo, hi) = port.range.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                    let sp = speed(port.range, v);
+                    ui.add(egui::DragValue::new(&mut v).range(lo..=hi).speed(sp)).changed()
+                }
+            };
+            changed.then_some(ParamValue::Float(v))
+        }
+        PortType::Int => {
+            let ParamValue::Int(mut v) = *value else { return None };
+            let changed = match slider_range(port.range) {
+                Some((lo, hi)) => {
+                    ui.add(egui::Slider::new(&mut v, lo as i64..=hi as i64).clamping(egui::SliderClamping::Always)).changed()
+                }
+                None => {
+                    let (lo, hi) = port.range.unwrap_or((i64::MIN as f64, i64::MAX as f64));
+                    let sp = speed(port.range, v as f64).max(0.2);
+                    ui.add(egui::DragValue::new(&mut v).range(lo as i64..=hi as i64).speed(sp)).changed()
+                }
+            };
+            changed.then_some(ParamValue::Int(v))
+        }
+        PortType::Bool => {
+            let ParamValue::Bool(mut b) = *value else { return None };
+            ui.checkbox(&mut b, "").changed().then_some(ParamValue::Bool(b))
+        }
+        PortType::Color => {
+            let mut c = as_color(value)?;
+            let changed = ui.color_edit_button_rgba_unmultiplied(&mut c).changed();
+            changed.then(|| ParamValue::List(c.iter().map(|v| ParamValue::Float((*v as f64 * 1e4).round() / 1e4)).collect()))
+        }
+        PortType::Vec2 | PortType::Vec3 => {
+            let mut v = numbers(value)?;
+            let want = if port.ty == PortType::Vec2 { 2 } else { 3 };
+            if v.len() != want {
+                return None;
+            }
+            let mut changed = false;
+            ui.horizontal(|ui| {
+                for c in v.iter_mut() {
+                    changed |= ui.add(egui::DragValue::new(c).speed(0.01).max_decimals(4)).changed();
+                }
+            });
+            changed.then(|| ParamValue::List(v.into_iter().map(ParamValue::Float).collect()))
+        }
+        PortType::Enum => {
+            let ParamValue::String(cur) = value else { return None };
+            let mut sel = cur.clone();
+            egui::ComboBox::from_id_salt(id).selected_text(sel.clone()).show_ui(ui, |ui| {
+                for o in &port.options {
+                    ui.selectable_value(&mut sel, o.clone(), o);
+                }
+            });
+            (sel != *cur).then_some(ParamValue::String(sel))
+        }
+        PortType::String | PortType::Path => {
+            let ParamValue::String(cur) = value else { return None };
+            let mut s = cur.clone();
+            let r = ui.add(egui::TextEdit::singleline(&mut s).desired_width(f32::INFINITY));
+            (r.changed() && s != *cur).then_some(ParamValue::String(s))
+        }
+        _ => None,
+    }
+}
+
+/// The fallback for values of the wrong kind: RON text, parsed when edited.
+pub fn raw_widget(ui: &mut egui::Ui, value: &ParamValue) -> Option<ParamValue> {
+    let cur = value.to_string();
+    let mut s = cur.clone();
+    let r = ui.add(egui::TextEdit::singleline(&mut s).text_color(egui::Color32::LIGHT_RED));
+    (r.changed() && s != cur).then(|| ParamValue::parse_cli(&s))
+}

@@ -1,0 +1,341 @@
+//! Drawing mass-spring flames (mass-spring flame project 2019 §Textures, §User Interface "Draw"):
+//! each cloth as a textured, alpha-blended mesh turned to face the camera, or as a wireframe of
+//! its springs, or as plain shaded cloth (the project's Figure 4). Nodes `cloth.cloth_render`
+//! (built-in procedural textures) and `cloth.cloth_render_textured` (a required texture input).
+
+use std::sync::Arc;
+
+use glam::Vec3;
+use pyrograph_core::{
+    ClothState, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
+};
+use pyrograph_render::{Blend, Camera, DrawList, Vertex, View, render};
+use rayon::prelude::*;
+
+use crate::textures::builtin_textures;
+
+/// Adds `cloth.cloth_render` and `cloth.cloth_render_textured`.
+pub fn register(registry: &mut Registry) {
+    registry.add(FnNode::new(cloth_render_desc(false), cook_cloth_render));
+    registry.add(FnNode::new(cloth_render_desc(true), cook_cloth_render_textured));
+}
+
+/// How the cloths are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Textured, alpha-blended mesh (the flame).
+    Textured,
+    /// The structural springs as thin camera-facing strips.
+    Wireframe,
+    /// Plain shaded cloth, without a texture (Figure 4).
+    Cloth,
+}
+
+/// Where the textures come from.
+#[derive(Clone, Copy, Debug)]
+pub enum Textures<'a> {
+    /// The eight built-in procedural textures, one per flame chosen by its seed.
+    Builtin,
+    /// One texture for every flame.
+    Single(&'a Arc<Image>),
+}
+
+/// Drawing parameters other than the view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderParams {
+    /// Drawing mode.
+    pub mode: Mode,
+    /// Blending of textured and cloth meshes (`Over` or `Additive`).
+    pub blend: Blend,
+    /// Tint multiplied into the texture (straight RGBA); the colour of wireframe and cloth.
+    pub tint: [f32; 4],
+    /// Width of wireframe strips in pixels.
+    pub line_width: f32,
+    /// Background (straight RGBA).
+    pub background: [f32; 4],
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        RenderParams {
+            mode: Mode::Textured,
+            blend: Blend::Over,
+            tint: [1.0; 4],
+            line_width: 1.5,
+            background: [0.0, 0.0, 0.0, 1.0],
+        }
+    }
+}
+
+/// The world axes of a flame at `root` facing the camera about the vertical: `(across, up,
+/// toward the eye)`. Flames stay upright; looking straight down falls back to a billboard.
+pub fn flame_axes(camera: &Camera, root: Vec3) -> (Vec3, Vec3, Vec3) {
+    let to_eye = camera.position() - root;
+    let flat = Vec3::new(to_eye.x, 0.0, to_eye.z);
+    if flat.length_squared() > 1e-8 {
+        let f = flat.normalize();
+        (Vec3::Y.cross(f), Vec3::Y, f)
+    } else {
+        let (r, u) = camera.billboard_axes(root);
+        (r, u, r.cross(u))
+    }
+}
+
+/// World positions of flame `i` of `cloth`, turned to face the camera.
+fn world_positions(camera: &Camera, cloth: &ClothState, i: usize) -> Vec<Vec3> {
+    let root = Vec3::from_array(cloth.roots[i]);
+    let (r, u, f) = flame_axes(camera, root);
+    cloth.flame(i).unwrap_or(&[]).iter().map(|p| root + r * p[0] + u * p[1] + f * p[2]).collect()
+}
+
+fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, tex: Option<pyrograph_render::TextureId>, p: &RenderParams) {
+    let camera = *list.view().camera();
+    let (w, h) = (cloth.width as usize, cloth.height as usize);
+    let pos = world_positions(&camera, cloth, i);
+    if pos.len() != w * h || w < 2 || h < 2 {
+        return;
+    }
+    let at = |r: usize, c: usize| pos[r * w + c];
+    match (p.mode, tex) {
+        (Mode::Textured, Some(t)) => {
+            // uv (0,0) is the texture's top-left: the top row of the cloth.
+            let vert = |r: usize, c: usize| Vertex {
+                position: at(r, c),
+                color: p.tint,
+                uv: [c as f32 / (w - 1) as f32, 1.0 - r as f32 / (h - 1) as f32],
+            };
+            for r in 0..h - 1 {
+                for c in 0..w - 1 {
+                    let (a, b, cc, d) = (vert(r, c), vert(r, c + 1), vert(r + 1, c + 1), vert(r + 1, c));
+                    list.textured_triangle([a, b, cc], t, p.blend);
+                    list.textured_triangle([a, cc, d], t, p.blend);
+                }
+            }
+        }
+        (Mode::Wireframe, _) => {
+            // World size of one pixel at unit distance: 2·tan(fov/2) / height.
+            let focal = camera.projection_matrix(1.0).y_axis.y;
+            let pixel = 2.0 / (focal * list.view().height() as f32);
+            let mut strip = |a: Vec3, b: Vec3| {
+                let to_eye = camera.position() - (a + b) * 0.5;
+                let half = 0.5 * p.line_width * pixel * to_eye.length();
+                let side = (b - a).cross(to_eye).normalize_or_zero() * half;
+                let v = |q: Vec3| Vertex::new(q, p.tint);
+                list.triangle([v(a - side), v(b - side), v(b + side)], Blend::Over);
+                list.triangle([v(a - side), v(b + side), v(a + side)], Blend::Over);
+            };
+            for r in 0..h {
+                for c in 0..w {
+                    if c + 1 < w {
+                        strip(at(r, c), at(r, c + 1));
+                    }
+                    if r + 1 < h {
+                        strip(at(r, c), at(r + 1, c));
+                    }
+                }
+            }
+        }
+        _ => {
+            let eye = camera.position();
+            for r in 0..h - 1 {
+                for c in 0..w - 1 {
+                    for tri in [[at(r, c), at(r, c + 1), at(r + 1, c + 1)], [at(r, c), at(r + 1, c + 1), at(r + 1, c)]] {
+                        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+                        let centre = (tri[0] + tri[1] + tri[2]) / 3.0;
+                        let lit = 0.3 + 0.7 * n.dot((eye - centre).normalize_or_zero()).abs();
+                        let col = [p.tint[0] * lit, p.tint[1] * lit, p.tint[2] * lit, p.tint[3]];
+                        list.triangle(tri.map(|q| Vertex::new(q, col)), p.blend);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Renders every flame of `cloth` through `view`, far flames first (so "over" blends correctly);
+/// geometry is built in parallel chunks and rasterized in parallel bands.
+pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: &RenderParams) -> Image {
+    let eye = view.camera().position();
+    let mut order: Vec<usize> = (0..cloth.flames()).collect();
+    let dist = |i: usize| (Vec3::from_array(cloth.roots[i]) - eye).length_squared();
+    order.sort_by(|&a, &b| dist(b).total_cmp(&dist(a)).then(a.cmp(&b)));
+    let chunk = (order.len() / (rayon::current_num_threads() * 4)).max(4);
+    let lists: Vec<DrawList> = order
+        .par_chunks(chunk)
+        .map(|flames| {
+            let mut list = DrawList::new(view);
+            let ids: Vec<_> = match textures {
+                Textures::Builtin => builtin_textures().iter().map(|t| list.add_texture(t)).collect(),
+                Textures::Single(t) => vec![list.add_texture(t)],
+            };
+            for &i in flames {
+                let seed = cloth.seeds.get(i).copied().unwrap_or(i as u32) as usize;
+                let tex = ids.get(seed % ids.len().max(1)).copied();
+                draw_flame(&mut list, cloth, i, tex, p);
+            }
+            list
+        })
+        .collect();
+    render(view, &lists, p.background).to_image()
+}
+
+fn vec3_port(name: &str, default: [f64; 3], doc: &str) -> PortDesc {
+    PortDesc { default: Some(Value::Vec3(default)), ..PortDesc::new(name, PortType::Vec3, doc) }
+}
+
+fn cloth_render_desc(textured: bool) -> NodeDesc {
+    let (name, doc) = if textured {
+        (
+            "cloth.cloth_render_textured",
+            "Renders mass-spring flames with a texture from another node (mass-spring flame project 2019 \
+             §Textures): like cloth.cloth_render, but every cloth is textured with the required `texture` \
+             input. Connect an image, or a Clip<Image> (imaging.turbulence_flame, Eigenfires reconstructions) \
+             together with the cloth clip: the render is lifted over both and frame n uses texture frame n. \
+             A separate node because an optional texture input would need a default image.",
+        )
+    } else {
+        (
+            "cloth.cloth_render",
+            "Renders mass-spring flames (mass-spring flame project 2019 §Textures): each cloth is a mesh turned \
+             about the vertical to face the camera, textured with one of 8 built-in procedural flame textures \
+             (Figure 3; generated with gradient noise, chosen at random per flame by its seed) and alpha-blended \
+             far to near; or drawn as a wireframe of its springs, or as plain shaded cloth (Figure 4). Connect the \
+             Clip<ClothState> of cloth.mass_spring_flame to get a clip of frames (RGBA, straight alpha). Use \
+             cloth.cloth_render_textured to texture the cloth with another node's image or clip.",
+        )
+    };
+    let mut d = NodeDesc::new(name, "Cloth", TimeDep::PerFrame, doc).input(PortDesc::new(
+        "cloth",
+        PortType::ClothState,
+        "The cloths to draw (cloth.mass_spring_flame).",
+    ));
+    if textured {
+        d = d.input(PortDesc::new("texture", PortType::Image, "Texture for every cloth (top of the image at the flame's tip)."));
+    }
+    d.input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
+        .input(PortDesc::int("height", 480, (1, 16384), "Image height in pixels."))
+        .input(vec3_port("camera_position", [0.0, 2.5, 9.0], "Eye position."))
+        .input(vec3_port("camera_target", [0.0, 1.0, 0.0], "Point looked at."))
+        .input(vec3_port("camera_up", [0.0, 1.0, 0.0], "Up hint."))
+        .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
+        .input(PortDesc::float("near", 0.1, (0.0001, 1e6), "Near plane distance."))
+        .input(PortDesc::float("far", 1000.0, (0.001, 1e7), "Far plane distance."))
+        .input(PortDesc::choice(
+            "mode",
+            &["textured", "wireframe", "cloth"],
+            "textured",
+            "Textured flame, spring wireframe, or plain cloth.",
+        ))
+        .input(PortDesc::choice("blend", &["over", "additive"], "over", "Alpha blending (over) or additive light."))
+        .input(PortDesc::color("tint", [1.0, 1.0, 1.0, 1.0], "Multiplies the texture; the colour of wireframe and cloth."))
+        .input(PortDesc::float("line_width", 1.5, (0.0, 1e3), "Width of wireframe strips in pixels."))
+        .input(PortDesc::color("background", [0.0, 0.0, 0.0, 1.0], "Background colour (straight RGBA)."))
+        .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
+}
+
+fn vec3(i: &Inputs<'_>, name: &str) -> Result<Vec3, NodeError> {
+    let v = i.vec3(name)?;
+    Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
+}
+
+/// The camera and viewport described by a node's inputs; errors name the port.
+pub fn view_from_inputs(i: &Inputs<'_>) -> Result<View, NodeError> {
+    let camera = Camera::new(
+        vec3(i, "camera_position")?,
+        vec3(i, "camera_target")?,
+        vec3(i, "camera_up")?,
+        i.float("fov")? as f32,
+        i.float("near")? as f32,
+        i.float("far")? as f32,
+    )
+    .map_err(|e| NodeError::port(e.field, e.message))?;
+    let w = u32::try_from(i.usize("width")?).map_err(|_| NodeError::port("width", "too large"))?;
+    let h = u32::try_from(i.usize("height")?).map_err(|_| NodeError::port("height", "too large"))?;
+    View::new(camera, w, h).map_err(|e| NodeError::port(e.field, e.message))
+}
+
+fn params_from_inputs(i: &Inputs<'_>) -> Result<RenderParams, NodeError> {
+    let mode = match i.choice("mode")? {
+        "wireframe" => Mode::Wireframe,
+        "cloth" => Mode::Cloth,
+        _ => Mode::Textured,
+    };
+    let blend = if i.choice("blend")? == "additive" { Blend::Additive } else { Blend::Over };
+    let line_width = i.float("line_width")? as f32;
+    if !line_width.is_finite() || line_width < 0.0 {
+        return Err(NodeError::port("line_width", format!("must be a finite non-negative width, got {line_width}")));
+    }
+    Ok(RenderParams { mode, blend, tint: i.color("tint")?, line_width, background: i.color("background")? })
+}
+
+fn checked_cloth<'a>(i: &Inputs<'a>) -> Result<&'a Arc<ClothState>, NodeError> {
+    let cloth = i.cloth_state("cloth")?;
+    let n = cloth.width as usize * cloth.height as usize;
+    if cloth.positions.len() != n * cloth.flames() || cloth.seeds.len() != cloth.flames() {
+        return Err(NodeError::port("cloth", "inconsistent cloth state: positions or seeds do not match the flame count"));
+    }
+    if !cloth.positions.iter().chain(&cloth.roots).all(|p| p.iter().all(|x| x.is_finite())) {
+        return Err(NodeError::port("cloth", "the cloth has non-finite positions"));
+    }
+    Ok(cloth)
+}
+
+fn cook_cloth_render(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let view = view_from_inputs(i)?;
+    let cloth = checked_cloth(i)?;
+    let p = params_from_inputs(i)?;
+    ctx.check_cancel()?;
+    Ok(vec![Value::Image(Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)))])
+}
+
+fn cook_cloth_render_textured(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let view = view_from_inputs(i)?;
+    let cloth = checked_cloth(i)?;
+    let texture = i.image("texture")?;
+    if texture.width() == 0 || texture.height() == 0 {
+        return Err(NodeError::port("texture", "is an empty image"));
+    }
+    let p = params_from_inputs(i)?;
+    ctx.check_cancel()?;
+    Ok(vec![Value::Image(Arc::new(render_cloth(&view, cloth, Textures::Single(texture), &p)))])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{ClothParams, Simulation, grid_roots};
+    use pyrograph_core::Channels;
+
+    fn view(w: u32, h: u32) -> View {
+        let cam = Camera::new(Vec3::new(0.0, 1.0, 6.0), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 40.0, 0.1, 100.0).unwrap();
+        View::new(cam, w, h).unwrap()
+    }
+
+    fn one_flame() -> ClothState {
+        Simulation::new(&ClothParams::default(), &grid_roots(1, 1.0)).unwrap().snapshot()
+    }
+
+    #[test]
+    fn a_textured_flame_is_bright_in_its_body_and_clear_outside() {
+        let v = view(96, 96);
+        let img = render_cloth(&v, &one_flame(), Textures::Builtin, &RenderParams::default());
+        let body = v.project(Vec3::new(0.0, 0.5, 0.0)).unwrap();
+        let px = img.pixel(body.x as u32, body.y as u32);
+        assert!(px[0] > 0.5, "flame body {px:?}");
+        assert_eq!(img.pixel(2, 2), &[0.0, 0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn a_given_texture_colours_the_cloth_and_wireframe_and_cloth_modes_draw() {
+        let v = view(64, 64);
+        let green = Arc::new(Image::from_vec(2, 2, Channels::Rgba, [0.0, 1.0, 0.0, 1.0].repeat(4)).unwrap());
+        let img = render_cloth(&v, &one_flame(), Textures::Single(&green), &RenderParams::default());
+        let c = v.project(Vec3::new(0.0, 1.0, 0.0)).unwrap();
+        assert_eq!(img.pixel(c.x as u32, c.y as u32), &[0.0, 1.0, 0.0, 1.0]);
+        for mode in [Mode::Wireframe, Mode::Cloth] {
+            let p = RenderParams { mode, ..RenderParams::default() };
+            let img = render_cloth(&v, &one_flame(), Textures::Builtin, &p);
+            assert!(img.data().chunks(4).any(|q| q[0] > 0.2), "{mode:?} draws something");
+        }
+    }
+}

@@ -1,0 +1,24 @@
+//! pyrograph-nodes-eigen: Eigenfires (thesis ch. 4–5): PCA training, projection and
+//! reconstruction, the database on disk, recognition, motion transitions (low-pass, Direct
+//! Bridging, End Growing), motion lists, weight synthesis and plots.
+//!
+//! Pixel values are 0..1 (the thesis works in 0..255), so weights, distances and θ_min are 1/255
+//! of the thesis' numbers (its θ_min = 500 is about 2 here).
+#![deny(missing_docs)]
+
+pub mod database;
+pub mod motion;
+pub mod pca;
+pub mod transition;
+pub mod view;
+
+use pyrograph_core::Registry;
+
+/// Adds every Eigenfires node type.
+pub fn register(registry: &mut Registry) {
+    pca::register(registry);
+    database::register(registry);
+    transition::register(registry);
+    motion::register(registry);
+    view::register(registry);
+}

@@ -1,0 +1,97 @@
+//! Eigenfires on the real tealight footage (never committed): every motion transition of
+//! `graphs/eigenfires-tealight.ron`'s scenario is measured in PCA space; its largest jump between
+//! consecutive frames must stay within 1.5× the 95th percentile of the clip's own
+//! consecutive-frame distances.
+
+use std::ops::RangeInclusive;
+use std::path::PathBuf;
+
+use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value, Weights};
+use pyrograph::eigen::motion::{Method, transition};
+use pyrograph::eigen::transition::{distance, lowpass_kernel};
+
+fn footage() -> PathBuf {
+    std::env::var_os("PYROGRAPH_FOOTAGE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
+}
+
+/// The training weights of the tealight database, as the example graph builds it.
+fn tealight_weights() -> Weights {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut doc = GraphDoc::new();
+    let video = footage().join("tealight-candle/candle.mp4");
+    doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
+    doc.add_node(
+        "pre",
+        NodeDoc::new("graph.include").param("path", ParamValue::String("presets/preprocess-tealight.ron".into())),
+    );
+    doc.add_node(
+        "small",
+        NodeDoc::new("imaging.resize").param("width", ParamValue::Int(150)).param("height", ParamValue::Int(150)),
+    );
+    doc.add_node("pca", NodeDoc::new("eigen.eigenfires"));
+    doc.edges = vec![
+        ("video.clip".into(), "pre.image".into()),
+        ("pre.gray".into(), "small.image".into()),
+        ("small.image".into(), "pca.clip1".into()),
+    ];
+    let g = Graph::build(&doc, &pyrograph::registry(), &root.join("graphs"), &BuildOptions::default())
+        .unwrap_or_else(|d| panic!("{d}"));
+    match Evaluator::new().output(&g, "pca.weights", &CookCtx::new()).unwrap() {
+        Value::Weights(w) => w.as_ref().clone(),
+        other => panic!("expected weights, got {}", other.type_name()),
+    }
+}
+
+fn row(w: &Weights, f: usize) -> Vec<f32> {
+    w.row(f).unwrap().to_vec()
+}
+
+fn p95_consecutive(w: &Weights, e: usize) -> f64 {
+    let mut d: Vec<f64> = (1..w.frames).map(|f| distance(w.row(f - 1).unwrap(), w.row(f).unwrap(), e)).collect();
+    d.sort_by(f64::total_cmp);
+    d[(d.len() as f64 * 0.95) as usize]
+}
+
+/// Largest jump from the last untouched frame of `x`, through the transition, to the first
+/// untouched frame of `y`.
+fn largest_jump(w: &Weights, x: &RangeInclusive<usize>, y: &RangeInclusive<usize>, method: &Method, e: usize) -> (f64, usize) {
+    let t = transition(w, x, y, method).unwrap_or_else(|m| panic!("{method:?}: {m}"));
+    let mut seq = vec![row(w, x.end() - t.trim_end)];
+    for item in &t.items {
+        seq.push(match item {
+            pyrograph::core::FrameItem::Frame(f) => row(w, *f as usize),
+            pyrograph::core::FrameItem::Weights(v) => v.clone(),
+        });
+    }
+    seq.push(row(w, y.start() + t.trim_start));
+    (seq.windows(2).map(|p| distance(&p[0], &p[1], e)).fold(0.0, f64::max), t.items.len())
+}
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn every_transition_on_the_tealight_stays_within_the_clips_own_motion() {
+    let w = tealight_weights();
+    assert_eq!(w.frames, 796);
+    let (t1, t2) = (100..=199, 500..=599);
+    let e_detect = 100.min(w.components);
+    let methods = [
+        ("lowpass", Method::LowPass { components: 50, kernel: lowpass_kernel("box3").unwrap(), span: 2 }, 50),
+        ("direct_bridging", Method::DirectBridging { steps: 6, components: e_detect, theta_min: 10.0 }, e_detect),
+        ("end_growing", Method::EndGrowing { steps: 40, components: e_detect, theta_min: 10.0, exclude: 7 }, e_detect),
+    ];
+    let mut failures = Vec::new();
+    for (name, method, e) in &methods {
+        let p95 = p95_consecutive(&w, *e);
+        for (x, y, seam) in [(&t1, &t2, "T1→T2"), (&t2, &t1, "T2→T1 loop")] {
+            let (jump, n) = largest_jump(&w, x, y, method, *e);
+            let cut = distance(w.row(*x.end()).unwrap(), w.row(*y.start()).unwrap(), *e);
+            println!("{name} {seam}: {n} frames, largest jump {jump:.3} (cut {cut:.3}), p95 {p95:.3}, ratio {:.2}", jump / p95);
+            if jump > 1.5 * p95 {
+                failures.push(format!("{name} {seam}: largest jump {jump:.3} > 1.5 × p95 {p95:.3}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

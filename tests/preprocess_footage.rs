@@ -1,0 +1,140 @@
+//! The Eigenfires pre-processing graphs on real footage (never committed to this repository):
+//! `graphs/preprocess-candle.ron` and `graphs/preprocess-tealight.ron` cook and write clean
+//! gray flame sequences; on the tea-light the glowing wax and glass stay outside the mask while
+//! the flame, blue base included, is inside.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
+
+fn footage() -> PathBuf {
+    std::env::var_os("PYROGRAPH_FOOTAGE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
+}
+
+fn render(graph: &str, out: &Path, frames: &str) {
+    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs").join(graph);
+    let o = Command::new(env!("CARGO_BIN_EXE_pyrograph"))
+        .args(["render", graph.to_str().unwrap(), "--out", out.to_str().unwrap(), "--frames", frames])
+        .args(["--node", "write_gray", "--node", "write_mask"])
+        .env("PYROGRAPH_FOOTAGE", footage())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+}
+
+fn gray(path: &Path) -> image::GrayImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_luma8()
+}
+
+/// (hue 0–360, saturation 0–255, value 0–255) of an 8-bit RGB pixel, as eq. 3 of the thesis.
+fn hsv(r: f32, g: f32, b: f32) -> (f32, f32, f32) {
+    let v = r.max(g).max(b);
+    let d = v - r.min(g).min(b);
+    let s = if v > 0.0 { 255.0 * d / v } else { 0.0 };
+    let h = if d == 0.0 {
+        0.0
+    } else if v == r {
+        60.0 * (g - b) / d
+    } else if v == g {
+        120.0 + 60.0 * (b - r) / d
+    } else {
+        240.0 + 60.0 * (r - g) / d
+    };
+    ((h + 360.0) % 360.0, s, v)
+}
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn candle_preprocessing_writes_an_upright_clean_flame_for_every_frame() {
+    let out = tempfile::tempdir().unwrap();
+    render("preprocess-candle.ron", out.path(), "0-149");
+    let dir = out.path().join("preprocess-candle");
+    let mut leans = Vec::new();
+    for f in 0..150 {
+        let mask = gray(&dir.join(format!("mask_{f:04}.png")));
+        let g = gray(&dir.join(format!("gray_{f:04}.png")));
+        assert_eq!(g.dimensions(), (200, 240));
+        let inside = mask.pixels().filter(|p| p[0] > 127).count();
+        assert!((600..20_000).contains(&inside), "frame {f}: flame mask of {inside} px");
+        // Background removed: the frame's border is black in the output.
+        let border_max = (0..200).flat_map(|x| [g.get_pixel(x, 0)[0], g.get_pixel(x, 239)[0]]).max().unwrap();
+        assert!(border_max < 10, "frame {f}: border pixel {border_max}");
+        assert!(g.pixels().map(|p| p[0]).max().unwrap() > 200, "frame {f}: the flame is kept bright");
+        leans.push(lean_of(&g));
+    }
+    let mean = leans.iter().map(|a| a.abs()).sum::<f64>() / leans.len() as f64;
+    println!("candle: mean |lean| after pose normalization {mean:.2}°");
+    assert!(mean < 3.0, "flames stand upright after pose normalization (mean |lean| {mean:.2}°)");
+}
+
+/// Lean from vertical (degrees) of the bright part (> 50 %) of a gray frame.
+fn lean_of(g: &image::GrayImage) -> f64 {
+    use pyrograph::imaging::preprocess::{contours::trace_contours, pose};
+    let bits = g.pixels().map(|p| if p[0] > 127 { 255 } else { 0 }).collect();
+    let mask = pyrograph::core::Mask::from_vec(g.width(), g.height(), bits).unwrap();
+    let contours = trace_contours(&mask);
+    pose::main_contour(&contours).and_then(|c| pose::flame_axis(c, pose::Weighting::Uniform)).map_or(0.0, |a| a.angle_deg)
+}
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn tealight_mask_excludes_the_glowing_wax_and_glass_and_keeps_the_blue_base() {
+    const FRAMES: usize = 120;
+    let out = tempfile::tempdir().unwrap();
+    render("preprocess-tealight.ron", out.path(), &format!("0-{}", FRAMES - 1));
+    let dir = out.path().join("preprocess-tealight");
+
+    // The same crop of the original frames, for colour checks.
+    let mut doc = GraphDoc::new();
+    let video = footage().join("tealight-candle/candle.mp4");
+    doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
+    doc.add_node(
+        "crop",
+        NodeDoc::new("imaging.crop")
+            .param("x", ParamValue::Int(90))
+            .param("y", ParamValue::Int(100))
+            .param("width", ParamValue::Int(300))
+            .param("height", ParamValue::Int(300)),
+    );
+    doc.connect("v.clip", "crop.image");
+    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
+    let ctx = CookCtx::new();
+    let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
+
+    let (mut wax_inside, mut wax_total, mut with_base) = (0usize, 0usize, 0usize);
+    for f in 0..FRAMES {
+        let mask = gray(&dir.join(format!("mask_{f:04}.png")));
+        let rgb = frames.image(f, &ctx).unwrap();
+        let mut base_inside = false;
+        for y in 0..300u32 {
+            for x in 0..300u32 {
+                let p = rgb.pixel(x, y);
+                let (h, s, v) = hsv(p[0] * 255.0, p[1] * 255.0, p[2] * 255.0);
+                let masked = mask.get_pixel(x, y)[0] > 127;
+                // Lit wax and frosted glass: pink-white, moderately saturated, bright.
+                if (h >= 350.0 || h <= 20.0) && (60.0..=110.0).contains(&s) && v >= 150.0 && !(110..=190).contains(&x) {
+                    wax_total += 1;
+                    wax_inside += usize::from(masked);
+                }
+                // The violet-blue base of the flame, below its luminous zone.
+                if (300.0..=350.0).contains(&h) && s >= 90.0 && (110.0..=200.0).contains(&v) && masked {
+                    base_inside = true;
+                }
+            }
+        }
+        with_base += usize::from(base_inside);
+        let inside = mask.pixels().filter(|p| p[0] > 127).count();
+        assert!(inside > 300, "frame {f}: flame mask of only {inside} px");
+    }
+    assert!(wax_total > 100_000, "the test region holds glowing wax and glass ({wax_total} px)");
+    let leak = wax_inside as f64 / wax_total as f64;
+    println!(
+        "tealight: {:.3} % of {wax_total} wax/glass pixels inside the mask; blue base inside in {with_base}/{FRAMES} frames",
+        leak * 100.0
+    );
+    assert!(leak < 0.01, "{:.2} % of the glowing wax/glass pixels are inside the mask", leak * 100.0);
+    assert!(with_base * 10 >= FRAMES * 8, "blue base inside the mask in only {with_base} of {FRAMES} frames");
+}

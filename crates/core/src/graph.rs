@@ -340,7 +340,8 @@ fn numbers<const N: usize>(pv: &ParamValue) -> Option<[f64; N]> {
     }
 }
 
-fn parse_hex_color(s: &str) -> Option<[f32; 4]> {
+/// Parses `#rrggbb` or `#rrggbbaa` into straight RGBA in 0..1.
+pub fn parse_hex_color(s: &str) -> Option<[f32; 4]> {
     let hex = s.strip_prefix('#')?;
     if !(hex.len() == 6 || hex.len() == 8) || !hex.is_ascii() {
         return None;

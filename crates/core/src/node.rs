@@ -98,6 +98,11 @@ impl PortDesc {
         PortDesc { default: Some(Value::Color(default)), ..Self::new(name, PortType::Color, doc) }
     }
 
+    /// A Vec3 parameter.
+    pub fn vec3(name: &str, default: [f64; 3], doc: &str) -> Self {
+        PortDesc { default: Some(Value::Vec3(default)), ..Self::new(name, PortType::Vec3, doc) }
+    }
+
     /// A String parameter.
     pub fn string(name: &str, default: &str, doc: &str) -> Self {
         PortDesc { default: Some(Value::String(default.to_string())), ..Self::new(name, PortType::String, doc) }

@@ -18,20 +18,10 @@ fn numbers(pv: &ParamValue) -> Option<Vec<f64>> {
     }
 }
 
-fn hex_color(s: &str) -> Option<[f32; 4]> {
-    let hex = s.strip_prefix('#')?;
-    if !(hex.len() == 6 || hex.len() == 8) || !hex.is_ascii() {
-        return None;
-    }
-    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok().map(|b| b as f32 / 255.0);
-    let a = if hex.len() == 8 { byte(6)? } else { 1.0 };
-    Some([byte(0)?, byte(2)?, byte(4)?, a])
-}
-
 /// A colour from its file form: `(r, g, b)`, `(r, g, b, a)` or `"#rrggbb"`.
 pub fn as_color(pv: &ParamValue) -> Option<[f32; 4]> {
     match pv {
-        ParamValue::String(s) => hex_color(s),
+        ParamValue::String(s) => pyrograph::core::graph::parse_hex_color(s),
         _ => match numbers(pv)?.as_slice() {
             [r, g, b] => Some([*r as f32, *g as f32, *b as f32, 1.0]),
             [r, g, b, a] => Some([*r as f32, *g as f32, *b as f32, *a as f32]),

@@ -30,6 +30,7 @@
 #![deny(missing_docs)]
 
 pub mod camera;
+pub mod ports;
 pub mod raster;
 
 pub use camera::{Camera, CameraError};

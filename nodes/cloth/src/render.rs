@@ -179,10 +179,6 @@ pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: 
     render(view, &lists, p.background).to_image()
 }
 
-fn vec3_port(name: &str, default: [f64; 3], doc: &str) -> PortDesc {
-    PortDesc { default: Some(Value::Vec3(default)), ..PortDesc::new(name, PortType::Vec3, doc) }
-}
-
 fn cloth_render_desc(textured: bool) -> NodeDesc {
     let (name, doc) = if textured {
         (
@@ -214,9 +210,9 @@ fn cloth_render_desc(textured: bool) -> NodeDesc {
     }
     d.input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
         .input(PortDesc::int("height", 480, (1, 16384), "Image height in pixels."))
-        .input(vec3_port("camera_position", [0.0, 2.5, 9.0], "Eye position."))
-        .input(vec3_port("camera_target", [0.0, 1.0, 0.0], "Point looked at."))
-        .input(vec3_port("camera_up", [0.0, 1.0, 0.0], "Up hint."))
+        .input(PortDesc::vec3("camera_position", [0.0, 2.5, 9.0], "Eye position."))
+        .input(PortDesc::vec3("camera_target", [0.0, 1.0, 0.0], "Point looked at."))
+        .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
         .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
         .input(PortDesc::float("near", 0.1, (0.0001, 1e6), "Near plane distance."))
         .input(PortDesc::float("far", 1000.0, (0.001, 1e7), "Far plane distance."))
@@ -233,26 +229,7 @@ fn cloth_render_desc(textured: bool) -> NodeDesc {
         .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
 }
 
-fn vec3(i: &Inputs<'_>, name: &str) -> Result<Vec3, NodeError> {
-    let v = i.vec3(name)?;
-    Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
-}
-
-/// The camera and viewport described by a node's inputs; errors name the port.
-pub fn view_from_inputs(i: &Inputs<'_>) -> Result<View, NodeError> {
-    let camera = Camera::new(
-        vec3(i, "camera_position")?,
-        vec3(i, "camera_target")?,
-        vec3(i, "camera_up")?,
-        i.float("fov")? as f32,
-        i.float("near")? as f32,
-        i.float("far")? as f32,
-    )
-    .map_err(|e| NodeError::port(e.field, e.message))?;
-    let w = u32::try_from(i.usize("width")?).map_err(|_| NodeError::port("width", "too large"))?;
-    let h = u32::try_from(i.usize("height")?).map_err(|_| NodeError::port("height", "too large"))?;
-    View::new(camera, w, h).map_err(|e| NodeError::port(e.field, e.message))
-}
+pub use pyrograph_render::ports::view_from_inputs;
 
 fn params_from_inputs(i: &Inputs<'_>) -> Result<RenderParams, NodeError> {
     let mode = match i.choice("mode")? {

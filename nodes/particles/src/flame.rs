@@ -314,10 +314,6 @@ fn flame_particles(
         .collect())
 }
 
-fn vec3_port(name: &str, default: [f64; 3], doc: &str) -> PortDesc {
-    PortDesc { default: Some(Value::Vec3(default)), ..PortDesc::new(name, PortType::Vec3, doc) }
-}
-
 fn roots_desc() -> NodeDesc {
     NodeDesc::new(
         "particles.roots",
@@ -329,10 +325,10 @@ fn roots_desc() -> NodeDesc {
     )
     .input(PortDesc::choice("layout", &["row", "grid", "ring", "disc"], "row", "How the roots are placed."))
     .input(PortDesc::int("count", 1, (1, 100_000), "Number of roots."))
-    .input(vec3_port("center", [0.0, 0.0, 0.0], "Centre of the layout."))
+    .input(PortDesc::vec3("center", [0.0, 0.0, 0.0], "Centre of the layout."))
     .input(PortDesc::float("spacing", 2.5, (0.0, 1000.0), "Distance between neighbours (row, grid)."))
     .input(PortDesc::float("radius", 2.0, (0.0, 1000.0), "Radius (ring, disc)."))
-    .input(vec3_port("direction", [0.0, 1.0, 0.0], "Initial direction of every flame."))
+    .input(PortDesc::vec3("direction", [0.0, 1.0, 0.0], "Initial direction of every flame."))
     .input(PortDesc::float("spread", 0.0, (0.0, 1.0), "Random tilt of each direction (0: all equal)."))
     .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of disc placement and tilt."))
     .output("roots", PortType::Particles, "Root particles.")

@@ -9,7 +9,7 @@ use noise::{NoiseFn, Perlin};
 use pyrograph_core::{
     CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, TimeDep, Value,
 };
-use pyrograph_render::{Blend, Camera, DrawList, Vertex, View, render};
+use pyrograph_render::{Blend, DrawList, Vertex, View, render};
 use rayon::prelude::*;
 
 /// Adds `particles.render_flames` and `particles.flame_lights`.
@@ -106,10 +106,6 @@ pub fn render_particles(
     render(view, &lists, background).to_image()
 }
 
-fn vec3_port(name: &str, default: [f64; 3], doc: &str) -> PortDesc {
-    PortDesc { default: Some(Value::Vec3(default)), ..PortDesc::new(name, PortType::Vec3, doc) }
-}
-
 fn empty_particles() -> Value {
     Value::Particles(Arc::new(Particles::default()))
 }
@@ -131,9 +127,9 @@ fn render_flames_desc() -> NodeDesc {
     })
     .input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
     .input(PortDesc::int("height", 480, (1, 16384), "Image height in pixels."))
-    .input(vec3_port("camera_position", [0.0, 3.0, 14.0], "Eye position."))
-    .input(vec3_port("camera_target", [0.0, 2.5, 0.0], "Point looked at."))
-    .input(vec3_port("camera_up", [0.0, 1.0, 0.0], "Up hint."))
+    .input(PortDesc::vec3("camera_position", [0.0, 3.0, 14.0], "Eye position."))
+    .input(PortDesc::vec3("camera_target", [0.0, 2.5, 0.0], "Point looked at."))
+    .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
     .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
     .input(PortDesc::float("near", 0.1, (0.0001, 1e6), "Near plane distance."))
     .input(PortDesc::float("far", 1000.0, (0.001, 1e7), "Far plane distance."))
@@ -147,27 +143,7 @@ fn render_flames_desc() -> NodeDesc {
     .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
 }
 
-fn vec3(i: &Inputs<'_>, name: &str) -> Result<Vec3, NodeError> {
-    let v = i.vec3(name)?;
-    Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
-}
-
-/// The camera and viewport described by a node's inputs; errors name the port.
-pub fn view_from_inputs(i: &Inputs<'_>) -> Result<View, NodeError> {
-    let camera = Camera::new(
-        vec3(i, "camera_position")?,
-        vec3(i, "camera_target")?,
-        vec3(i, "camera_up")?,
-        i.float("fov")? as f32,
-        i.float("near")? as f32,
-        i.float("far")? as f32,
-    )
-    .map_err(|e| NodeError::port(e.field, e.message))?;
-    let (w, h) = (i.usize("width")?, i.usize("height")?);
-    let w32 = u32::try_from(w).map_err(|_| NodeError::port("width", "too large"))?;
-    let h32 = u32::try_from(h).map_err(|_| NodeError::port("height", "too large"))?;
-    View::new(camera, w32, h32).map_err(|e| NodeError::port(e.field, e.message))
-}
+pub use pyrograph_render::ports::view_from_inputs;
 
 fn cook_render_flames(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
     let view = view_from_inputs(i)?;
@@ -276,6 +252,7 @@ mod tests {
     use super::*;
     use crate::flame::{FlameParams, Root, simulate_frame};
     use pyrograph_core::WindField;
+    use pyrograph_render::Camera;
 
     fn view(w: u32, h: u32) -> View {
         let cam = Camera::new(Vec3::new(0.0, 3.0, 14.0), Vec3::new(0.0, 2.5, 0.0), Vec3::Y, 40.0, 0.1, 100.0).unwrap();

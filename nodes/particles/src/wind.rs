@@ -114,10 +114,6 @@ impl WindSampler {
     }
 }
 
-fn vec3_port(name: &str, default: [f64; 3], doc: &str) -> PortDesc {
-    PortDesc { default: Some(Value::Vec3(default)), ..PortDesc::new(name, PortType::Vec3, doc) }
-}
-
 fn wind_field_desc() -> NodeDesc {
     NodeDesc::new(
         "particles.wind_field",
@@ -128,7 +124,7 @@ fn wind_field_desc() -> NodeDesc {
          the gradient of band-limited noise at k_p·p − k_s·T·ĵ scaled by C and by the height above the \
          flame's base. Ranges of C, k_p and k_s are Perry's Table 3.1.",
     )
-    .input(vec3_port("gravity", [0.0, -1.0, 0.0], "Gravity g (Perry: −ĵ)."))
+    .input(PortDesc::vec3("gravity", [0.0, -1.0, 0.0], "Gravity g (Perry: −ĵ)."))
     .input(PortDesc::float("k_g", 1.0, (0.0, 10.0), "Convection coefficient k_g: flames rise against gravity (Perry: 1.0)."))
     .input(PortDesc::choice(
         "large_scale",
@@ -136,9 +132,9 @@ fn wind_field_desc() -> NodeDesc {
         "none",
         "Large-scale wind w_L: none, the constant `wind`, a vortex, or −`object_velocity` (§3.4).",
     ))
-    .input(vec3_port("wind", [0.0, 0.0, 0.0], "Constant wind vector (large_scale = constant)."))
-    .input(vec3_port("object_velocity", [0.0, 0.0, 0.0], "Velocity of the burning object (large_scale = moving_object)."))
-    .input(vec3_port("vortex_center", [0.0, 0.0, 0.0], "A point on the vertical vortex axis (large_scale = vortex)."))
+    .input(PortDesc::vec3("wind", [0.0, 0.0, 0.0], "Constant wind vector (large_scale = constant)."))
+    .input(PortDesc::vec3("object_velocity", [0.0, 0.0, 0.0], "Velocity of the burning object (large_scale = moving_object)."))
+    .input(PortDesc::vec3("vortex_center", [0.0, 0.0, 0.0], "A point on the vertical vortex axis (large_scale = vortex)."))
     .input(PortDesc::float("vortex_strength", 1.0, (-100.0, 100.0), "Tangential wind speed at the vortex radius."))
     .input(PortDesc::float("vortex_radius", 1.0, (0.001, 1000.0), "Vortex core radius (Rankine vortex)."))
     .input(PortDesc::float("noise_c", 0.04, (0.0, 0.04), "Flame noisiness C of eq. 3.1 (Table 3.1; footnote 5: 0.04)."))

@@ -408,16 +408,8 @@ pub(crate) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
             }
             _ => Err(wrong("a path string")),
         },
-        PortType::Image
-        | PortType::Mask
-        | PortType::Contours
-        | PortType::WindField
-        | PortType::Particles
-        | PortType::ClothState
-        | PortType::Basis
-        | PortType::Weights
-        | PortType::FrameList
-        | PortType::Clip(_) => Err((
+        // Every data type (images, masks, clips, databases…): see `PortType::is_parameter`.
+        _ => Err((
             DiagnosticKind::WrongKind,
             format!("is a {} input: connect another node's output to it instead of writing a value", port.ty),
         )),

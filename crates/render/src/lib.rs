@@ -35,5 +35,6 @@ pub mod raster;
 
 pub use camera::{Camera, CameraError};
 pub use raster::{
-    BAND_ROWS, Blend, DrawList, Framebuffer, ScreenVertex, TextureId, Vertex, View, blend_pixel, render, sample_bilinear,
+    BAND_ROWS, Blend, DrawList, Framebuffer, ScreenVertex, TextureId, Vertex, View, blend_pixel, render, render_image,
+    sample_bilinear,
 };

@@ -160,8 +160,8 @@ struct SVert {
 enum Prim {
     /// Three vertex indices; `tex` indexes the list's textures.
     Tri { v: [u32; 3], blend: Blend, tex: Option<u32> },
-    /// A triangle fan: vertex `first` is the centre, the next `n` the closed rim.
-    Fan { first: u32, n: u32, blend: Blend },
+    /// A fuzzy particle: index into the list's scanline setups.
+    Fan { fan: u32, blend: Blend },
 }
 
 /// The planes geometry is clipped against: near (`z >= 0`) and the guard band.
@@ -197,15 +197,55 @@ fn clip_polygon(mut poly: Vec<ClipVert>) -> Vec<ClipVert> {
     poly
 }
 
+/// Most rim vertices a particle may have and still take the scanline fast path.
+const MAX_FAN: usize = 256;
+
+/// One rim edge of a fuzzy particle, as the affine function `L(p) = 1 + b·dx + c·dy` of the
+/// pixel offset `(dx, dy)` from the particle's centre: 1 at the centre, 0 on the edge's line.
+/// Inside the fan triangle of that edge `L` is exactly the centre vertex's barycentric weight.
+#[derive(Clone, Copy, Debug)]
+struct FanEdge {
+    b: f32,
+    c: f32,
+    /// `1 / b` (0 when `b` is 0).
+    inv_b: f32,
+    /// `1 / (b − b_next)` with the next edge of the rim.
+    inv_db_next: f32,
+}
+
+/// A fuzzy particle ready for scanline rasterization: a convex polygon around `(cx, cy)` whose
+/// colour is `edge + (center − edge)·L` with `L = min_k L_k` (the Gouraud fan, computed per row
+/// as the lower envelope of the rim edges' functions instead of triangle by triangle).
+#[derive(Clone, Copy, Debug)]
+struct FanSetup {
+    cx: f32,
+    cy: f32,
+    /// Pixel rows touched, inclusive, clamped to the viewport.
+    rows: (i32, i32),
+    /// First of this fan's edges in `DrawList::fan_edges`, and their count.
+    first: u32,
+    n: u32,
+    /// Straight RGBA at the rim and centre − rim.
+    edge: [f32; 4],
+    delta: [f32; 4],
+    /// Depth at the centre and its gradient in x and y per pixel (depth is affine in screen
+    /// space over a planar polygon).
+    z: [f32; 3],
+}
+
 /// Geometry ready for [`render`]: built on one thread, many lists may be built in parallel and
 /// rendered together (in list order).
 pub struct DrawList {
     view: View,
     verts: Vec<SVert>,
     prims: Vec<Prim>,
+    fans: Vec<FanSetup>,
+    fan_edges: Vec<FanEdge>,
     textures: Vec<Arc<Image>>,
     /// Per pass (0 opaque, 1 blended), per band, the primitives touching it in submission order.
     bins: [Vec<Vec<u32>>; 2],
+    /// `(cos, sin)` of the rim angles for the last particle side count.
+    ring: Vec<(f32, f32)>,
 }
 
 /// A texture added to a [`DrawList`].
@@ -220,8 +260,11 @@ impl DrawList {
             view: view.clone(),
             verts: Vec::new(),
             prims: Vec::new(),
+            fans: Vec::new(),
+            fan_edges: Vec::new(),
             textures: Vec::new(),
             bins: [vec![Vec::new(); bands], vec![Vec::new(); bands]],
+            ring: Vec::new(),
         }
     }
 
@@ -230,7 +273,7 @@ impl DrawList {
         &self.view
     }
 
-    /// Number of primitives (triangles and fans) kept after clipping and culling.
+    /// Number of primitives (triangles and particles) kept after clipping and culling.
     pub fn primitive_count(&self) -> usize {
         self.prims.len()
     }
@@ -254,8 +297,8 @@ impl DrawList {
         let iw = 1.0 / v.pos.w;
         let s = self.view.to_screen(v.pos);
         SVert {
-            x: (s.x * SUB as f32).round() as i64,
-            y: (s.y * SUB as f32).round() as i64,
+            x: round_i64(s.x * SUB as f32),
+            y: round_i64(s.y * SUB as f32),
             z: v.pos.z * iw,
             iw,
             c: (v.color * iw).to_array(),
@@ -263,8 +306,8 @@ impl DrawList {
         }
     }
 
-    /// The bands covered by the bounding box of `verts`, `None` when it covers no pixel.
-    fn band_range<'v>(&self, verts: impl Iterator<Item = &'v SVert>) -> Option<(usize, usize)> {
+    /// The pixel rows and bands covered by the bounding box of `verts`, `None` when it covers no pixel.
+    fn pixel_rows<'v>(&self, verts: impl Iterator<Item = &'v SVert>) -> Option<(i64, i64)> {
         let (mut x0, mut x1, mut y0, mut y1) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
         for v in verts {
             x0 = x0.min(v.x);
@@ -273,11 +316,15 @@ impl DrawList {
             y1 = y1.max(v.y);
         }
         let (w, h) = (self.view.width as i64, self.view.height as i64);
-        let row0 = ceil_div(y0 - SUB / 2, SUB).max(0);
-        let row1 = floor_div(y1 - SUB / 2, SUB).min(h - 1);
-        let col0 = ceil_div(x0 - SUB / 2, SUB).max(0);
-        let col1 = floor_div(x1 - SUB / 2, SUB).min(w - 1);
-        (row0 <= row1 && col0 <= col1).then_some((row0 as usize / BAND_ROWS, row1 as usize / BAND_ROWS))
+        let row0 = ceil_sub(y0 - SUB / 2).max(0);
+        let row1 = floor_sub(y1 - SUB / 2).min(h - 1);
+        let col0 = ceil_sub(x0 - SUB / 2).max(0);
+        let col1 = floor_sub(x1 - SUB / 2).min(w - 1);
+        (row0 <= row1 && col0 <= col1).then_some((row0, row1))
+    }
+
+    fn band_range<'v>(&self, verts: impl Iterator<Item = &'v SVert>) -> Option<(usize, usize)> {
+        self.pixel_rows(verts).map(|(r0, r1)| (r0 as usize / BAND_ROWS, r1 as usize / BAND_ROWS))
     }
 
     fn push_prim(&mut self, prim: Prim, blend: Blend, bands: (usize, usize)) {
@@ -290,7 +337,16 @@ impl DrawList {
     }
 
     fn push_clipped(&mut self, cv: [ClipVert; 3], blend: Blend, tex: Option<u32>) {
-        let poly = if cv.iter().all(|v| inside_all(v.pos)) { cv.to_vec() } else { clip_polygon(cv.to_vec()) };
+        if cv.iter().all(|v| inside_all(v.pos)) {
+            let base = self.verts.len() as u32;
+            for v in &cv {
+                let s = self.snap(v);
+                self.verts.push(s);
+            }
+            self.bin_tri([base, base + 1, base + 2], blend, tex);
+            return;
+        }
+        let poly = clip_polygon(cv.to_vec());
         if poly.len() < 3 {
             return;
         }
@@ -326,6 +382,39 @@ impl DrawList {
         self.push_clipped(cv, blend, Some(texture.0));
     }
 
+    /// An indexed triangle mesh, optionally textured (colour = vertex colour × bilinear texel):
+    /// every vertex is transformed and snapped once however many triangles share it, which is
+    /// what makes dense meshes (cloth, a lit ground grid) cheap. Triangles with an index out of
+    /// range, and a texture not added to this list, are skipped.
+    pub fn mesh(&mut self, vertices: &[Vertex], triangles: &[[u32; 3]], texture: Option<TextureId>, blend: Blend) {
+        if texture.is_some_and(|t| t.0 as usize >= self.textures.len()) {
+            return;
+        }
+        let tex = texture.map(|t| t.0);
+        let clip: Vec<ClipVert> = vertices.iter().map(|v| self.clip_vert(v)).collect();
+        let mut index = Vec::with_capacity(clip.len());
+        for cv in &clip {
+            if inside_all(cv.pos) {
+                index.push(self.verts.len() as u32);
+                let s = self.snap(cv);
+                self.verts.push(s);
+            } else {
+                index.push(u32::MAX);
+            }
+        }
+        for t in triangles {
+            if t.iter().any(|&i| i as usize >= clip.len()) {
+                continue;
+            }
+            let v = t.map(|i| index[i as usize]);
+            if v.iter().all(|&i| i != u32::MAX) {
+                self.bin_tri(v, blend, tex);
+            } else {
+                self.push_clipped(t.map(|i| clip[i as usize]), blend, tex);
+            }
+        }
+    }
+
     /// A textured quad with corners in order top-left, top-right, bottom-right, bottom-left of
     /// the texture, tinted by `tint` (straight RGBA).
     pub fn textured_quad(&mut self, corners: [Vec3; 4], texture: TextureId, tint: [f32; 4], blend: Blend) {
@@ -345,6 +434,11 @@ impl DrawList {
     /// A fuzzy particle (Perry 1994 §3.2.1): a camera-facing N-gon of `sides` triangles around
     /// `center`, rim vertices on an ellipse of half extents `half` (billboard x and y), the centre
     /// vertex coloured `center_rgba` and the rim `edge_rgba`, Gouraud-shaded.
+    ///
+    /// A blended particle wholly inside the guard band is rasterized as one convex polygon, row
+    /// by row (see [`FanSetup`]): every pixel is touched once and coloured exactly as its fan
+    /// triangle's Gouraud interpolation would (in screen space, which for a camera-facing
+    /// billboard differs from perspective-correct by far less than one 8-bit level).
     pub fn particle(&mut self, center: Vec3, half: Vec2, sides: u32, center_rgba: [f32; 4], edge_rgba: [f32; 4], blend: Blend) {
         if sides < 3 || !center.is_finite() || !half.is_finite() {
             return;
@@ -356,32 +450,117 @@ impl DrawList {
         let rc = vp * (r * half.x).extend(0.0);
         let uc = vp * (u * half.y).extend(0.0);
         let (cc, ec) = (Vec4::from_array(center_rgba), Vec4::from_array(edge_rgba));
-        let step = std::f32::consts::TAU / sides as f32;
-        let ring: Vec<ClipVert> = (0..sides)
-            .map(|k| {
-                let (s, co) = (k as f32 * step).sin_cos();
-                ClipVert { pos: c + rc * co + uc * s, color: ec, uv: Vec2::ZERO }
-            })
-            .collect();
+        if self.ring.len() != sides as usize {
+            let step = std::f32::consts::TAU / sides as f32;
+            self.ring = (0..sides).map(|k| (k as f32 * step).sin_cos()).map(|(s, co)| (co, s)).collect();
+        }
         let centre = ClipVert { pos: c, color: cc, uv: Vec2::ZERO };
-        if inside_all(c) && ring.iter().all(|v| inside_all(v.pos)) {
-            let first = self.verts.len();
-            let s = self.snap(&centre);
+        let ring_at = |k: usize, ring: &[(f32, f32)]| {
+            let (co, s) = ring[k];
+            ClipVert { pos: c + rc * co + uc * s, color: ec, uv: Vec2::ZERO }
+        };
+        let n = sides as usize;
+        let all_inside = inside_all(c) && (0..n).all(|k| inside_all(ring_at(k, &self.ring).pos));
+        if !all_inside {
+            for k in 0..n {
+                let (a, b) = (ring_at(k, &self.ring), ring_at((k + 1) % n, &self.ring));
+                self.push_clipped([centre, a, b], blend, None);
+            }
+            return;
+        }
+        let first = self.verts.len();
+        let s = self.snap(&centre);
+        self.verts.push(s);
+        for k in 0..n {
+            let s = self.snap(&ring_at(k, &self.ring));
             self.verts.push(s);
-            for v in &ring {
-                let s = self.snap(v);
-                self.verts.push(s);
-            }
-            if let Some(bands) = self.band_range(self.verts[first..].iter()) {
-                self.push_prim(Prim::Fan { first: first as u32, n: sides, blend }, blend, bands);
-            } else {
-                self.verts.truncate(first);
-            }
+        }
+        let Some((row0, row1)) = self.pixel_rows(self.verts[first..].iter()) else {
+            self.verts.truncate(first);
+            return;
+        };
+        let bands = (row0 as usize / BAND_ROWS, row1 as usize / BAND_ROWS);
+        if blend != Blend::Opaque && self.fan_setup(first, n, (row0, row1), center_rgba, edge_rgba) {
+            self.verts.truncate(first);
+            let fan = self.fans.len() as u32 - 1;
+            self.push_prim(Prim::Fan { fan, blend }, blend, bands);
         } else {
-            for k in 0..ring.len() {
-                self.push_clipped([centre, ring[k], ring[(k + 1) % ring.len()]], blend, None);
+            for k in 0..n {
+                let v = [first as u32, (first + 1 + k) as u32, (first + 1 + (k + 1) % n) as u32];
+                self.bin_tri(v, blend, None);
             }
         }
+    }
+
+    /// Prepares the scanline form of the fan whose centre is `verts[first]` and rim the next `n`
+    /// vertices; `false` (nothing pushed) when it cannot take that path: degenerate, not convex
+    /// around its centre, beyond the far plane or too many sides.
+    fn fan_setup(&mut self, first: usize, n: usize, rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
+        if n > MAX_FAN {
+            return false;
+        }
+        let vs = &self.verts[first..first + 1 + n];
+        let (c, rim) = (&vs[0], &vs[1..]);
+        if vs.iter().any(|v| !(0.0..=1.0).contains(&v.z)) {
+            return false;
+        }
+        let start = self.fan_edges.len();
+        let mut sign = 0i64;
+        for k in 0..n {
+            let (p, q) = (&rim[k], &rim[(k + 1) % n]);
+            let (ex, ey) = (q.x - p.x, q.y - p.y);
+            if ex == 0 && ey == 0 {
+                continue; // Two rim vertices snapped together: the edge vanishes, its triangle too.
+            }
+            let ec = edge_fn(p, q, c.x, c.y);
+            if ec == 0 || (sign != 0 && ec.signum() != sign) {
+                self.fan_edges.truncate(start);
+                return false;
+            }
+            sign = ec.signum();
+            let (ec, sub) = (ec as f64, SUB as f64);
+            let b = (-(ey as f64) * sub / ec) as f32;
+            let cy = (ex as f64 * sub / ec) as f32;
+            self.fan_edges.push(FanEdge { b, c: cy, inv_b: if b != 0.0 { 1.0 / b } else { 0.0 }, inv_db_next: 0.0 });
+        }
+        let m = self.fan_edges.len() - start;
+        if m < 3 {
+            self.fan_edges.truncate(start);
+            return false;
+        }
+        for k in 0..m {
+            let next = self.fan_edges[start + (k + 1) % m].b;
+            let e = &mut self.fan_edges[start + k];
+            e.inv_db_next = 1.0 / (e.b - next);
+        }
+        // Depth plane through the centre and the two rim vertices spanning the largest area.
+        let px = |v: &SVert| ((v.x - c.x) as f64 / SUB as f64, (v.y - c.y) as f64 / SUB as f64, (v.z - c.z) as f64);
+        let p0 = px(&rim[0]);
+        let (mut best, mut det) = (p0, 0.0f64);
+        for v in &rim[1..] {
+            let p = px(v);
+            let d = p0.0 * p.1 - p.0 * p0.1;
+            if d.abs() > det.abs() {
+                (best, det) = (p, d);
+            }
+        }
+        let (gx, gy) = if det.abs() > 1e-9 {
+            ((p0.2 * best.1 - best.2 * p0.1) / det, (p0.0 * best.2 - best.0 * p0.2) / det)
+        } else {
+            (0.0, 0.0)
+        };
+        let delta = std::array::from_fn(|i| center[i] - edge[i]);
+        self.fans.push(FanSetup {
+            cx: c.x as f32 / SUB as f32,
+            cy: c.y as f32 / SUB as f32,
+            rows: (rows.0 as i32, rows.1 as i32),
+            first: start as u32,
+            n: m as u32,
+            edge,
+            delta,
+            z: [c.z, gx as f32, gy as f32],
+        });
+        true
     }
 
     /// A triangle given directly in pixel coordinates (no camera, no perspective). Coordinates
@@ -411,31 +590,36 @@ impl DrawList {
                 let [a, b, c] = v.map(|i| &self.verts[i as usize]);
                 raster_tri(band, a, b, c, blend, tex);
             }
-            Prim::Fan { first, n, blend } => {
-                let first = first as usize;
-                let centre = &self.verts[first];
-                let rim = &self.verts[first + 1..first + 1 + n as usize];
-                let (lo, hi) = ((band.y0 as i64) * SUB, (band.y1 as i64) * SUB + SUB);
-                for k in 0..rim.len() {
-                    let (p, q) = (&rim[k], &rim[(k + 1) % rim.len()]);
-                    // Skip fan triangles entirely above or below the band.
-                    if centre.y.max(p.y).max(q.y) < lo || centre.y.min(p.y).min(q.y) > hi {
-                        continue;
-                    }
-                    raster_tri(band, centre, p, q, blend, None);
+            Prim::Fan { fan, blend } => {
+                let f = &self.fans[fan as usize];
+                let edges = &self.fan_edges[f.first as usize..(f.first + f.n) as usize];
+                match blend {
+                    Blend::Additive => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Additive)),
+                    Blend::Over => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Over)),
+                    Blend::Opaque => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Opaque)),
                 }
             }
         }
     }
 }
 
-fn floor_div(a: i64, b: i64) -> i64 {
-    a.div_euclid(b)
+/// Rounds half away from zero, without a libm call; saturates like `as`.
+#[inline(always)]
+fn round_i64(v: f32) -> i64 {
+    (v + 0.5f32.copysign(v)) as i64
 }
 
-fn ceil_div(a: i64, b: i64) -> i64 {
-    -((-a).div_euclid(b))
+/// `floor(a / SUB)`.
+fn floor_sub(a: i64) -> i64 {
+    a >> 8
 }
+
+/// `ceil(a / SUB)`.
+fn ceil_sub(a: i64) -> i64 {
+    -((-a) >> 8)
+}
+
+const _: () = assert!(SUB == 1 << 8, "floor_sub and ceil_sub shift by log2(SUB)");
 
 /// Rows `y0..y1` of the framebuffer.
 struct Band<'a> {
@@ -444,11 +628,14 @@ struct Band<'a> {
     width: usize,
     y0: usize,
     y1: usize,
+    /// Whether any opaque primitive touches this band (otherwise depth is 1 everywhere and
+    /// blended primitives skip the depth test).
+    has_opaque: bool,
 }
 
 /// `(b − a) × (p − a)` in fixed point: positive when `p` is on the inner side of a
 /// positively-oriented triangle.
-fn edge(a: &SVert, b: &SVert, px: i64, py: i64) -> i64 {
+fn edge_fn(a: &SVert, b: &SVert, px: i64, py: i64) -> i64 {
     (b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x)
 }
 
@@ -458,46 +645,216 @@ fn is_top_left(a: &SVert, b: &SVert) -> bool {
     dy < 0 || (dy == 0 && dx > 0)
 }
 
+/// Scanline rasterization of a fuzzy particle within one band. Per row: the span is the
+/// intersection of the rim edges' half-planes `L_k ≥ 0` (pixel centres in `[x_left, x_right)`),
+/// and the colour follows the lower envelope `min_k L_k`, walked sector by sector from the
+/// edge that bounds the span on the left; within a sector `L` is linear along the row.
+fn raster_fan(band: &mut Band<'_>, f: &FanSetup, edges: &[FanEdge], blend: impl Fn(&mut [f32; 4], [f32; 4])) {
+    let n = edges.len();
+    let r0 = f.rows.0.max(band.y0 as i32);
+    let r1 = f.rows.1.min(band.y1 as i32 - 1);
+    let w = band.width as i32;
+    let (next, prev) = (|k: usize| if k + 1 == n { 0 } else { k + 1 }, |k: usize| if k == 0 { n - 1 } else { k - 1 });
+    // The edges bounding the span on the left (b > 0) and right (b < 0); found by a full scan on
+    // the first row, then by stepping along the rim as the rows go down.
+    let (mut kl, mut kr) = (usize::MAX, usize::MAX);
+    for y in r0..=r1 {
+        let dy = y as f32 + 0.5 - f.cy;
+        let a = |k: usize| 1.0 + edges[k].c * dy;
+        // Where edge k's line crosses the row, relative to the centre.
+        let cross = |k: usize| -a(k) * edges[k].inv_b;
+        if kl == usize::MAX || kr == usize::MAX {
+            let (mut xl, mut xr) = (f32::NEG_INFINITY, f32::INFINITY);
+            for (k, e) in edges.iter().enumerate() {
+                if e.b > 0.0 && cross(k) > xl {
+                    (xl, kl) = (cross(k), k);
+                } else if e.b < 0.0 && cross(k) < xr {
+                    (xr, kr) = (cross(k), k);
+                }
+            }
+            if kl == usize::MAX || kr == usize::MAX {
+                return;
+            }
+        } else {
+            // The left boundary is the largest crossing of a left-facing edge, unimodal along the rim.
+            for _ in 0..n {
+                let (kn, kp) = (next(kl), prev(kl));
+                if edges[kn].b > 0.0 && cross(kn) > cross(kl) {
+                    kl = kn;
+                } else if edges[kp].b > 0.0 && cross(kp) > cross(kl) {
+                    kl = kp;
+                } else {
+                    break;
+                }
+            }
+            for _ in 0..n {
+                let (kn, kp) = (next(kr), prev(kr));
+                if edges[kn].b < 0.0 && cross(kn) < cross(kr) {
+                    kr = kn;
+                } else if edges[kp].b < 0.0 && cross(kp) < cross(kr) {
+                    kr = kp;
+                } else {
+                    break;
+                }
+            }
+        }
+        let (xl, xr) = (cross(kl), cross(kr));
+        // Written so a NaN crossing (degenerate edge) also skips the row.
+        if xl >= xr || xl.is_nan() || xr.is_nan() {
+            continue;
+        }
+        let px0 = ceil_i32(f.cx + xl - 0.5).max(0);
+        let px1 = (ceil_i32(f.cx + xr - 0.5) - 1).min(w - 1);
+        if px0 > px1 {
+            continue;
+        }
+        let at = |k: usize, xd: f32| a(k) + edges[k].b * xd;
+        // The sector of the first pixel: the left-bounding edge's, unless the row starts clipped
+        // at the viewport's left side; L_k is unimodal around the rim, so descend to its minimum.
+        let mut k = kl;
+        let xd0 = px0 as f32 + 0.5 - f.cx;
+        for _ in 0..n {
+            let (kn, kp) = (next(k), prev(k));
+            let cur = at(k, xd0);
+            if at(kn, xd0) < cur {
+                k = kn;
+            } else if at(kp, xd0) < cur {
+                k = kp;
+            } else {
+                break;
+            }
+        }
+        let line = (y as usize - band.y0) * band.width;
+        let zrow = f.z[0] + f.z[2] * dy;
+        let mut x = px0;
+        for guard in 0..=2 * n {
+            // Where a neighbouring edge's function drops below this one's: the next sector.
+            let (kn, kp) = (next(k), prev(k));
+            let (mut bp, mut to) = (f32::INFINITY, k);
+            if edges[kn].b < edges[k].b {
+                let t = (a(kn) - a(k)) * edges[k].inv_db_next;
+                if t < bp {
+                    (bp, to) = (t, kn);
+                }
+            }
+            if edges[kp].b < edges[k].b {
+                let t = (a(k) - a(kp)) * edges[kp].inv_db_next;
+                if t < bp {
+                    (bp, to) = (t, kp);
+                }
+            }
+            let last = to == k || guard == 2 * n || bp + f.cx >= px1 as f32 + 0.5 || bp.is_nan();
+            let end = if last { px1 } else { (ceil_i32(f.cx + bp - 0.5) - 1).min(px1) };
+            if end >= x {
+                let xd = x as f32 + 0.5 - f.cx;
+                let (l, dl) = (at(k, xd), edges[k].b);
+                let span = line + x as usize..line + end as usize + 1;
+                let z = (zrow + f.z[1] * xd, f.z[1]);
+                if band.has_opaque {
+                    fill_fan_span(&mut band.color[span.clone()], Some(&band.depth[span]), l, dl, z, f, &blend);
+                } else {
+                    fill_fan_span(&mut band.color[span], None, l, dl, z, f, &blend);
+                }
+                x = end + 1;
+            }
+            if last || x > px1 {
+                break;
+            }
+            k = to;
+        }
+    }
+}
+
+/// `ceil(x)` for values well inside the `i32` range (no libm call without SSE4.1).
+#[inline(always)]
+fn ceil_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i + i32::from((i as f32) < x)
+}
+
+/// Blends one run of a particle row: `L` starts at `l` and steps by `dl`, depth likewise.
+#[inline(always)]
+fn fill_fan_span(
+    color: &mut [[f32; 4]],
+    depth: Option<&[f32]>,
+    mut l: f32,
+    dl: f32,
+    (mut z, dz): (f32, f32),
+    f: &FanSetup,
+    blend: &impl Fn(&mut [f32; 4], [f32; 4]),
+) {
+    let (e, d) = (f.edge, f.delta);
+    for (i, dst) in color.iter_mut().enumerate() {
+        let visible = depth.is_none_or(|zb| z <= zb[i]);
+        if visible {
+            let t = l.clamp(0.0, 1.0);
+            blend(dst, [e[0] + d[0] * t, e[1] + d[1] * t, e[2] + d[2] * t, e[3] + d[3] * t]);
+        }
+        l += dl;
+        z += dz;
+    }
+}
+
 fn raster_tri(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend, tex: Option<&Image>) {
-    let area = edge(a, b, c.x, c.y);
+    let area = edge_fn(a, b, c.x, c.y);
     let (b, c, area) = match area.cmp(&0) {
         std::cmp::Ordering::Equal => return,
         std::cmp::Ordering::Less => (c, b, -area),
         std::cmp::Ordering::Greater => (b, c, area),
     };
-    let x0 = ceil_div(a.x.min(b.x).min(c.x) - SUB / 2, SUB).max(0);
-    let x1 = floor_div(a.x.max(b.x).max(c.x) - SUB / 2, SUB).min(band.width as i64 - 1);
-    let y0 = ceil_div(a.y.min(b.y).min(c.y) - SUB / 2, SUB).max(band.y0 as i64);
-    let y1 = floor_div(a.y.max(b.y).max(c.y) - SUB / 2, SUB).min(band.y1 as i64 - 1);
+    let x0 = ceil_sub(a.x.min(b.x).min(c.x) - SUB / 2).max(0);
+    let x1 = floor_sub(a.x.max(b.x).max(c.x) - SUB / 2).min(band.width as i64 - 1);
+    let y0 = ceil_sub(a.y.min(b.y).min(c.y) - SUB / 2).max(band.y0 as i64);
+    let y1 = floor_sub(a.y.max(b.y).max(c.y) - SUB / 2).min(band.y1 as i64 - 1);
     if x0 > x1 || y0 > y1 {
         return;
     }
-    // Edge functions at the first pixel centre, their steps, and top-left biases.
+    // Edge functions at the first pixel centre (top-left bias folded in, so a pixel is covered
+    // when all three are >= 0; the bias is below one fixed-point unit of area), and their steps.
     let (px, py) = (x0 * SUB + SUB / 2, y0 * SUB + SUB / 2);
     let edges = [(b, c), (c, a), (a, b)];
     let mut row = [0i64; 3];
     let mut dx = [0i64; 3];
     let mut dy = [0i64; 3];
-    let mut bias = [0i64; 3];
     for (k, (p, q)) in edges.iter().enumerate() {
-        row[k] = edge(p, q, px, py);
+        row[k] = edge_fn(p, q, px, py) - i64::from(!is_top_left(p, q));
         dx[k] = -(q.y - p.y) * SUB;
         dy[k] = (q.x - p.x) * SUB;
-        bias[k] = if is_top_left(p, q) { 0 } else { -1 };
     }
     let inv_area = 1.0 / area as f32;
     let depth_write = blend == Blend::Opaque;
+    let depth_test = depth_write || band.has_opaque;
+    let wide = x1 - x0 >= 8;
     for y in y0..=y1 {
         let mut w = row;
         let line = (y as usize - band.y0) * band.width;
-        for x in x0..=x1 {
-            if w[0] + bias[0] >= 0 && w[1] + bias[1] >= 0 && w[2] + bias[2] >= 0 {
+        let (mut lo, mut hi) = (x0, x1);
+        if wide {
+            // Jump to the covered run of the row: an edge with a positive x step holds from some
+            // x on, one with a negative step up to some x.
+            for k in 0..3 {
+                if dx[k] > 0 && w[k] < 0 {
+                    lo = lo.max(x0 + (-w[k] + dx[k] - 1) / dx[k]);
+                } else if dx[k] < 0 {
+                    hi = if w[k] < 0 { -1 } else { hi.min(x0 + w[k] / -dx[k]) };
+                } else if dx[k] == 0 && w[k] < 0 {
+                    hi = -1;
+                }
+            }
+            if lo <= hi {
+                for k in 0..3 {
+                    w[k] += dx[k] * (lo - x0);
+                }
+            }
+        }
+        for x in lo..=hi {
+            if w[0] >= 0 && w[1] >= 0 && w[2] >= 0 {
                 let l1 = w[1] as f32 * inv_area;
                 let l2 = w[2] as f32 * inv_area;
                 let l0 = 1.0 - l1 - l2;
                 let z = a.z * l0 + b.z * l1 + c.z * l2;
                 let i = line + x as usize;
-                if (0.0..=1.0).contains(&z) && z <= band.depth[i] {
+                if (0.0..=1.0).contains(&z) && (!depth_test || z <= band.depth[i]) {
                     let iw = a.iw * l0 + b.iw * l1 + c.iw * l2;
                     let inv = 1.0 / iw;
                     let mut src = [0.0f32; 4];
@@ -604,42 +961,86 @@ impl Framebuffer {
     /// exceed alpha; such pixels get `alpha = max(r, g, b)` so that compositing the image over
     /// black gives back exactly the rendered colour.
     pub fn to_image(&self) -> Image {
-        let mut data = Vec::with_capacity(self.color.len() * 4);
-        for p in &self.color {
-            let a = p[3].max(p[0]).max(p[1]).max(p[2]).min(1.0);
-            if a > 0.0 {
-                data.extend_from_slice(&[(p[0] / a).min(1.0), (p[1] / a).min(1.0), (p[2] / a).min(1.0), a]);
-            } else {
-                data.extend_from_slice(&[0.0; 4]);
-            }
-        }
-        Image::from_vec(self.width, self.height, Channels::Rgba, data)
-            .unwrap_or_else(|| Image::new(self.width, self.height, Channels::Rgba))
+        let mut image = Image::new(self.width, self.height, Channels::Rgba);
+        let w = self.width as usize;
+        image
+            .data_mut()
+            .par_chunks_mut(w * 4 * BAND_ROWS)
+            .zip(self.color.par_chunks(w * BAND_ROWS))
+            .for_each(|(out, color)| write_straight(color, out));
+        image
     }
 }
 
-/// Rasterizes `lists` (in order) over a `background` (straight RGBA), bands in parallel.
+/// Premultiplied pixels to straight-alpha RGBA samples (see [`Framebuffer::to_image`]).
+fn write_straight(color: &[[f32; 4]], out: &mut [f32]) {
+    for (p, o) in color.iter().zip(out.chunks_exact_mut(4)) {
+        let a = p[3].max(p[0]).max(p[1]).max(p[2]).min(1.0);
+        if a > 0.0 {
+            let inv = 1.0 / a;
+            o.copy_from_slice(&[(p[0] * inv).min(1.0), (p[1] * inv).min(1.0), (p[2] * inv).min(1.0), a]);
+        } else {
+            o.copy_from_slice(&[0.0; 4]);
+        }
+    }
+}
+
+/// Rasterizes every list's primitives that touch band `bi` into `band`: opaque ones first
+/// (depth test and write), then blended ones (depth test only where something opaque was drawn).
+fn raster_band(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+    let usable = |l: &&DrawList| l.view.width == view.width && l.view.height == view.height;
+    band.has_opaque = lists.iter().filter(usable).any(|l| !l.bins[0][bi].is_empty());
+    for pass in 0..2 {
+        for list in lists.iter().filter(usable) {
+            for &p in &list.bins[pass][bi] {
+                list.raster_prim(p, band);
+            }
+        }
+    }
+}
+
+fn premultiply(background: [f32; 4]) -> [f32; 4] {
+    let a = background[3].clamp(0.0, 1.0);
+    [background[0] * a, background[1] * a, background[2] * a, a]
+}
+
+/// Rasterizes `lists` (in order) over a `background` (straight RGBA), bands in parallel,
+/// keeping the premultiplied colour and the depth of every pixel.
 pub fn render(view: &View, lists: &[DrawList], background: [f32; 4]) -> Framebuffer {
     let (w, h) = (view.width as usize, view.height as usize);
-    let a = background[3].clamp(0.0, 1.0);
-    let bg = [background[0] * a, background[1] * a, background[2] * a, a];
-    let mut color = vec![bg; w * h];
+    let mut color = vec![premultiply(background); w * h];
     let mut depth = vec![1.0f32; w * h];
     color.par_chunks_mut(w * BAND_ROWS).zip(depth.par_chunks_mut(w * BAND_ROWS)).enumerate().for_each(|(bi, (c, d))| {
         let y0 = bi * BAND_ROWS;
-        let mut band = Band { y1: y0 + c.len() / w, color: c, depth: d, width: w, y0 };
-        for pass in 0..2 {
-            for list in lists {
-                if list.view.width != view.width || list.view.height != view.height {
-                    continue;
-                }
-                for &p in &list.bins[pass][bi] {
-                    list.raster_prim(p, &mut band);
-                }
-            }
-        }
+        let mut band = Band { y1: y0 + c.len() / w, color: c, depth: d, width: w, y0, has_opaque: false };
+        raster_band(lists, view, bi, &mut band);
     });
     Framebuffer { width: view.width, height: view.height, color, depth }
+}
+
+/// [`render`] straight to an RGBA image (as [`Framebuffer::to_image`]), without keeping a
+/// full-frame premultiplied buffer: each band is rasterized into a small per-thread buffer that
+/// stays in cache and is converted as soon as it is done. This is the fast path of the
+/// render nodes.
+pub fn render_image(view: &View, lists: &[DrawList], background: [f32; 4]) -> Image {
+    let w = view.width as usize;
+    let bg = premultiply(background);
+    let mut image = Image::new(view.width, view.height, Channels::Rgba);
+    image.data_mut().par_chunks_mut(w * 4 * BAND_ROWS).enumerate().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(color, depth): &mut (Vec<[f32; 4]>, Vec<f32>), (bi, out)| {
+            let rows = out.len() / (4 * w);
+            color.clear();
+            color.resize(rows * w, bg);
+            depth.clear();
+            depth.resize(rows * w, 1.0);
+            let y0 = bi * BAND_ROWS;
+            let mut band = Band { color, depth, width: w, y0, y1: y0 + rows, has_opaque: false };
+            raster_band(lists, view, bi, &mut band);
+            write_straight(color, out);
+        },
+    );
+    image
 }
 
 #[cfg(test)]
@@ -776,6 +1177,130 @@ mod tests {
         }
         // A 20-gon of radius 1 at distance 5 with a 60° field of view: about π·11.1² pixels.
         assert!((300..420).contains(&covered), "{covered}");
+    }
+
+    /// The same particle drawn through the scanline fast path and as 20 screen-space Gouraud
+    /// triangles (the definition): same pixels, same colours.
+    #[test]
+    fn scanline_particles_match_their_fan_of_triangles() {
+        let view = screen_view(120, 90);
+        let cases = [
+            (Vec3::new(0.0, 0.0, 0.0), Vec2::new(1.0, 0.4), Blend::Additive),
+            (Vec3::new(-2.9, 1.0, 0.5), Vec2::new(0.8, 1.3), Blend::Over),
+            (Vec3::new(3.4, -1.2, -1.0), Vec2::new(1.07, 0.032), Blend::Additive),
+            (Vec3::new(1.0, 1.5, 2.0), Vec2::new(0.05, 0.05), Blend::Additive),
+        ];
+        let (cc, ec) = ([1.0, 0.8, 0.3, 0.9], [0.6, 0.1, 0.0, 0.0]);
+        for (center, half, blend) in cases {
+            let mut fast = DrawList::new(&view);
+            fast.particle(center, half, 20, cc, ec, blend);
+            assert_eq!(fast.fans.len(), 1, "{center} takes the scanline path");
+            let mut slow = DrawList::new(&view);
+            let (r, u) = view.camera().billboard_axes(center);
+            let s = |p: Vec3, c: [f32; 4]| {
+                let q = view.project(p).unwrap();
+                sv(q.x, q.y, q.z, c)
+            };
+            for k in 0..20 {
+                let at = |k: usize| {
+                    let a = std::f32::consts::TAU * (k % 20) as f32 / 20.0;
+                    center + r * (half.x * a.cos()) + u * (half.y * a.sin())
+                };
+                slow.screen_triangle([s(center, cc), s(at(k), ec), s(at(k + 1), ec)], blend);
+            }
+            let (a, b) = (render(&view, &[fast], [0.0; 4]), render(&view, &[slow], [0.0; 4]));
+            let (mut differ, mut lit) = (0, 0);
+            for y in 0..90 {
+                for x in 0..120 {
+                    let (p, q) = (a.premultiplied(x, y), b.premultiplied(x, y));
+                    lit += usize::from(q[3] > 0.0);
+                    if (p[3] > 0.0) != (q[3] > 0.0) {
+                        differ += 1;
+                    } else {
+                        for ch in 0..4 {
+                            assert!((p[ch] - q[ch]).abs() < 2e-3, "{center}: ({x}, {y}) {p:?} vs {q:?}");
+                        }
+                    }
+                }
+            }
+            // Pixel centres exactly on an edge may fall either way.
+            assert!(differ <= 2, "{center}: {differ} of {lit} pixels covered by one and not the other");
+            assert!(lit > 0 || half.y < 0.1, "{center}: draws something");
+        }
+    }
+
+    #[test]
+    fn particles_clipped_by_the_viewport_and_hidden_by_opaque_geometry() {
+        let view = screen_view(64, 64);
+        let c = [1.0, 1.0, 1.0, 1.0];
+        // Half off the left side of the view: still a disc, brightest at the centre.
+        let mut list = DrawList::new(&view);
+        let centre = Vec3::new(-2.9, 0.0, 0.0);
+        list.particle(centre, Vec2::splat(1.0), 20, c, [0.0, 0.0, 0.0, 0.0], Blend::Additive);
+        let fb = render(&view, &[list], [0.0; 4]);
+        let p = view.project(centre).unwrap();
+        let (row, x_in) = (p.y as u32, (p.x.max(0.0) as u32).min(63));
+        assert!(fb.premultiplied(0, row)[0] > 0.3, "{:?}", fb.premultiplied(0, row));
+        assert!(fb.premultiplied(0, row)[0] <= fb.premultiplied(x_in, row)[0] + 1e-6);
+        // Behind an opaque wall nothing shows; in front of it, everything does.
+        for (z, seen) in [(-1.0, false), (1.0, true)] {
+            let mut wall = DrawList::new(&view);
+            let red = [1.0, 0.0, 0.0, 1.0];
+            wall.triangle(
+                [
+                    Vertex::new(Vec3::new(-9.0, -9.0, 0.0), red),
+                    Vertex::new(Vec3::new(9.0, -9.0, 0.0), red),
+                    Vertex::new(Vec3::new(0.0, 9.0, 0.0), red),
+                ],
+                Blend::Opaque,
+            );
+            wall.particle(
+                Vec3::new(0.0, 0.0, z),
+                Vec2::splat(0.5),
+                20,
+                [0.0, 1.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0, 1.0],
+                Blend::Additive,
+            );
+            let fb = render(&view, &[wall], [0.0; 4]);
+            assert_eq!(fb.premultiplied(32, 32)[1] > 0.5, seen, "particle at z = {z}");
+        }
+    }
+
+    #[test]
+    fn render_image_equals_the_framebuffer_converted() {
+        let view = screen_view(50, 37);
+        let mut list = DrawList::new(&view);
+        list.particle(Vec3::ZERO, Vec2::new(1.5, 1.0), 20, [1.0, 0.7, 0.2, 0.8], [0.8, 0.2, 0.0, 0.0], Blend::Additive);
+        let g = [0.2, 0.3, 0.1, 1.0];
+        let verts = [
+            Vertex::new(Vec3::new(-3.0, -1.0, -2.0), g),
+            Vertex::new(Vec3::new(3.0, -1.0, -2.0), g),
+            Vertex::new(Vec3::new(3.0, -1.0, 2.0), g),
+            Vertex::new(Vec3::new(-3.0, -1.0, 2.0), g),
+        ];
+        list.mesh(&verts, &[[0, 1, 2], [0, 2, 3], [0, 9, 2]], None, Blend::Opaque);
+        let lists = [list];
+        let bg = [0.0, 0.0, 0.1, 0.5];
+        assert_eq!(render_image(&view, &lists, bg), render(&view, &lists, bg).to_image());
+    }
+
+    #[test]
+    fn a_mesh_draws_like_its_triangles() {
+        let view = screen_view(40, 40);
+        let (r, g, b) = ([1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]);
+        let v = [
+            Vertex::new(Vec3::new(-2.0, -2.0, 0.0), r),
+            Vertex::new(Vec3::new(2.0, -2.0, 0.0), g),
+            Vertex::new(Vec3::new(2.0, 2.0, 0.0), b),
+            Vertex::new(Vec3::new(-2.0, 2.0, 0.0), g),
+        ];
+        let mut mesh = DrawList::new(&view);
+        mesh.mesh(&v, &[[0, 1, 2], [0, 2, 3]], None, Blend::Over);
+        let mut tris = DrawList::new(&view);
+        tris.triangle([v[0], v[1], v[2]], Blend::Over);
+        tris.triangle([v[0], v[2], v[3]], Blend::Over);
+        assert_eq!(render(&view, &[mesh], [0.0; 4]), render(&view, &[tris], [0.0; 4]));
     }
 
     #[test]

@@ -17,6 +17,7 @@
 
 pub mod render;
 pub mod sim;
+pub mod stencil;
 pub mod textures;
 
 use pyrograph_core::Registry;

@@ -9,7 +9,7 @@ use glam::Vec3;
 use pyrograph_core::{
     ClothState, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
 };
-use pyrograph_render::{Blend, Camera, DrawList, Vertex, View, render};
+use pyrograph_render::{Blend, Camera, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::textures::builtin_textures;
@@ -98,19 +98,25 @@ fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, tex: Option<pyr
     let at = |r: usize, c: usize| pos[r * w + c];
     match (p.mode, tex) {
         (Mode::Textured, Some(t)) => {
-            // uv (0,0) is the texture's top-left: the top row of the cloth.
-            let vert = |r: usize, c: usize| Vertex {
-                position: at(r, c),
-                color: p.tint,
-                uv: [c as f32 / (w - 1) as f32, 1.0 - r as f32 / (h - 1) as f32],
-            };
-            for r in 0..h - 1 {
-                for c in 0..w - 1 {
-                    let (a, b, cc, d) = (vert(r, c), vert(r, c + 1), vert(r + 1, c + 1), vert(r + 1, c));
-                    list.textured_triangle([a, b, cc], t, p.blend);
-                    list.textured_triangle([a, cc, d], t, p.blend);
-                }
-            }
+            // uv (0,0) is the texture's top-left: the top row of the cloth. One indexed mesh, so
+            // each cloth vertex is projected once.
+            let verts: Vec<Vertex> = (0..h)
+                .flat_map(|r| (0..w).map(move |c| (r, c)))
+                .map(|(r, c)| Vertex {
+                    position: at(r, c),
+                    color: p.tint,
+                    uv: [c as f32 / (w - 1) as f32, 1.0 - r as f32 / (h - 1) as f32],
+                })
+                .collect();
+            let idx = |r: usize, c: usize| (r * w + c) as u32;
+            let tris: Vec<[u32; 3]> = (0..h - 1)
+                .flat_map(|r| (0..w - 1).map(move |c| (r, c)))
+                .flat_map(|(r, c)| {
+                    let (a, b, cc, d) = (idx(r, c), idx(r, c + 1), idx(r + 1, c + 1), idx(r + 1, c));
+                    [[a, b, cc], [a, cc, d]]
+                })
+                .collect();
+            list.mesh(&verts, &tris, Some(t), p.blend);
         }
         (Mode::Wireframe, _) => {
             // World size of one pixel at unit distance: 2·tan(fov/2) / height.
@@ -176,7 +182,7 @@ pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: 
             list
         })
         .collect();
-    render(view, &lists, p.background).to_image()
+    render_image(view, &lists, p.background)
 }
 
 fn cloth_render_desc(textured: bool) -> NodeDesc {

@@ -338,7 +338,9 @@ fn cook_frames_to_clip(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, Node
             }
             _ => Err(NodeError::msg("inconsistent frame list")),
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Vec<_>>();
+    // Sequential so the error reported is the first in list order, not whichever thread lost.
+    let frames = frames.into_iter().collect::<Result<Vec<_>, _>>()?;
     Ok(vec![Value::Clip(Clip::from_frames(PortType::Image, fps, frames))])
 }
 

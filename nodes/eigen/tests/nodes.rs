@@ -214,3 +214,36 @@ fn database_nodes_round_trip_and_reject_a_truncated_pack() {
     let e = message(cook("eigen.load_database", &[("path", path)]).unwrap_err());
     assert!(e.contains("port 'path'") && e.contains("pack_002.bin") && e.contains("truncated"), "{e}");
 }
+
+#[test]
+fn end_growing_adaptive_theta_needs_the_basis_and_reports_the_thresholds() {
+    let (basis, weights) = trained();
+    let ports = |mode: &str| -> Vec<(&str, Value)> {
+        vec![
+            ("weights", weights.clone()),
+            ("t1_start", Value::Int(0)),
+            ("t1_end", Value::Int(1)),
+            ("t2_start", Value::Int(9)),
+            ("t2_end", Value::Int(11)),
+            ("exclude", Value::Int(0)),
+            ("theta_mode", Value::Enum(mode.into())),
+        ]
+    };
+    let e = message(cook("eigen.end_growing", &ports("measured")).unwrap_err());
+    assert!(e.contains("port 'basis'") && e.contains("theta_mode measured"), "{e}");
+    let mut bad = ports("per_clip");
+    bad.push(("basis", basis.clone()));
+    bad.push(("theta_per_clip", Value::String("0.01".into())));
+    let e = message(cook("eigen.end_growing", &bad).unwrap_err());
+    assert!(e.contains("port 'theta_per_clip'") && e.contains("clip 2"), "{e}");
+    // Measured with scale 0: both clips get θ_min = 0, the same as the fixed default.
+    let mut measured = ports("measured");
+    measured.push(("basis", basis));
+    measured.push(("theta_scale", Value::Float(0.0)));
+    let out = cook("eigen.end_growing", &measured).unwrap();
+    let fixed = cook("eigen.end_growing", &ports("fixed")).unwrap();
+    let (Value::String(t), Value::String(tf)) = (&out[2], &fixed[2]) else { panic!() };
+    assert_eq!((t.as_str(), tf.as_str()), ("0, 0", "0"));
+    let (Value::FrameList(a), Value::FrameList(b)) = (&out[0], &fixed[0]) else { panic!() };
+    assert_eq!(a.items.len(), b.items.len());
+}

@@ -12,6 +12,7 @@ pub mod reference;
 pub use pyrograph_core as core;
 pub use pyrograph_nodes_cloth as cloth;
 pub use pyrograph_nodes_eigen as eigen;
+pub use pyrograph_nodes_flame_model as flame_model;
 pub use pyrograph_nodes_imaging as imaging;
 pub use pyrograph_nodes_particles as particles;
 
@@ -22,5 +23,6 @@ pub fn registry() -> core::Registry {
     eigen::register(&mut r);
     particles::register(&mut r);
     cloth::register(&mut r);
+    flame_model::register(&mut r);
     r
 }

@@ -436,6 +436,11 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         | Value::Basis(_)
         | Value::Weights(_)
         | Value::FrameList(_)
+        | Value::ParamSeries(_)
+        | Value::ArModel(_)
+        | Value::FlameModel(_)
+        | Value::Mesh(_)
+        | Value::SpreadState(_)
         | Value::Clip(_) => {
             return None;
         }

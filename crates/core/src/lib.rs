@@ -10,6 +10,8 @@ pub mod eval;
 pub mod fingerprint;
 pub mod graph;
 pub mod include;
+pub mod learned;
+pub mod mesh;
 pub mod node;
 pub mod registry;
 pub mod value;
@@ -21,6 +23,7 @@ pub use graph::{BuildOptions, Graph};
 pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
 pub use registry::Registry;
 pub use value::{
-    Basis, Channels, Clip, ClothState, Contour, Contours, FrameItem, FrameList, FrameRef, FrameSource, Image, LargeWind, Mask,
-    Particle, Particles, PortType, Value, Weights, WindField,
+    ArModel, Basis, Channels, CharMark, Clip, ClothState, Contour, Contours, FlameModel, FlameRoot, FrameItem, FrameList,
+    FrameRef, FrameSource, Image, LargeWind, Mask, Mesh, NO_NEIGHBOR, ParamSeries, Particle, Particles, PortType, SpreadState,
+    Value, Weights, WindField,
 };

@@ -364,6 +364,46 @@ impl<'a> Inputs<'a> {
         }
     }
 
+    /// A [`crate::value::ParamSeries`].
+    pub fn param_series(&self, name: &str) -> Result<&'a Arc<crate::value::ParamSeries>, NodeError> {
+        match self.get(name)? {
+            Value::ParamSeries(v) => Ok(v),
+            other => Err(self.wrong(name, "ParamSeries", other)),
+        }
+    }
+
+    /// A [`crate::value::ArModel`].
+    pub fn ar_model(&self, name: &str) -> Result<&'a Arc<crate::value::ArModel>, NodeError> {
+        match self.get(name)? {
+            Value::ArModel(v) => Ok(v),
+            other => Err(self.wrong(name, "ArModel", other)),
+        }
+    }
+
+    /// A [`crate::value::FlameModel`].
+    pub fn flame_model(&self, name: &str) -> Result<&'a Arc<crate::value::FlameModel>, NodeError> {
+        match self.get(name)? {
+            Value::FlameModel(v) => Ok(v),
+            other => Err(self.wrong(name, "FlameModel", other)),
+        }
+    }
+
+    /// A [`crate::value::Mesh`].
+    pub fn mesh(&self, name: &str) -> Result<&'a Arc<crate::value::Mesh>, NodeError> {
+        match self.get(name)? {
+            Value::Mesh(v) => Ok(v),
+            other => Err(self.wrong(name, "Mesh", other)),
+        }
+    }
+
+    /// A [`crate::value::SpreadState`].
+    pub fn spread_state(&self, name: &str) -> Result<&'a Arc<crate::value::SpreadState>, NodeError> {
+        match self.get(name)? {
+            Value::SpreadState(v) => Ok(v),
+            other => Err(self.wrong(name, "SpreadState", other)),
+        }
+    }
+
     /// An Eigenfires basis.
     pub fn basis(&self, name: &str) -> Result<&'a Arc<crate::value::Basis>, NodeError> {
         match self.get(name)? {

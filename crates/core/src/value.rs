@@ -11,6 +11,8 @@ use rayon::prelude::*;
 use crate::error::NodeError;
 use crate::eval::CookCtx;
 use crate::fingerprint::{Fingerprinter, hash_f32s};
+pub use crate::learned::{ArModel, FlameModel, ParamSeries};
+pub use crate::mesh::{CharMark, FlameRoot, Mesh, NO_NEIGHBOR, SpreadState};
 
 /// The closed set of types a port can carry.
 ///
@@ -55,6 +57,16 @@ pub enum PortType {
     Weights,
     /// A sequence of database frames and synthesized weight vectors (thesis §5.1 motion lists).
     FrameList,
+    /// A time series of flame-model parameter vectors x_t (Stich & Magnor §3).
+    ParamSeries,
+    /// A learned auto-regressive process (Stich & Magnor §4).
+    ArModel,
+    /// The generic flame model: parameter sizes and eigenflames (Stich & Magnor §3).
+    FlameModel,
+    /// A triangle mesh with face adjacency (Perry 1994 §3.3.2).
+    Mesh,
+    /// A fire spreading over a mesh at one moment (Perry 1994 §3.3–3.4).
+    SpreadState,
     /// A time-varying sequence of the inner type.
     Clip(Box<PortType>),
 }
@@ -86,6 +98,11 @@ impl PortType {
                 | PortType::Basis
                 | PortType::Weights
                 | PortType::FrameList
+                | PortType::ParamSeries
+                | PortType::ArModel
+                | PortType::FlameModel
+                | PortType::Mesh
+                | PortType::SpreadState
                 | PortType::Clip(_)
         )
     }
@@ -694,6 +711,16 @@ pub enum Value {
     Weights(Arc<Weights>),
     /// See [`PortType::FrameList`].
     FrameList(Arc<FrameList>),
+    /// See [`PortType::ParamSeries`].
+    ParamSeries(Arc<ParamSeries>),
+    /// See [`PortType::ArModel`].
+    ArModel(Arc<ArModel>),
+    /// See [`PortType::FlameModel`].
+    FlameModel(Arc<FlameModel>),
+    /// See [`PortType::Mesh`].
+    Mesh(Arc<Mesh>),
+    /// See [`PortType::SpreadState`].
+    SpreadState(Arc<SpreadState>),
     /// See [`PortType::Clip`].
     Clip(Clip),
 }
@@ -720,6 +747,11 @@ impl Value {
             Value::Basis(_) => PortType::Basis,
             Value::Weights(_) => PortType::Weights,
             Value::FrameList(_) => PortType::FrameList,
+            Value::ParamSeries(_) => PortType::ParamSeries,
+            Value::ArModel(_) => PortType::ArModel,
+            Value::FlameModel(_) => PortType::FlameModel,
+            Value::Mesh(_) => PortType::Mesh,
+            Value::SpreadState(_) => PortType::SpreadState,
             Value::Clip(c) => PortType::clip_of(c.element().clone()),
         }
     }
@@ -798,6 +830,11 @@ impl Value {
                     }
                 }
             }
+            Value::ParamSeries(v) => v.hash_into(h),
+            Value::ArModel(v) => v.hash_into(h),
+            Value::FlameModel(v) => v.hash_into(h),
+            Value::Mesh(v) => v.hash_into(h),
+            Value::SpreadState(v) => v.hash_into(h),
             Value::Clip(c) => c.fingerprint.hash(h),
         }
     }
@@ -815,6 +852,11 @@ impl Value {
             Value::FrameList(l) => {
                 l.items.iter().map(|i| if let FrameItem::Weights(w) = i { w.len() * 4 + 32 } else { 32 }).sum()
             }
+            Value::ParamSeries(v) => v.byte_size(),
+            Value::ArModel(v) => v.byte_size(),
+            Value::FlameModel(v) => v.byte_size(),
+            Value::Mesh(v) => v.byte_size(),
+            Value::SpreadState(v) => v.byte_size(),
             Value::String(s) | Value::Enum(s) => s.len(),
             _ => std::mem::size_of::<Value>(),
         }
@@ -844,6 +886,11 @@ impl Value {
             }
             Value::Weights(w) => format!("Weights {} frames x {} components", w.frames, w.components),
             Value::FrameList(l) => format!("FrameList {} frames", l.items.len()),
+            Value::ParamSeries(v) => v.summary(),
+            Value::ArModel(v) => v.summary(),
+            Value::FlameModel(v) => v.summary(),
+            Value::Mesh(v) => v.summary(),
+            Value::SpreadState(v) => v.summary(),
             Value::Clip(c) => format!("Clip<{}> {} frames @ {} fps", c.element(), c.len(), c.fps()),
         }
     }

@@ -319,6 +319,8 @@ pub fn type_color(ty: &PortType) -> Color32 {
         PortType::WindField => Color32::from_rgb(120, 160, 250),
         PortType::Particles => Color32::from_rgb(245, 110, 180),
         PortType::Basis | PortType::Weights | PortType::FrameList => Color32::from_rgb(200, 180, 140),
+        PortType::ParamSeries | PortType::ArModel | PortType::FlameModel => Color32::from_rgb(230, 150, 200),
+        PortType::Mesh | PortType::SpreadState => Color32::from_rgb(150, 200, 150),
         PortType::Clip(inner) => type_color(inner),
         #[allow(unreachable_patterns)]
         _ => Color32::GRAY,

@@ -5,8 +5,12 @@
 //! [`wind::WindSampler`], [`render::flame_lights`]); the node wrappers only read ports.
 #![deny(missing_docs)]
 
+pub mod char;
+pub mod fire;
 pub mod flame;
+pub mod mesh;
 pub mod render;
+pub mod spread;
 pub mod wind;
 
 use pyrograph_core::Registry;
@@ -16,6 +20,10 @@ pub fn register(registry: &mut Registry) {
     wind::register(registry);
     flame::register(registry);
     render::register(registry);
+    mesh::register(registry);
+    spread::register(registry);
+    char::register(registry);
+    fire::register(registry);
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use noise::{NoiseFn, Perlin};
 use pyrograph_core::{
     CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, TimeDep, Value,
 };
-use pyrograph_render::{Blend, DrawList, Vertex, View, render};
+use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 /// Adds `particles.render_flames` and `particles.flame_lights`.
@@ -64,14 +64,16 @@ fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Part
         let lit = albedo * (light_at(p, lights) + Vec3::splat(ground.ambient));
         Vertex::new(p, [lit.x, lit.y, lit.z, 1.0])
     };
-    let grid: Vec<Vec<Vertex>> = (0..=n).map(|i| (0..=n).map(|j| vertex(i, j)).collect()).collect();
-    for i in 0..n {
-        for j in 0..n {
-            let (a, b, c, d) = (grid[i][j], grid[i + 1][j], grid[i + 1][j + 1], grid[i][j + 1]);
-            list.triangle([a, b, c], Blend::Opaque);
-            list.triangle([a, c, d], Blend::Opaque);
-        }
-    }
+    let verts: Vec<Vertex> = (0..=n).flat_map(|i| (0..=n).map(move |j| (i, j))).map(|(i, j)| vertex(i, j)).collect();
+    let at = |i: usize, j: usize| (i * (n + 1) + j) as u32;
+    let tris: Vec<[u32; 3]> = (0..n)
+        .flat_map(|i| (0..n).map(move |j| (i, j)))
+        .flat_map(|(i, j)| {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            [[a, b, c], [a, c, d]]
+        })
+        .collect();
+    list.mesh(&verts, &tris, None, Blend::Opaque);
 }
 
 /// Renders `particles` as camera-facing fuzzy N-gons (Perry 1994 §3.2.1) over `background`
@@ -103,7 +105,7 @@ pub fn render_particles(
         draw_ground(&mut list, g, view.camera().target(), lights);
         lists.push(list);
     }
-    render(view, &lists, background).to_image()
+    render_image(view, &lists, background)
 }
 
 fn empty_particles() -> Value {

@@ -1,0 +1,378 @@
+//! The auto-regressive process of Stich & Magnor §4: learning it from a parameter series by EM
+//! (§4, §4.1, initialization §4.2), sampling new controllable parameter series from it (§4.3,
+//! §5.1), and the node types `flame_model.arp_learn` and `flame_model.arp_sample`.
+
+pub mod em;
+pub mod rng;
+pub mod sampler;
+
+use std::sync::Arc;
+
+use faer::Mat;
+use pyrograph_core::{
+    ArModel, CookCtx, FnNode, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc, PortType, Registry, TimeDep, Value,
+};
+
+pub use sampler::{ArSampler, BendShape, Controls, Ramp, sample};
+
+use em::Lambda;
+
+/// Adds `flame_model.arp_learn` and `flame_model.arp_sample`.
+pub fn register(registry: &mut Registry) {
+    registry.add(FnNode::new(learn_desc(), cook_learn));
+    registry.add(FnNode::new(sampler::sample_desc(), sampler::cook_sample));
+}
+
+/// How the E-step computes the expected statistics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EStep {
+    /// Exact Kalman filter + Rauch–Tung–Striebel smoother on the stacked state.
+    Kalman,
+    /// The paper's condensation (particle) approximation (§4.1) with this many particles N_c.
+    Condensation {
+        /// N_c.
+        particles: usize,
+        /// Seed of the particle filter (each iteration uses seed + iteration).
+        seed: u64,
+    },
+}
+
+/// Settings of [`learn`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LearnOptions {
+    /// Order K of the process.
+    pub order: usize,
+    /// E-steps at most (each is one evaluation of the likelihood).
+    pub max_iterations: usize,
+    /// Stop after this many consecutive iterations without an increase of the likelihood (§5: 3).
+    pub patience: usize,
+    /// An iteration counts as an increase only if it gains more than `tolerance · max(1, |ℓ|)`.
+    pub tolerance: f64,
+    /// The E-step.
+    pub e_step: EStep,
+    /// Initial observation-noise variance in the unit-variance space (§4.2: small, the
+    /// observations are first taken as almost exact).
+    pub initial_observation_noise: f64,
+    /// Lower bound of the observation-noise variances in the unit-variance space.
+    pub min_observation_noise: f64,
+}
+
+impl Default for LearnOptions {
+    fn default() -> Self {
+        LearnOptions {
+            order: 2,
+            max_iterations: 200,
+            patience: 3,
+            tolerance: 1e-7,
+            e_step: EStep::Kalman,
+            initial_observation_noise: 0.01,
+            min_observation_noise: 1e-6,
+        }
+    }
+}
+
+/// Minimum number of frames to learn an order-`order` process over `dim` parameters: each row of
+/// [A_1 … A_K d] has K·D + 1 unknowns and needs as many transitions.
+pub fn min_frames(dim: usize, order: usize) -> usize {
+    order * dim + order + 1
+}
+
+/// Checks a training series: at least [`min_frames`] rows, every value finite, no parameter of
+/// zero variance. Errors name the port `params` and the parameter (and frame).
+pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), NodeError> {
+    let dim = series.dim();
+    if dim == 0 {
+        return Err(NodeError::port("params", "the parameter series has no columns"));
+    }
+    if series.data.len() != series.frames * dim {
+        return Err(NodeError::port(
+            "params",
+            format!("the series holds {} values, not frames × parameters = {} × {dim}", series.data.len(), series.frames),
+        ));
+    }
+    if order == 0 {
+        return Err(NodeError::port("order", "the order K must be at least 1"));
+    }
+    let need = min_frames(dim, order);
+    if series.frames < need {
+        return Err(NodeError::port(
+            "params",
+            format!(
+                "too few frames for K = {order}: {} frames of {dim} parameters, an order-{order} process needs at least \
+                 K·D + K + 1 = {need}",
+                series.frames
+            ),
+        ));
+    }
+    if let Some(k) = series.data.iter().position(|v| !v.is_finite()) {
+        return Err(NodeError::port(
+            "params",
+            format!("parameter '{}' is {} at frame {}", series.names[k % dim], series.data[k], k / dim),
+        ));
+    }
+    let (mean, sd) = column_moments(series);
+    for i in 0..dim {
+        if sd[i] <= 1e-12 * mean[i].abs().max(1e-300) || sd[i] == 0.0 {
+            return Err(NodeError::port(
+                "params",
+                format!(
+                    "parameter '{}' does not vary (constant {}); a zero-variance parameter cannot be scaled to unit variance \
+                     (§4.2) — drop it from the series",
+                    series.names[i], mean[i]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Mean and (population) standard deviation of every column.
+pub fn column_moments(series: &ParamSeries) -> (Vec<f64>, Vec<f64>) {
+    let (dim, t) = (series.dim(), series.frames.max(1) as f64);
+    let mut mean = vec![0.0; dim];
+    for row in series.data.chunks_exact(dim) {
+        mean.iter_mut().zip(row).for_each(|(m, v)| *m += v / t);
+    }
+    let mut var = vec![0.0; dim];
+    for row in series.data.chunks_exact(dim) {
+        for i in 0..dim {
+            var[i] += (row[i] - mean[i]).powi(2) / t;
+        }
+    }
+    (mean, var.into_iter().map(f64::sqrt).collect())
+}
+
+/// Learns the ARP of eq. 2 from `series` by EM (§4–4.2).
+///
+/// The data are scaled to zero mean and unit variance, λ_0 is the §4.2 heuristic, and EM runs
+/// until the likelihood has not increased for `patience` consecutive iterations (or
+/// `max_iterations`). The returned model is the one of the best likelihood (with the exact
+/// E-step that is the last one: EM never decreases it); its `log_likelihood` lists the
+/// likelihood of the original (unscaled) data at every iteration. A fit whose companion matrix
+/// has spectral radius ≥ 1 is an error: its samples would diverge.
+pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result<ArModel, NodeError> {
+    validate_series(series, opts.order)?;
+    let (dim, frames, k) = (series.dim(), series.frames, opts.order);
+    let (offset, scale) = column_moments(series);
+    let mut y = series.data.clone();
+    for row in y.chunks_exact_mut(dim) {
+        for i in 0..dim {
+            row[i] = (row[i] - offset[i]) / scale[i];
+        }
+    }
+    // log p(x) = log p(y) − T Σ ln σ_i (change of variables back to the original units).
+    let jacobian = -(frames as f64) * scale.iter().map(|s| s.ln()).sum::<f64>();
+    let mut lam = em::initial_lambda(&y, frames, dim, k, opts.initial_observation_noise);
+    let mut history = Vec::new();
+    let mut best: Option<(f64, Lambda)> = None;
+    let mut stall = 0;
+    for it in 0..opts.max_iterations.max(1) {
+        ctx.check_cancel()?;
+        let stats = match opts.e_step {
+            EStep::Kalman => em::kalman_estep(&y, frames, &lam),
+            EStep::Condensation { particles, seed } => {
+                em::condensation_estep(&y, frames, &lam, particles, seed.wrapping_add(it as u64))
+            }
+        }
+        .map_err(|m| NodeError::msg(format!("EM iteration {}: {m}", it + 1)))?;
+        let ll = stats.log_likelihood + jacobian;
+        history.push(ll);
+        ctx.frame_progress(it + 1, opts.max_iterations);
+        match &best {
+            Some((b, _)) if ll <= b + opts.tolerance * b.abs().max(1.0) => {
+                stall += 1;
+                if ll > *b {
+                    best = Some((ll, lam.clone()));
+                }
+            }
+            _ => {
+                stall = 0;
+                best = Some((ll, lam.clone()));
+            }
+        }
+        if stall >= opts.patience.max(1) || it + 1 >= opts.max_iterations {
+            break;
+        }
+        lam = em::m_step(&stats, &lam, opts.min_observation_noise)
+            .map_err(|m| NodeError::msg(format!("EM iteration {}: {m}", it + 1)))?;
+    }
+    let Some((_, lam)) = best else {
+        return Err(NodeError::msg("EM ran no iteration"));
+    };
+    let model = to_model(series, &lam, offset, scale, history)?;
+    let rho = spectral_radius(&model)?;
+    if rho >= 1.0 {
+        return Err(NodeError::msg(format!(
+            "the learned process is unstable: the spectral radius of its companion matrix is {rho:.4} ≥ 1, so samples would \
+             diverge; use more frames, fewer parameters or a lower order K"
+        )));
+    }
+    Ok(model)
+}
+
+fn to_model(
+    series: &ParamSeries,
+    lam: &Lambda,
+    offset: Vec<f64>,
+    scale: Vec<f64>,
+    history: Vec<f64>,
+) -> Result<ArModel, NodeError> {
+    let (dim, k) = (lam.dim, lam.order);
+    let mut a = Vec::with_capacity(k * dim * dim);
+    for blk in 0..k {
+        for i in 0..dim {
+            for j in 0..dim {
+                a.push(lam.a[(i, blk * dim + j)]);
+            }
+        }
+    }
+    let b = cholesky_lower(&lam.q)?;
+    let initial = series.data[(series.frames - k) * dim..].to_vec();
+    Ok(ArModel {
+        names: series.names.clone(),
+        order: k,
+        a,
+        d: lam.d.clone(),
+        b,
+        observation_noise: lam.r.clone(),
+        offset,
+        scale,
+        initial,
+        log_likelihood: history,
+        fps: series.fps,
+    })
+}
+
+/// B with B Bᵀ = Q (lower Cholesky factor, row-major); a tiny jitter is added if Q is only
+/// semi-definite.
+fn cholesky_lower(q: &Mat<f64>) -> Result<Vec<f64>, NodeError> {
+    let dim = q.nrows();
+    let mut jitter = 0.0;
+    for _ in 0..8 {
+        let mut m = q.clone();
+        for i in 0..dim {
+            m[(i, i)] += jitter;
+        }
+        if let Ok(llt) = m.llt(faer::Side::Lower) {
+            let l = llt.L();
+            return Ok((0..dim * dim).map(|k| if k % dim <= k / dim { l[(k / dim, k % dim)] } else { 0.0 }).collect());
+        }
+        jitter = if jitter == 0.0 { 1e-12 } else { jitter * 100.0 };
+    }
+    Err(NodeError::msg("the learned noise covariance B Bᵀ is not positive semi-definite"))
+}
+
+/// Checks the shapes and numbers of an [`ArModel`]; errors name the port `model`.
+pub fn validate_model(m: &ArModel) -> Result<(), NodeError> {
+    let (dim, k) = (m.dim(), m.order);
+    let bad = |what: &str| Err(NodeError::port("model", format!("malformed ARP: {what}")));
+    if dim == 0 || k == 0 {
+        return bad("no parameters or order 0");
+    }
+    if m.a.len() != k * dim * dim {
+        return bad("A has the wrong size");
+    }
+    if m.d.len() != dim || m.b.len() != dim * dim || m.offset.len() != dim || m.scale.len() != dim {
+        return bad("d, B, offset or scale has the wrong size");
+    }
+    if m.initial.len() != k * dim {
+        return bad("the initial state is not K rows");
+    }
+    let all = m.a.iter().chain(&m.d).chain(&m.b).chain(&m.offset).chain(&m.scale).chain(&m.initial);
+    if all.clone().any(|v| !v.is_finite()) {
+        return bad("it holds a NaN or infinite number");
+    }
+    Ok(())
+}
+
+/// Spectral radius of the companion matrix [[A_1 … A_K], [I 0]]: the process is stable (its
+/// samples stay bounded in distribution) iff this is < 1.
+pub fn spectral_radius(m: &ArModel) -> Result<f64, NodeError> {
+    validate_model(m)?;
+    let (dim, k) = (m.dim(), m.order);
+    let n = dim * k;
+    let f = Mat::<f64>::from_fn(n, n, |i, j| {
+        if i < dim {
+            let (blk, jj) = (j / dim, j % dim);
+            m.a[blk * dim * dim + i * dim + jj]
+        } else if j + dim == i {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let ev = f.eigenvalues().map_err(|e| NodeError::msg(format!("eigenvalues of the companion matrix: {e:?}")))?;
+    Ok(ev.iter().map(|c| c.re.hypot(c.im)).fold(0.0, f64::max))
+}
+
+fn learn_desc() -> NodeDesc {
+    NodeDesc::new(
+        "flame_model.arp_learn",
+        "Flame model",
+        TimeDep::WholeClip,
+        "Learns the auto-regressive process x_t = Σ_k A_k x_{t−k} + d + B w_t of a parameter series by EM (Stich & Magnor §4, §4.1).\n\n\
+         The state is observed through noise; the E-step is an exact Kalman smoother on the stacked state (K·D) or the \
+         paper's condensation with N_c particles. λ_0 follows §4.2: diagonal A_k from each parameter's own AR fit, d = 0, \
+         B = diag(standard deviations), the data scaled to unit variance and the result rescaled. EM stops when the \
+         likelihood has not increased for 3 consecutive iterations (§5). An unstable fit (companion spectral radius ≥ 1) \
+         is an error.",
+    )
+    .input(PortDesc::new("params", PortType::ParamSeries, "Training parameter series x_t (e.g. flame_model.fit's params)."))
+    .input(PortDesc::int("order", 2, (1, 16), "Order K of the process (§5: 2)."))
+    .input(PortDesc::choice(
+        "e_step",
+        &["kalman", "condensation"],
+        "kalman",
+        "E-step: exact Kalman smoother, or the paper's condensation particle filter (§4.1).",
+    ))
+    .input(PortDesc::int("particles", 200, (10, 100_000), "Particles N_c of the condensation E-step (§4.1: 50–300; §5: 200)."))
+    .input(PortDesc::int("max_iterations", 200, (1, 100_000), "Most EM iterations."))
+    .input(PortDesc::int("patience", 3, (1, 1000), "Stop after this many iterations without a likelihood increase (§5: 3)."))
+    .input(PortDesc::float(
+        "tolerance",
+        1e-7,
+        (0.0, 1.0),
+        "Relative likelihood gain below which an iteration does not count as an increase.",
+    ))
+    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the condensation particle filter."))
+    .output("model", PortType::ArModel, "The learned process λ = {A, d, B} with scaling and initial state.")
+    .output(
+        "log_likelihood",
+        PortType::ParamSeries,
+        "Log-likelihood of the training data after each EM iteration (one column; plot it with flame_model.param_plot).",
+    )
+    .output("spectral_radius", PortType::Float, "Spectral radius of the learned companion matrix (< 1: stable).")
+}
+
+fn cook_learn(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let series = i.param_series("params")?;
+    let e_step = match i.choice("e_step")? {
+        "kalman" => EStep::Kalman,
+        "condensation" => EStep::Condensation { particles: i.usize("particles")?, seed: i.int("seed")? as u64 },
+        other => return Err(NodeError::port("e_step", format!("unknown option '{other}'"))),
+    };
+    let tolerance = i.float("tolerance")?;
+    if !tolerance.is_finite() || tolerance < 0.0 {
+        return Err(NodeError::port("tolerance", format!("must be a finite number ≥ 0, got {tolerance}")));
+    }
+    let opts = LearnOptions {
+        order: i.usize("order")?,
+        max_iterations: i.usize("max_iterations")?,
+        patience: i.usize("patience")?,
+        tolerance,
+        e_step,
+        ..LearnOptions::default()
+    };
+    let model = learn(series, &opts, ctx)?;
+    let rho = spectral_radius(&model)?;
+    let ll = ParamSeries {
+        names: vec!["log_likelihood".into()],
+        frames: model.log_likelihood.len(),
+        data: model.log_likelihood.clone(),
+        fps: 1.0,
+    };
+    Ok(vec![Value::ArModel(Arc::new(model)), Value::ParamSeries(Arc::new(ll)), Value::Float(rho)])
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,311 @@
+//! Sampling a learned ARP (Stich & Magnor §4.3): eq. 2 evaluated repeatedly, then rescaled, with
+//! the §5.1 controls (an offset on the path parameters bends the flame, as wind does; height,
+//! width and overall scale) applied per frame.
+
+use std::sync::Arc;
+
+use pyrograph_core::{ArModel, CookCtx, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc, PortType, TimeDep, Value};
+
+use super::rng::Rng;
+use super::spectral_radius;
+
+/// Steps eq. 2 with flat, preallocated arrays: one step is a `D × K·D` mat-vec, a triangular
+/// `D × D` mat-vec and D normal deviates, with no allocation.
+pub struct ArSampler {
+    dim: usize,
+    n: usize,
+    /// [A_1 … A_K] row-major `D × K·D` (row i: A_1 row i, A_2 row i, …).
+    a: Vec<f64>,
+    d: Vec<f64>,
+    /// B row-major; `b_len[i]` is the number of leading entries of row i that can be non-zero.
+    b: Vec<f64>,
+    b_len: Vec<usize>,
+    /// Scaled history z = (x_{t−1}, …, x_{t−K}).
+    z: Vec<f64>,
+    w: Vec<f64>,
+    x: Vec<f64>,
+    offset: Vec<f64>,
+    scale: Vec<f64>,
+    rng: Rng,
+}
+
+impl ArSampler {
+    /// A sampler starting from the model's initial state (the last K training rows), seeded by
+    /// `seed`. Unstable or malformed models are errors naming the port `model`.
+    pub fn new(model: &ArModel, seed: u64) -> Result<Self, NodeError> {
+        let rho = spectral_radius(model)?;
+        if rho >= 1.0 {
+            return Err(NodeError::port(
+                "model",
+                format!("the process is unstable (companion spectral radius {rho:.4} ≥ 1); its samples would diverge"),
+            ));
+        }
+        let (dim, k) = (model.dim(), model.order);
+        let n = dim * k;
+        let mut a = vec![0.0; dim * n];
+        for blk in 0..k {
+            for i in 0..dim {
+                for j in 0..dim {
+                    a[i * n + blk * dim + j] = model.a[blk * dim * dim + i * dim + j];
+                }
+            }
+        }
+        let b_len = (0..dim).map(|i| (0..dim).rev().find(|&j| model.b[i * dim + j] != 0.0).map_or(0, |j| j + 1)).collect();
+        let mut s = ArSampler {
+            dim,
+            n,
+            a,
+            d: model.d.clone(),
+            b: model.b.clone(),
+            b_len,
+            z: vec![0.0; n],
+            w: vec![0.0; dim],
+            x: vec![0.0; dim],
+            offset: model.offset.clone(),
+            scale: model.scale.clone(),
+            rng: Rng::new(seed),
+        };
+        s.set_history(&model.initial)?;
+        Ok(s)
+    }
+
+    /// Restarts from K unscaled rows (oldest first, `K × D` values).
+    pub fn set_history(&mut self, rows: &[f64]) -> Result<(), NodeError> {
+        let (dim, k) = (self.dim, self.n / self.dim);
+        if rows.len() != self.n || rows.iter().any(|v| !v.is_finite()) {
+            return Err(NodeError::port("model", format!("the initial state must be {k} finite rows of {dim} parameters")));
+        }
+        for lag in 0..k {
+            let row = &rows[(k - 1 - lag) * dim..(k - lag) * dim];
+            let block = &mut self.z[lag * dim..(lag + 1) * dim];
+            for (i, (z, r)) in block.iter_mut().zip(row).enumerate() {
+                *z = (r - self.offset[i]) / self.scale[i];
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of parameters D.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// One step of eq. 2 in the scaled space; returns the new scaled x_t.
+    #[inline]
+    pub fn step_scaled(&mut self) -> &[f64] {
+        let (dim, n) = (self.dim, self.n);
+        self.rng.fill_normal(&mut self.w);
+        for i in 0..dim {
+            let row = &self.a[i * n..(i + 1) * n];
+            let mut s = self.d[i];
+            for (aij, zj) in row.iter().zip(&self.z) {
+                s += aij * zj;
+            }
+            let brow = &self.b[i * dim..i * dim + self.b_len[i]];
+            for (bij, wj) in brow.iter().zip(&self.w) {
+                s += bij * wj;
+            }
+            self.x[i] = s;
+        }
+        self.z.copy_within(0..n - dim, dim);
+        self.z[..dim].copy_from_slice(&self.x);
+        &self.x
+    }
+
+    /// One step of eq. 2, written to `out` in the original units (`D` values).
+    #[inline]
+    pub fn step(&mut self, out: &mut [f64]) {
+        self.step_scaled();
+        for (((o, x), m), s) in out.iter_mut().zip(&self.x).zip(&self.offset).zip(&self.scale) {
+            *o = m + s * x;
+        }
+    }
+}
+
+/// A control value that moves linearly from `start` (first frame) to `end` (last frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ramp {
+    /// Value at the first frame.
+    pub start: f64,
+    /// Value at the last frame.
+    pub end: f64,
+}
+
+impl Ramp {
+    /// The same value on every frame.
+    pub fn constant(v: f64) -> Self {
+        Ramp { start: v, end: v }
+    }
+
+    /// The value at frame `f` of `frames`.
+    pub fn at(&self, f: usize, frames: usize) -> f64 {
+        if frames <= 1 { self.start } else { self.start + (self.end - self.start) * f as f64 / (frames - 1) as f64 }
+    }
+}
+
+/// How the bend offset is spread over the path samples path_0 … path_{N_p−1} (path_0 at the base).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BendShape {
+    /// The same offset on every path sample (§5.1 taken literally: the flame shifts sideways).
+    Uniform,
+    /// Offset growing linearly with height: the flame leans.
+    Linear,
+    /// Offset growing with the square of height: the flame bends like a plume in a cross wind.
+    Quadratic,
+}
+
+impl BendShape {
+    fn weight(self, j: usize, count: usize) -> f64 {
+        let h = if count <= 1 { 1.0 } else { j as f64 / (count - 1) as f64 };
+        match self {
+            BendShape::Uniform => 1.0,
+            BendShape::Linear => h,
+            BendShape::Quadratic => h * h,
+        }
+    }
+}
+
+/// The §5.1 controls, each a per-frame ramp: `bend` is added to the path parameters, `height`
+/// multiplies the height, `width` the width parameters and `scale` all three (path, width and
+/// height: the whole flame grows about its base).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Controls {
+    /// Offset on the path parameters.
+    pub bend: Ramp,
+    /// How the offset spreads over height.
+    pub bend_shape: BendShape,
+    /// Height factor.
+    pub height: Ramp,
+    /// Width factor.
+    pub width: Ramp,
+    /// Overall scale factor.
+    pub scale: Ramp,
+}
+
+impl Default for Controls {
+    fn default() -> Self {
+        Controls {
+            bend: Ramp::constant(0.0),
+            bend_shape: BendShape::Quadratic,
+            height: Ramp::constant(1.0),
+            width: Ramp::constant(1.0),
+            scale: Ramp::constant(1.0),
+        }
+    }
+}
+
+/// Which column plays which role, from the names `path_*`, `width_*` and `height`.
+struct Roles {
+    path: Vec<usize>,
+    width: Vec<usize>,
+    height: Option<usize>,
+}
+
+fn roles(names: &[String]) -> Roles {
+    let index = |prefix: &str| -> Vec<usize> {
+        let mut v: Vec<(usize, usize)> = names
+            .iter()
+            .enumerate()
+            .filter_map(|(c, n)| n.strip_prefix(prefix).and_then(|s| s.parse::<usize>().ok()).map(|j| (j, c)))
+            .collect();
+        v.sort_unstable();
+        v.into_iter().map(|(_, c)| c).collect()
+    };
+    Roles { path: index("path_"), width: index("width_"), height: names.iter().position(|n| n == "height") }
+}
+
+/// Samples `frames` rows from `model` (§4.3) after discarding `warmup` steps, starting from the
+/// model's initial state, with the §5.1 `controls`. The output has the training series' columns.
+pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls: &Controls) -> Result<ParamSeries, NodeError> {
+    let mut s = ArSampler::new(model, seed)?;
+    let dim = s.dim();
+    let mut data = vec![0.0; frames * dim];
+    let mut scratch = vec![0.0; dim];
+    for _ in 0..warmup {
+        s.step(&mut scratch);
+    }
+    let r = roles(&model.names);
+    let bend_w: Vec<f64> = (0..r.path.len()).map(|j| controls.bend_shape.weight(j, r.path.len())).collect();
+    for (f, row) in data.chunks_exact_mut(dim).enumerate() {
+        s.step(row);
+        let (bend, hf, wf, sf) = (
+            controls.bend.at(f, frames),
+            controls.height.at(f, frames),
+            controls.width.at(f, frames),
+            controls.scale.at(f, frames),
+        );
+        for (j, &c) in r.path.iter().enumerate() {
+            row[c] = (row[c] + bend * bend_w[j]) * sf;
+        }
+        for &c in &r.width {
+            row[c] *= wf * sf;
+        }
+        if let Some(c) = r.height {
+            row[c] *= hf * sf;
+        }
+    }
+    Ok(ParamSeries { names: model.names.clone(), frames, data, fps: model.fps })
+}
+
+pub(super) fn sample_desc() -> NodeDesc {
+    let ramp_doc = |what: &str| format!("{what} on the last frame when `ramp` is on (linear in between).");
+    NodeDesc::new(
+        "flame_model.arp_sample",
+        "Flame model",
+        TimeDep::Simulation,
+        "Synthesizes a new parameter series of any length by evaluating the learned ARP repeatedly (Stich & Magnor §4.3), with the §5.1 controls.\n\n\
+         Starts from the last K training rows, deterministic for a seed. An offset on the path parameters bends the flame \
+         (wind); height, width and scale multiply the height, the width parameters and the whole flame. With `ramp` on, \
+         every control moves linearly from its value on the first frame to its `_end` value on the last.",
+    )
+    .input(PortDesc::new("model", PortType::ArModel, "The learned process (flame_model.arp_learn)."))
+    .input(PortDesc::int("frames", 400, (1, 100_000_000), "Number of frames to synthesize."))
+    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the process noise w_t."))
+    .input(PortDesc::int("warmup", 0, (0, 1_000_000), "Steps run and discarded before the first output frame."))
+    .input(PortDesc::float("bend", 0.0, (-1.0e6, 1.0e6), "Offset added to the path parameters (§5.1: a bent flame, e.g. wind)."))
+    .input(PortDesc::choice(
+        "bend_shape",
+        &["uniform", "linear", "quadratic"],
+        "quadratic",
+        "How the bend offset grows from path_0 (base) to the last path sample: same everywhere, linearly or quadratically.",
+    ))
+    .input(PortDesc::float("height", 1.0, (0.0, 100.0), "Factor on the flame height (§5.1)."))
+    .input(PortDesc::float("width", 1.0, (0.0, 100.0), "Factor on the width parameters (§5.1)."))
+    .input(PortDesc::float("scale", 1.0, (0.0, 100.0), "Factor on the whole flame: path, width and height (§5.1)."))
+    .input(PortDesc::bool("ramp", false, "Ramp every control linearly from its value to its `_end` value over the frames."))
+    .input(PortDesc::float("bend_end", 0.0, (-1.0e6, 1.0e6), &ramp_doc("Bend offset")))
+    .input(PortDesc::float("height_end", 1.0, (0.0, 100.0), &ramp_doc("Height factor")))
+    .input(PortDesc::float("width_end", 1.0, (0.0, 100.0), &ramp_doc("Width factor")))
+    .input(PortDesc::float("scale_end", 1.0, (0.0, 100.0), &ramp_doc("Scale factor")))
+    .output("params", PortType::ParamSeries, "The synthesized series, in the training series' columns.")
+}
+
+fn finite(i: &Inputs<'_>, name: &str) -> Result<f64, NodeError> {
+    let v = i.float(name)?;
+    if v.is_finite() { Ok(v) } else { Err(NodeError::port(name, format!("must be finite, got {v}"))) }
+}
+
+/// The [`Controls`] described by the node's inputs; errors name the port.
+pub fn controls_from_inputs(i: &Inputs<'_>) -> Result<Controls, NodeError> {
+    let ramp = i.bool("ramp")?;
+    let pair = |name: &str| -> Result<Ramp, NodeError> {
+        let start = finite(i, name)?;
+        let end = if ramp { finite(i, &format!("{name}_end"))? } else { start };
+        Ok(Ramp { start, end })
+    };
+    let bend_shape = match i.choice("bend_shape")? {
+        "uniform" => BendShape::Uniform,
+        "linear" => BendShape::Linear,
+        "quadratic" => BendShape::Quadratic,
+        other => return Err(NodeError::port("bend_shape", format!("unknown option '{other}'"))),
+    };
+    Ok(Controls { bend: pair("bend")?, bend_shape, height: pair("height")?, width: pair("width")?, scale: pair("scale")? })
+}
+
+pub(super) fn cook_sample(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let model = i.ar_model("model")?;
+    let controls = controls_from_inputs(i)?;
+    ctx.check_cancel()?;
+    let out = sample(model, i.usize("frames")?, i.usize("warmup")?, i.int("seed")? as u64, &controls)?;
+    Ok(vec![Value::ParamSeries(Arc::new(out))])
+}

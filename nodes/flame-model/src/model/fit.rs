@@ -1,0 +1,437 @@
+//! Fitting the generic flame model to gray flame frames (Stich & Magnor §3, §3.1, §3.2).
+//!
+//! Per frame: threshold, keep the single plume (frames with two or more disjoint plumes are
+//! skipped, §5), geometric moments up to order 3 (eq. 1) give the centroid, the main axes and the
+//! flame height (from the second-order moment along the main axis). Over the clip the main axes
+//! fix one normalization frame (a base anchor and an axis direction), so every frame is measured
+//! in the same coordinates. The flame is cut into N_s height slices; each slice's own moments
+//! across the axis give its centre (path) and spread (width), which are sampled at N_p and N_w
+//! equidistant heights. Each frame is then normalized: slices centred and scaled by the cubic
+//! splines through those samples (exactly the inverse of the renderer's deformation), the height
+//! scaled to 1, and the intensity scaled to the clip's average. PCA of the normalized images
+//! (the Eigenfires code) gives the eigenflames and the N_e appearance weights (§3.2).
+
+use pyrograph_core::{FlameModel, FrameRef, ParamSeries};
+use pyrograph_nodes_eigen::pca;
+use rayon::prelude::*;
+
+use super::shape::{Moments, Spline, plumes, slice_value};
+
+/// Settings of the fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitSettings {
+    /// Path samples N_p.
+    pub path_samples: usize,
+    /// Width samples N_w.
+    pub width_samples: usize,
+    /// Eigenflames N_e (fewer when the frames do not have that many independent variations).
+    pub eigenflames: usize,
+    /// Height slices N_s measured per frame.
+    pub slices: usize,
+    /// Normalized image size (width, height).
+    pub norm_size: (u32, u32),
+    /// Gray values at or below this are background.
+    pub threshold: f32,
+    /// Plumes holding less than this fraction of a frame's intensity are specks and removed;
+    /// two or more larger ones make the frame a multi-plume frame (skipped).
+    pub min_plume: f64,
+    /// Flame height = this × σ along the main axis (a uniform ellipse is 4σ long).
+    pub height_sigmas: f64,
+    /// The flame base lies this many σ below the centroid along the main axis.
+    pub base_sigmas: f64,
+    /// The normalized image spans u ∈ −u_extent..u_extent local widths (σ of the slice).
+    pub u_extent: f64,
+    /// Heights covered by the normalized image: from −v_below to 1 + v_above flame heights.
+    pub v_below: f64,
+    /// See `v_below`.
+    pub v_above: f64,
+    /// Scale each normalized image to the clip's average intensity (§3.1).
+    pub normalize_intensity: bool,
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        FitSettings {
+            path_samples: 10,
+            width_samples: 10,
+            eigenflames: 5,
+            slices: 20,
+            norm_size: (64, 128),
+            threshold: 0.08,
+            min_plume: 0.05,
+            height_sigmas: 6.0,
+            base_sigmas: 3.6,
+            u_extent: 3.0,
+            v_below: 0.12,
+            v_above: 0.2,
+            normalize_intensity: true,
+        }
+    }
+}
+
+/// One frame's single flame: the cleaned gray values inside its bounding box, and its moments.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plume {
+    /// Left column of the box in the frame.
+    pub x0: usize,
+    /// Top row of the box in the frame.
+    pub y0: usize,
+    /// Box width.
+    pub width: usize,
+    /// Box height.
+    pub height: usize,
+    /// Gray values (background and specks zeroed), row-major `width × height`.
+    pub data: Vec<f32>,
+    /// Moments in frame coordinates.
+    pub moments: Moments,
+}
+
+impl Plume {
+    /// Bilinear sample at frame point (x, y) (pixel centres at +0.5), 0 outside the box.
+    fn sample(&self, x: f64, y: f64) -> f32 {
+        let fx = x - 0.5 - self.x0 as f64;
+        let fy = y - 0.5 - self.y0 as f64;
+        if fx <= -1.0 || fy <= -1.0 || fx >= self.width as f64 || fy >= self.height as f64 {
+            return 0.0;
+        }
+        let (ix, iy) = (fx.floor(), fy.floor());
+        let (tx, ty) = ((fx - ix) as f32, (fy - iy) as f32);
+        let (ix, iy) = (ix as isize, iy as isize);
+        let at = |cx: isize, cy: isize| -> f32 {
+            if cx < 0 || cy < 0 || cx >= self.width as isize || cy >= self.height as isize {
+                0.0
+            } else {
+                self.data[cy as usize * self.width + cx as usize]
+            }
+        };
+        let top = at(ix, iy) * (1.0 - tx) + at(ix + 1, iy) * tx;
+        let bottom = at(ix, iy + 1) * (1.0 - tx) + at(ix + 1, iy + 1) * tx;
+        top * (1.0 - ty) + bottom * ty
+    }
+}
+
+/// What one frame holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Frame {
+    /// One flame.
+    Flame(Plume),
+    /// Nothing above the threshold.
+    Empty,
+    /// This many disjoint plumes (two or more): the model cannot represent it (§5).
+    Plumes(usize),
+}
+
+/// Thresholds a row-major gray frame and isolates its flame.
+pub fn analyse_frame(gray: &[f32], width: usize, height: usize, s: &FitSettings) -> Frame {
+    let clean: Vec<f32> = gray.iter().map(|&v| if v > s.threshold && v.is_finite() { v } else { 0.0 }).collect();
+    let (labels, masses) = plumes(&clean, width, height);
+    let total: f64 = masses.iter().sum();
+    if total <= 0.0 {
+        return Frame::Empty;
+    }
+    let big = masses.iter().filter(|&&m| m >= s.min_plume * total).count();
+    if big >= 2 {
+        return Frame::Plumes(big);
+    }
+    let Some(keep) = masses.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(i, _)| i as u32 + 1) else {
+        return Frame::Empty;
+    };
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for (p, &l) in labels.iter().enumerate() {
+        if l == keep {
+            let (x, y) = (p % width, p / width);
+            x0 = x0.min(x);
+            y0 = y0.min(y);
+            x1 = x1.max(x);
+            y1 = y1.max(y);
+        }
+    }
+    let (bw, bh) = (x1 + 1 - x0, y1 + 1 - y0);
+    let mut data = vec![0.0_f32; bw * bh];
+    for y in 0..bh {
+        for x in 0..bw {
+            let p = (y0 + y) * width + x0 + x;
+            if labels[p] == keep {
+                data[y * bw + x] = clean[p];
+            }
+        }
+    }
+    let moments = Moments::of_image(&data, bw, bh).translated(x0 as f64, y0 as f64);
+    Frame::Flame(Plume { x0, y0, width: bw, height: bh, data, moments })
+}
+
+/// The result of a fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fit {
+    /// The generic flame model.
+    pub model: FlameModel,
+    /// One parameter row per kept frame.
+    pub params: ParamSeries,
+    /// Indices of the kept frames (rows of `params`).
+    pub kept: Vec<usize>,
+    /// Frames skipped for showing two or more plumes.
+    pub skipped_plumes: Vec<usize>,
+    /// Frames skipped for holding no flame.
+    pub skipped_empty: Vec<usize>,
+}
+
+/// Column names of a parameter row: `path_0.., width_0.., eig_0.., height`.
+pub fn param_names(path: usize, width: usize, eigen: usize) -> Vec<String> {
+    let mut names: Vec<String> = (0..path).map(|k| format!("path_{k}")).collect();
+    names.extend((0..width).map(|k| format!("width_{k}")));
+    names.extend((0..eigen).map(|k| format!("eig_{k}")));
+    names.push("height".into());
+    names
+}
+
+/// Height of knot `k` of `n` equidistant samples on 0..1 (the middle for one sample).
+pub fn knot(k: usize, n: usize) -> f64 {
+    if n <= 1 { 0.5 } else { k as f64 / (n - 1) as f64 }
+}
+
+/// The normalization frame shared by all frames of a fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame0 {
+    /// Base anchor (frame pixels).
+    pub anchor: [f64; 2],
+    /// Unit main axis, base → tip.
+    pub axis: [f64; 2],
+}
+
+impl Frame0 {
+    /// The axis turned +90° (x right, y down): points right for an upright flame.
+    pub fn across(&self) -> [f64; 2] {
+        [-self.axis[1], self.axis[0]]
+    }
+}
+
+/// Per-frame shape: height, path and width samples, and the normalized image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shape {
+    /// Flame height in pixels.
+    pub height: f64,
+    /// Path samples (pixels across the axis).
+    pub path: Vec<f64>,
+    /// Width samples (σ across the axis, pixels).
+    pub width: Vec<f64>,
+}
+
+/// Smallest width (pixels) a slice is given, so the normalization stays invertible.
+pub const MIN_WIDTH: f64 = 0.5;
+
+/// Measures the N_s height slices of one plume in frame `f0` for a flame of `height` pixels and
+/// samples path and width at equidistant heights (§3.1).
+pub fn measure_shape(plume: &Plume, f0: &Frame0, height: f64, s: &FitSettings) -> Shape {
+    let ns = s.slices.max(1);
+    let across = f0.across();
+    let mut acc = vec![[0.0_f64; 3]; ns];
+    for y in 0..plume.height {
+        for x in 0..plume.width {
+            let val = plume.data[y * plume.width + x];
+            if val <= 0.0 {
+                continue;
+            }
+            let dx = (plume.x0 + x) as f64 + 0.5 - f0.anchor[0];
+            let dy = (plume.y0 + y) as f64 + 0.5 - f0.anchor[1];
+            let v = (dx * f0.axis[0] + dy * f0.axis[1]) / height;
+            if v < -s.v_below || v > 1.0 + s.v_above {
+                continue;
+            }
+            let t = dx * across[0] + dy * across[1];
+            let j = ((v * ns as f64).floor().max(0.0) as usize).min(ns - 1);
+            let w = f64::from(val);
+            acc[j][0] += w;
+            acc[j][1] += w * t;
+            acc[j][2] += w * t * t;
+        }
+    }
+    let peak = acc.iter().map(|a| a[0]).fold(0.0, f64::max);
+    let valid: Vec<bool> = acc.iter().map(|a| a[0] > 1e-3 * peak && peak > 0.0).collect();
+    let stats: Vec<Option<(f64, f64)>> = acc
+        .iter()
+        .zip(&valid)
+        .map(|(a, &ok)| {
+            ok.then(|| {
+                let mean = a[1] / a[0];
+                (mean, (a[2] / a[0] - mean * mean).max(0.0).sqrt().max(MIN_WIDTH))
+            })
+        })
+        .collect();
+    // Empty slices take the nearest measured slice's values.
+    let filled: Vec<(f64, f64)> = (0..ns)
+        .map(|j| {
+            (0..ns)
+                .flat_map(|d| [j.checked_sub(d), Some(j + d)])
+                .flatten()
+                .filter(|&k| k < ns)
+                .find_map(|k| stats[k])
+                .unwrap_or((0.0, MIN_WIDTH))
+        })
+        .collect();
+    let path_slices: Vec<f64> = filled.iter().map(|p| p.0).collect();
+    let width_slices: Vec<f64> = filled.iter().map(|p| p.1).collect();
+    Shape {
+        height,
+        path: (0..s.path_samples).map(|k| slice_value(&path_slices, knot(k, s.path_samples))).collect(),
+        width: (0..s.width_samples).map(|k| slice_value(&width_slices, knot(k, s.width_samples)).max(MIN_WIDTH)).collect(),
+    }
+}
+
+/// Normalizes one plume into a `norm_size` image: the inverse of [`crate::model::render`]'s
+/// deformation, sampled bilinearly.
+pub fn normalize(plume: &Plume, f0: &Frame0, shape: &Shape, s: &FitSettings) -> Vec<f32> {
+    let (nw, nh) = (s.norm_size.0 as usize, s.norm_size.1 as usize);
+    let path = Spline::new(&shape.path);
+    let width = Spline::new(&shape.width);
+    let across = f0.across();
+    let (v0, v1) = (-s.v_below, 1.0 + s.v_above);
+    let mut out = vec![0.0_f32; nw * nh];
+    for (r, row) in out.chunks_exact_mut(nw).enumerate() {
+        let v = v1 - (r as f64 + 0.5) / nh as f64 * (v1 - v0);
+        let (p, w) = (path.at(v), width.at(v).max(MIN_WIDTH));
+        let base = [f0.anchor[0] + v * shape.height * f0.axis[0], f0.anchor[1] + v * shape.height * f0.axis[1]];
+        for (c, o) in row.iter_mut().enumerate() {
+            let u = -s.u_extent + (c as f64 + 0.5) / nw as f64 * 2.0 * s.u_extent;
+            let t = p + u * w;
+            *o = plume.sample(base[0] + t * across[0], base[1] + t * across[1]);
+        }
+    }
+    out
+}
+
+/// Fits the model to analysed frames (see [`analyse_frame`]) of a `frame_size` clip at `fps`.
+pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps: f64) -> Result<Fit, String> {
+    check_settings(s)?;
+    let mut kept = Vec::new();
+    let mut skipped_plumes = Vec::new();
+    let mut skipped_empty = Vec::new();
+    let mut flames = Vec::new();
+    for (i, f) in frames.iter().enumerate() {
+        match f {
+            Frame::Flame(p) => {
+                kept.push(i);
+                flames.push(p);
+            }
+            Frame::Empty => skipped_empty.push(i),
+            Frame::Plumes(_) => skipped_plumes.push(i),
+        }
+    }
+    if flames.is_empty() {
+        return Err(if skipped_plumes.is_empty() {
+            format!(
+                "no flame found in any of the {} frames: every pixel is at or below the threshold {} (lower `threshold`, or check the footage is a bright flame on a dark background)",
+                frames.len(),
+                s.threshold
+            )
+        } else {
+            format!(
+                "all {} frames with a flame show two or more disjoint plumes, which the model cannot represent",
+                skipped_plumes.len()
+            )
+        });
+    }
+    if flames.len() < 2 {
+        return Err(format!("only {} frame holds a single flame; eigenflames need at least 2", flames.len()));
+    }
+
+    // The normalization frame: the mean main axis (averaged as doubled angles, orientation-free)
+    // and the mean base point.
+    let axes: Vec<([f64; 2], f64)> = flames
+        .iter()
+        .map(|p| p.moments.main_axes().map(|(d, major, _)| (d, major)).ok_or("a plume has no intensity"))
+        .collect::<Result<_, _>>()?;
+    let (c2, s2) = axes.iter().fold((0.0, 0.0), |(c, sn), (d, _)| {
+        let th = d[1].atan2(d[0]);
+        (c + (2.0 * th).cos(), sn + (2.0 * th).sin())
+    });
+    let th = 0.5 * s2.atan2(c2);
+    let mut axis = [th.cos(), th.sin()];
+    if axis[1] > 0.0 || (axis[1] == 0.0 && axis[0] < 0.0) {
+        axis = [-axis[0], -axis[1]];
+    }
+    let mut anchor = [0.0, 0.0];
+    for (p, (_, major)) in flames.iter().zip(&axes) {
+        let c = p.moments.centroid().ok_or("a plume has no intensity")?;
+        anchor[0] += c[0] - s.base_sigmas * major * axis[0];
+        anchor[1] += c[1] - s.base_sigmas * major * axis[1];
+    }
+    anchor = [anchor[0] / flames.len() as f64, anchor[1] / flames.len() as f64];
+    let f0 = Frame0 { anchor, axis };
+
+    // Per frame: height from the second-order moment along the main axis, slices, normalization.
+    let shaped: Vec<(Shape, Vec<f32>)> = flames
+        .par_iter()
+        .zip(&axes)
+        .map(|(p, (_, major))| {
+            let shape = measure_shape(p, &f0, (s.height_sigmas * major).max(1.0), s);
+            let img = normalize(p, &f0, &shape, s);
+            (shape, img)
+        })
+        .collect();
+
+    let n = s.norm_size.0 as usize * s.norm_size.1 as usize;
+    let mut data = Vec::with_capacity(n * shaped.len());
+    let means: Vec<f64> = shaped.iter().map(|(_, img)| img.iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64).collect();
+    let target = means.iter().sum::<f64>() / means.len() as f64;
+    for ((_, img), &m) in shaped.iter().zip(&means) {
+        let gain = if s.normalize_intensity && m > 0.0 { (target / m) as f32 } else { 1.0 };
+        data.extend(img.iter().map(|v| v * gain));
+    }
+    let sources = (0..shaped.len()).map(|i| FrameRef { clip: 0, index: kept[i] as u32 }).collect();
+    let db = pca::train(s.norm_size.0, s.norm_size.1, data, sources, s.eigenflames)?;
+    let e = db.basis.components();
+
+    let names = param_names(s.path_samples, s.width_samples, e);
+    let dim = names.len();
+    let mut rows = Vec::with_capacity(dim * shaped.len());
+    for (f, (shape, _)) in shaped.iter().enumerate() {
+        rows.extend_from_slice(&shape.path);
+        rows.extend_from_slice(&shape.width);
+        let w = db.weights.row(f).ok_or("missing weights row")?;
+        rows.extend(w.iter().map(|&x| f64::from(x)));
+        rows.push(shape.height);
+    }
+    let mean_params = (0..dim).map(|c| rows.iter().skip(c).step_by(dim).sum::<f64>() / shaped.len() as f64).collect();
+    let params = ParamSeries::new(names, shaped.len(), rows, fps).ok_or("parameter rows have the wrong size")?;
+    let model = FlameModel {
+        path_samples: s.path_samples,
+        width_samples: s.width_samples,
+        eigenflames: e,
+        width: s.norm_size.0,
+        height: s.norm_size.1,
+        mean: db.basis.mean,
+        basis: db.basis.eigenvectors,
+        eigenvalues: db.basis.eigenvalues,
+        frame_size,
+        anchor,
+        axis,
+        v_range: [-s.v_below, 1.0 + s.v_above],
+        u_extent: s.u_extent,
+        mean_intensity: if s.normalize_intensity { target } else { 0.0 },
+        mean_params,
+    };
+    Ok(Fit { model, params, kept, skipped_plumes, skipped_empty })
+}
+
+/// Analyses and fits row-major gray frames of one size (the node pulls clip frames instead).
+pub fn fit_gray_frames(frames: &[Vec<f32>], frame_size: (u32, u32), s: &FitSettings, fps: f64) -> Result<Fit, String> {
+    let (w, h) = (frame_size.0 as usize, frame_size.1 as usize);
+    if let Some(i) = frames.iter().position(|f| f.len() != w * h) {
+        return Err(format!("frame {i} has {} samples, expected {w}x{h}", frames[i].len()));
+    }
+    let analysed: Vec<Frame> = frames.par_iter().map(|f| analyse_frame(f, w, h, s)).collect();
+    fit_frames(&analysed, frame_size, s, fps)
+}
+
+fn check_settings(s: &FitSettings) -> Result<(), String> {
+    if s.path_samples == 0 || s.width_samples == 0 || s.eigenflames == 0 || s.slices == 0 {
+        return Err("n_p, n_w, n_e and n_s must each be at least 1".into());
+    }
+    if s.norm_size.0 < 2 || s.norm_size.1 < 2 {
+        return Err("the normalized image must be at least 2x2".into());
+    }
+    if !(s.height_sigmas > 0.0 && s.u_extent > 0.0 && s.v_below >= 0.0 && s.v_above >= 0.0) {
+        return Err("height_sigmas and u_extent must be positive, v_below and v_above non-negative".into());
+    }
+    Ok(())
+}

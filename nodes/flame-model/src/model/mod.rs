@@ -1,0 +1,515 @@
+//! The generic flame model of Stich & Magnor, "Learning Flames" (§3, §3.1, §3.2): nodes
+//! `flame_model.fit` (frames → model + parameter series) and `flame_model.render`
+//! (model + parameter series → gray and coloured frames).
+
+pub mod fit;
+pub mod render;
+pub mod shape;
+
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
+
+use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::{
+    Channels, Clip, CookCtx, FlameModel, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc,
+    PortType, Registry, TimeDep, Value,
+};
+use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
+use rayon::prelude::*;
+
+pub use fit::{FitSettings, analyse_frame, fit_frames, fit_gray_frames};
+pub use render::{Alpha, RenderSettings, colorize, render_frame};
+
+/// Category of the learned-flame nodes in the editor.
+pub const CATEGORY: &str = "Flame model";
+
+/// Adds this module's node types.
+pub fn register(registry: &mut Registry) {
+    registry.add(FnNode::new(fit_desc(), cook_fit));
+    registry.add(FnNode::new(render_desc(), cook_render));
+}
+
+/// Luma of an image as one gray plane (Rec. 601 weights for RGBA, as `imaging.to_gray`).
+pub fn gray_plane(img: &Image) -> Vec<f32> {
+    match img.channels() {
+        Channels::Gray => img.data().to_vec(),
+        Channels::Rgba => img.data().chunks_exact(4).map(|p| 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]).collect(),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// flame_model.fit
+// ---------------------------------------------------------------------------------------------
+
+fn fit_desc() -> NodeDesc {
+    let d = FitSettings::default();
+    NodeDesc::new(
+        "flame_model.fit",
+        CATEGORY,
+        TimeDep::WholeClip,
+        "Fits Stich & Magnor's generic flame model to flame footage (Learning Flames §3, §3.1, §3.2).\n\n\
+         Each frame's gray intensity is thresholded and its geometric moments up to order 3 (eq. 1) give the \
+         centroid, the main axes and the flame height (height_sigmas × σ along the main axis). The clip's mean \
+         main axis and base point fix the normalization frame. Each flame is cut into n_s height slices whose own \
+         moments give the path (centre across the axis) and the width (σ across the axis), sampled at n_p and n_w \
+         equidistant heights. Slices are centred and scaled by the cubic splines through those samples, the \
+         height scaled to 1 and (optionally) the intensity to the clip's average; PCA of these normalized \
+         images gives the eigenflames and n_e appearance weights per frame (fewer if the frames do not vary \
+         that much). Frames with two or more disjoint plumes (and frames with no flame) are skipped, as in §5; \
+         `skipped` counts them. Parameter rows are [path_0.., width_0.., eig_0.., height] in pixels.",
+    )
+    .input(PortDesc::new(
+        "clip",
+        PortType::clip_of(PortType::Image),
+        "Flame frames on a dark background (gray or RGBA; RGBA uses luma).",
+    ))
+    .input(PortDesc::int("n_p", d.path_samples as i64, (1, 64), "Path samples N_p at equidistant heights (paper: 10)."))
+    .input(PortDesc::int("n_w", d.width_samples as i64, (1, 64), "Width samples N_w at equidistant heights (paper: 10)."))
+    .input(PortDesc::int("n_e", d.eigenflames as i64, (1, 1000), "Eigenflames N_e (paper: 5); at most frames − 1 are available."))
+    .input(PortDesc::int(
+        "n_s",
+        d.slices as i64,
+        (1, 512),
+        "Height slices N_s measured per frame before sampling path and width.",
+    ))
+    .input(PortDesc::int("norm_width", d.norm_size.0 as i64, (4, 1024), "Width of the normalized images (eigenflame size)."))
+    .input(PortDesc::int("norm_height", d.norm_size.1 as i64, (4, 1024), "Height of the normalized images (eigenflame size)."))
+    .input(PortDesc::float("threshold", f64::from(d.threshold), (0.0, 1.0), "Gray values at or below this are background."))
+    .input(PortDesc::float(
+        "min_plume",
+        d.min_plume,
+        (0.0, 1.0),
+        "Plumes under this fraction of a frame's intensity are specks (removed); two larger ones skip the frame.",
+    ))
+    .input(PortDesc::float(
+        "height_sigmas",
+        d.height_sigmas,
+        (0.5, 20.0),
+        "Flame height = this × σ along the main axis (second-order moment).",
+    ))
+    .input(PortDesc::float(
+        "base_sigmas",
+        d.base_sigmas,
+        (0.0, 10.0),
+        "The flame base lies this many σ below the centroid along the main axis.",
+    ))
+    .input(PortDesc::float(
+        "u_extent",
+        d.u_extent,
+        (0.5, 20.0),
+        "Half-width of the normalized image, in local widths (σ of a slice).",
+    ))
+    .input(PortDesc::float("v_below", d.v_below, (0.0, 2.0), "Normalized image margin below the base, in flame heights."))
+    .input(PortDesc::float("v_above", d.v_above, (0.0, 2.0), "Normalized image margin above the tip, in flame heights."))
+    .input(PortDesc::bool(
+        "normalize_intensity",
+        d.normalize_intensity,
+        "Scale every normalized image to the clip's average intensity (§3.1).",
+    ))
+    .output("model", PortType::FlameModel, "The generic flame model: normalization frame and eigenflames.")
+    .output("params", PortType::ParamSeries, "One parameter row per kept frame: path, width, eigenflame weights, height.")
+    .output("skipped", PortType::Int, "Frames skipped: two or more disjoint plumes, or no flame.")
+}
+
+fn fit_settings(i: &Inputs<'_>) -> Result<FitSettings, NodeError> {
+    Ok(FitSettings {
+        path_samples: i.usize("n_p")?,
+        width_samples: i.usize("n_w")?,
+        eigenflames: i.usize("n_e")?,
+        slices: i.usize("n_s")?,
+        norm_size: (i.usize("norm_width")? as u32, i.usize("norm_height")? as u32),
+        threshold: i.float("threshold")? as f32,
+        min_plume: i.float("min_plume")?,
+        height_sigmas: i.float("height_sigmas")?,
+        base_sigmas: i.float("base_sigmas")?,
+        u_extent: i.float("u_extent")?,
+        v_below: i.float("v_below")?,
+        v_above: i.float("v_above")?,
+        normalize_intensity: i.bool("normalize_intensity")?,
+    })
+}
+
+fn cook_fit(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let clip = i.clip("clip")?;
+    let s = fit_settings(i)?;
+    if clip.is_empty() {
+        return Err(NodeError::port("clip", "the clip has no frames"));
+    }
+    let size = clip.image(0, ctx).map_err(|e| NodeError::port("clip", e.to_string()))?.size();
+    let frames: Vec<fit::Frame> = (0..clip.len())
+        .into_par_iter()
+        .map(|f| {
+            ctx.check_cancel()?;
+            let img = clip.image(f, ctx).map_err(|e| NodeError::port("clip", e.to_string()))?;
+            if img.size() != size {
+                return Err(NodeError::port(
+                    "clip",
+                    format!(
+                        "frame {f} is {}x{} but frame 0 is {}x{}; every frame must be the same size",
+                        img.width(),
+                        img.height(),
+                        size.0,
+                        size.1
+                    ),
+                ));
+            }
+            let a = analyse_frame(&gray_plane(&img), size.0 as usize, size.1 as usize, &s);
+            ctx.frame_progress(f + 1, clip.len());
+            Ok(a)
+        })
+        .collect::<Result<_, NodeError>>()?;
+    let fit = fit_frames(&frames, size, &s, clip.fps()).map_err(|m| NodeError::port("clip", m))?;
+    let skipped = (fit.skipped_plumes.len() + fit.skipped_empty.len()) as i64;
+    Ok(vec![Value::FlameModel(Arc::new(fit.model)), Value::ParamSeries(Arc::new(fit.params)), Value::Int(skipped)])
+}
+
+// ---------------------------------------------------------------------------------------------
+// flame_model.render
+// ---------------------------------------------------------------------------------------------
+
+fn render_desc() -> NodeDesc {
+    NodeDesc::new(
+        "flame_model.render",
+        CATEGORY,
+        TimeDep::PerFrame,
+        "Renders Stich & Magnor's generic flame model, one frame per parameter row (Learning Flames §3.1–3.2, §4.3, §5.1).\n\n\
+         The normalized appearance is the mean image plus the eigenflames weighted by the row's eig_k; the \
+         inverse normalization places it in the frame: the height scales the main axis from the base, and the \
+         path and width samples, interpolated by natural cubic splines, shift and stretch every height slice. \
+         Frames are computed lazily (rows in parallel). §5.1's controls: bend adds an offset to the path that \
+         grows with the square of the height (wind), ramped in over bend_ramp frames; height_scale, width_scale \
+         and scale change the flame's height, width and size. `color` maps intensity × exposure through a colour \
+         ramp (the intensity → colour transfer function of §5.1).",
+    )
+    .input(PortDesc::new("model", PortType::FlameModel, "The fitted generic flame model (flame_model.fit)."))
+    .input(PortDesc::new("params", PortType::ParamSeries, "Parameter rows (fitted or sampled by flame_model.arp_sample)."))
+    .input(PortDesc::int("width", 0, (0, 16384), "Output width in pixels; 0 = the fitted footage's width."))
+    .input(PortDesc::int(
+        "height",
+        0,
+        (0, 16384),
+        "Output height in pixels; 0 = the fitted footage's height (the base keeps its distance from the bottom).",
+    ))
+    .input(PortDesc::float("scale", 1.0, (0.01, 100.0), "Overall flame size about its base."))
+    .input(PortDesc::float(
+        "bend",
+        0.0,
+        (-10.0, 10.0),
+        "Path offset at the tip in flame heights, growing with height² (wind bends the flame; + = right).",
+    ))
+    .input(PortDesc::int("bend_ramp", 0, (0, 1_000_000), "Frames over which the bend ramps in from 0; 0 = from the first frame."))
+    .input(PortDesc::float("height_scale", 1.0, (0.01, 100.0), "Multiplies the height parameter."))
+    .input(PortDesc::float("width_scale", 1.0, (0.01, 100.0), "Multiplies the width parameters."))
+    .input(PortDesc::string("ramp", DEFAULT_RAMP, "Intensity → colour ramp of the color output: pos:r,g,b; …"))
+    .input(PortDesc::float("exposure", 1.0, (0.0, 100.0), "Intensity multiplier before the colour ramp."))
+    .input(PortDesc::choice(
+        "alpha",
+        &["opaque", "intensity"],
+        "opaque",
+        "Alpha of the color output: 1, or the clamped intensity.",
+    ))
+    .input(PortDesc::float("fps", 0.0, (0.0, 1000.0), "Frame rate of the clips; 0 = the parameter series' rate."))
+    .output("clip", PortType::clip_of(PortType::Image), "Gray flame frames, one per parameter row.")
+    .output("color", PortType::clip_of(PortType::Image), "RGBA frames coloured by the ramp.")
+}
+
+struct RenderSource {
+    model: Arc<FlameModel>,
+    params: Arc<ParamSeries>,
+    settings: RenderSettings,
+}
+
+impl FrameSource for RenderSource {
+    fn len(&self) -> usize {
+        self.params.frames
+    }
+    fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
+        let row = self.params.row(index).ok_or_else(|| NodeError::port("params", format!("there is no row {index}")))?;
+        let img = render_frame(&self.model, row, &self.settings, index).map_err(|m| NodeError::port("params", m))?;
+        Ok(Value::Image(Arc::new(img)))
+    }
+}
+
+struct ColorSource {
+    gray: Clip,
+    ramp: ColorRamp,
+    exposure: f32,
+    alpha: Alpha,
+}
+
+impl FrameSource for ColorSource {
+    fn len(&self) -> usize {
+        self.gray.len()
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        let g = self.gray.image(index, ctx)?;
+        Ok(Value::Image(Arc::new(colorize(&g, &self.ramp, self.exposure, self.alpha))))
+    }
+}
+
+fn cook_render(i: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let model = i.flame_model("model")?.clone();
+    let params = i.param_series("params")?.clone();
+    if params.frames == 0 {
+        return Err(NodeError::port("params", "there are no parameter rows to render"));
+    }
+    if params.dim() != model.dim() {
+        return Err(NodeError::port(
+            "params",
+            format!(
+                "rows have {} parameters but the model needs {} (N_p {} + N_w {} + N_e {} + height); use the series of the same fit",
+                params.dim(),
+                model.dim(),
+                model.path_samples,
+                model.width_samples,
+                model.eigenflames
+            ),
+        ));
+    }
+    let settings = RenderSettings {
+        size: (i.usize("width")? as u32, i.usize("height")? as u32),
+        scale: i.float("scale")?,
+        bend: i.float("bend")?,
+        bend_ramp: i.usize("bend_ramp")?,
+        height_scale: i.float("height_scale")?,
+        width_scale: i.float("width_scale")?,
+    };
+    if settings.size.0 == 0 && model.frame_size.0 == 0 || settings.size.1 == 0 && model.frame_size.1 == 0 {
+        return Err(NodeError::port("width", "the model has no frame size; set width and height"));
+    }
+    let ramp = ColorRamp::parse(i.string("ramp")?).map_err(|m| NodeError::port("ramp", m))?;
+    let exposure = i.float("exposure")? as f32;
+    let alpha = match i.choice("alpha")? {
+        "opaque" => Alpha::Opaque,
+        "intensity" => Alpha::Intensity,
+        other => return Err(NodeError::port("alpha", format!("unknown alpha mode '{other}' (opaque, intensity)"))),
+    };
+    let fps = match i.float("fps")? {
+        f if f > 0.0 => f,
+        _ if params.fps > 0.0 => params.fps,
+        _ => 30.0,
+    };
+    let mut h = Fingerprinter::new();
+    "flame_model.render".hash(&mut h);
+    model.hash_into(&mut h);
+    params.hash_into(&mut h);
+    format!("{settings:?}").hash(&mut h);
+    let gray_fp = h.finish();
+    format!("{ramp:?}{exposure}{alpha:?}").hash(&mut h);
+    let color_fp = h.finish();
+    let gray = Clip::new(PortType::Image, fps, gray_fp, Arc::new(RenderSource { model, params, settings }));
+    let color = Clip::new(PortType::Image, fps, color_fp, Arc::new(ColorSource { gray: gray.clone(), ramp, exposure, alpha }));
+    Ok(vec![Value::Clip(gray), Value::Clip(color)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fit::{Frame, Frame0, measure_shape, normalize};
+    use super::shape::Moments;
+    use super::shape::tests::ellipse;
+    use super::*;
+
+    /// A synthetic candle flame: a swaying teardrop, brightest low down, `f` varies the shape.
+    pub fn flame(w: usize, h: usize, f: usize) -> Vec<f32> {
+        let ft = f as f64;
+        let height = 90.0 + 10.0 * (0.9 * ft).sin();
+        let sway = 7.0 * (0.6 * ft).sin();
+        let base = [w as f64 / 2.0, h as f64 - 12.0];
+        let mut out = vec![0.0_f32; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let v = (base[1] - (y as f64 + 0.5)) / height;
+                if !(0.0..=1.0).contains(&v) {
+                    continue;
+                }
+                let half =
+                    15.0 * (std::f64::consts::PI * (v + 0.08) / 1.08).sin().max(0.0).powf(0.7) * (1.0 + 0.1 * (1.3 * ft).cos());
+                let d = (x as f64 + 0.5 - base[0] - sway * v * v) / half.max(1e-6);
+                let val = (1.0 - d * d).max(0.0) * (1.0 - 0.6 * v) * (0.9 + 0.1 * (2.1 * ft + 3.0 * v).sin());
+                out[y * w + x] = val as f32;
+            }
+        }
+        out
+    }
+
+    fn flames(w: usize, h: usize, m: usize) -> Vec<Vec<f32>> {
+        (0..m).map(|f| flame(w, h, f)).collect()
+    }
+
+    #[test]
+    fn normalization_aligns_a_rotated_ellipse_with_the_image_axes() {
+        let (w, h) = (200, 200);
+        let deg = -60.0_f64; // main axis 60° from the x axis, pointing up-right
+        let frames: Vec<Vec<f32>> = (0..4).map(|k| ellipse(w, h, [100.0, 100.0], 60.0 + k as f64, 20.0, deg)).collect();
+        // 4σ along the axis is the full length 2a of a uniform ellipse (the default 6σ suits real
+        // flames, whose faint tips pull σ in).
+        let s = FitSettings {
+            threshold: 0.0,
+            height_sigmas: 4.0,
+            base_sigmas: 2.0,
+            v_below: 0.1,
+            v_above: 0.1,
+            ..FitSettings::default()
+        };
+        let fit = fit_gray_frames(&frames, (w as u32, h as u32), &s, 24.0).unwrap();
+        let m = &fit.model;
+        let want = [deg.to_radians().cos(), deg.to_radians().sin()];
+        assert!((m.axis[0] - want[0]).abs() < 1e-3 && (m.axis[1] - want[1]).abs() < 1e-3, "axis {:?} vs {want:?}", m.axis);
+        // Height 4σ = 2a (the full length of the ellipse), path 0, width at the middle σ = b/2 of that slice.
+        let row = fit.params.row(0).unwrap();
+        let height = row[row.len() - 1];
+        assert!((height - 120.0).abs() < 0.5, "height {height}");
+        let dim_p = m.path_samples;
+        assert!(row[..dim_p].iter().all(|p| p.abs() < 0.2), "path {:?}", &row[..dim_p]);
+        // The anchor is the mean base of the ellipses: the centroid minus 2σ = a (mean 61.5) along the axis.
+        let base = [100.0 - 61.5 * want[0], 100.0 - 61.5 * want[1]];
+        assert!((m.anchor[0] - base[0]).abs() < 0.3 && (m.anchor[1] - base[1]).abs() < 0.3, "anchor {:?} vs {base:?}", m.anchor);
+        // The normalized image's own moments: centred on the middle column, main axis vertical.
+        let Frame::Flame(plume) = analyse_frame(&frames[0], w, h, &s) else { panic!("no flame") };
+        let f0 = Frame0 { anchor: m.anchor, axis: m.axis };
+        let shape = measure_shape(&plume, &f0, height, &s);
+        let img = normalize(&plume, &f0, &shape, &s);
+        let (nw, nh) = (s.norm_size.0 as usize, s.norm_size.1 as usize);
+        let nm = Moments::of_image(&img, nw, nh);
+        let (dir, major, minor) = nm.main_axes().unwrap();
+        assert!(dir[0].abs() < 1e-3 && dir[1] < 0.0, "normalized main axis {dir:?}");
+        assert!(major > 2.0 * minor);
+        let c = nm.centroid().unwrap();
+        assert!((c[0] - nw as f64 / 2.0).abs() < 0.05, "normalized centroid {c:?}");
+        // Width samples follow the ellipse: widest in the middle, σ = half-chord / 2 · (2/√3)… within a pixel.
+        let widths = &row[dim_p..dim_p + m.width_samples];
+        let mid = widths[m.width_samples / 2];
+        assert!(widths[0] < mid && widths[m.width_samples - 1] < mid, "{widths:?}");
+        // A uniform chord of half-length c has σ = c/√3; the middle chord is b = 20.
+        assert!((mid - 20.0 / 3.0_f64.sqrt()).abs() < 0.8, "mid width {mid}");
+    }
+
+    #[test]
+    fn fit_then_render_with_all_eigenflames_reconstructs_a_training_frame() {
+        let (w, h, m) = (96, 144, 12);
+        let frames = flames(w, h, m);
+        let s = FitSettings {
+            eigenflames: m,
+            normalize_intensity: false,
+            norm_size: (64, 128),
+            threshold: 0.0,
+            ..FitSettings::default()
+        };
+        let fit = fit_gray_frames(&frames, (w as u32, h as u32), &s, 24.0).unwrap();
+        assert_eq!(fit.model.eigenflames, m - 1, "all M − 1 eigenflames");
+        assert_eq!(fit.params.dim(), 10 + 10 + (m - 1) + 1);
+        assert_eq!(fit.params.names[0], "path_0");
+        assert_eq!(fit.params.names[20], "eig_0");
+        assert_eq!(fit.params.names.last().unwrap(), "height");
+        let mut worst = 0.0_f64;
+        for f in [0, 5, 11] {
+            let img = render_frame(&fit.model, fit.params.row(f).unwrap(), &RenderSettings::default(), f).unwrap();
+            assert_eq!(img.size(), (w as u32, h as u32));
+            let err: f64 = img.data().iter().zip(&frames[f]).map(|(a, b)| f64::from(a - b).powi(2)).sum::<f64>().sqrt();
+            let norm: f64 = frames[f].iter().map(|b| f64::from(*b).powi(2)).sum::<f64>().sqrt();
+            worst = worst.max(err / norm);
+        }
+        println!("fit → render relative L2 error with all eigenflames: {worst:.4}");
+        // Two bilinear resamplings (frame → 64×128 normalized → frame) blur the edges: the stated bound is 8 %.
+        assert!(worst < 0.08, "relative error {worst}");
+    }
+
+    #[test]
+    fn fewer_eigenflames_cost_accuracy_but_keep_the_shape() {
+        let (w, h, m) = (96, 144, 12);
+        let frames = flames(w, h, m);
+        let s = FitSettings { eigenflames: 2, threshold: 0.0, ..FitSettings::default() };
+        let fit = fit_gray_frames(&frames, (w as u32, h as u32), &s, 24.0).unwrap();
+        assert_eq!(fit.params.dim(), 23);
+        let img = render_frame(&fit.model, fit.params.row(3).unwrap(), &RenderSettings::default(), 3).unwrap();
+        let err: f64 = img.data().iter().zip(&frames[3]).map(|(a, b)| f64::from(a - b).powi(2)).sum::<f64>().sqrt();
+        let norm: f64 = frames[3].iter().map(|b| f64::from(*b).powi(2)).sum::<f64>().sqrt();
+        assert!(err / norm < 0.2, "relative error {}", err / norm);
+    }
+
+    #[test]
+    fn a_clip_without_flame_is_an_error() {
+        let frames = vec![vec![0.02_f32; 32 * 32]; 5];
+        let err = fit_gray_frames(&frames, (32, 32), &FitSettings::default(), 24.0).unwrap_err();
+        assert!(err.contains("no flame") && err.contains("threshold"), "{err}");
+    }
+
+    #[test]
+    fn a_two_plume_frame_is_skipped() {
+        let (w, h) = (96, 144);
+        let mut frames = flames(w, h, 6);
+        // Frame 2: a second, detached plume beside the flame.
+        for y in 20..50 {
+            for x in 80..92 {
+                frames[2][y * w + x] = 0.8;
+            }
+        }
+        // Frame 4: a tiny speck (under min_plume) is removed, not a plume.
+        frames[4][5 * w + 5] = 1.0;
+        let fit = fit_gray_frames(&frames, (w as u32, h as u32), &FitSettings::default(), 24.0).unwrap();
+        assert_eq!(fit.skipped_plumes, vec![2]);
+        assert_eq!(fit.kept, vec![0, 1, 3, 4, 5]);
+        assert_eq!(fit.params.frames, 5);
+        assert!(matches!(analyse_frame(&frames[2], w, h, &FitSettings::default()), Frame::Plumes(2)));
+    }
+
+    #[test]
+    fn bend_offsets_the_tip_and_scales_change_the_size() {
+        let (w, h, m) = (96, 144, 6);
+        let fit = fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings::default(), 24.0).unwrap();
+        let row = fit.params.row(0).unwrap();
+        let plain = render_frame(&fit.model, row, &RenderSettings::default(), 0).unwrap();
+        let bent = render_frame(&fit.model, row, &RenderSettings { bend: 0.2, ..RenderSettings::default() }, 0).unwrap();
+        let top_x = |img: &Image| {
+            let m = Moments::of_image(&img.data()[..60 * w], w, 60);
+            m.centroid().unwrap()[0]
+        };
+        assert!(top_x(&bent) > top_x(&plain) + 5.0, "{} vs {}", top_x(&bent), top_x(&plain));
+        let ramped = RenderSettings { bend: 0.2, bend_ramp: 10, ..RenderSettings::default() };
+        assert_eq!(render::bend_at(&ramped, 0), 0.0);
+        assert!((render::bend_at(&ramped, 5) - 0.1).abs() < 1e-12);
+        let tall = render_frame(&fit.model, row, &RenderSettings { height_scale: 1.2, ..RenderSettings::default() }, 0).unwrap();
+        let mass = |img: &Image| img.data().iter().map(|&v| f64::from(v)).sum::<f64>();
+        assert!(mass(&tall) > 1.1 * mass(&plain));
+        let out = render_frame(&fit.model, row, &RenderSettings { size: (480, 480), ..RenderSettings::default() }, 0).unwrap();
+        assert_eq!(out.size(), (480, 480));
+        assert!(mass(&out) > 0.9 * mass(&plain) && mass(&out) < 1.1 * mass(&plain));
+    }
+
+    #[test]
+    fn a_row_of_the_wrong_length_is_an_error() {
+        let (w, h) = (96, 144);
+        let fit = fit_gray_frames(&flames(w, h, 4), (w as u32, h as u32), &FitSettings::default(), 24.0).unwrap();
+        let err = render_frame(&fit.model, &[1.0; 5], &RenderSettings::default(), 0).unwrap_err();
+        assert!(err.contains("needs"), "{err}");
+    }
+
+    #[test]
+    fn nodes_cook_through_a_graph_of_clips() {
+        use pyrograph_core::PortType;
+        let (w, h) = (64, 96);
+        let frames: Vec<Value> = (0..6)
+            .map(|f| Value::Image(Arc::new(Image::from_vec(w, h, Channels::Gray, flame(w as usize, h as usize, f)).unwrap())))
+            .collect();
+        let clip = Clip::from_frames(PortType::Image, 24.0, frames);
+        let ctx = CookCtx::new();
+        let desc = fit_desc();
+        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
+        values[0] = Value::Clip(clip);
+        let out = cook_fit(&Inputs::new(&desc, &values), &ctx).unwrap();
+        let Value::Int(skipped) = out[2] else { panic!() };
+        assert_eq!(skipped, 0);
+        let rdesc = render_desc();
+        let mut rvalues: Vec<Value> = rdesc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
+        rvalues[0] = out[0].clone();
+        rvalues[1] = out[1].clone();
+        let rendered = cook_render(&Inputs::new(&rdesc, &rvalues), &ctx).unwrap();
+        let Value::Clip(gray) = &rendered[0] else { panic!() };
+        let Value::Clip(color) = &rendered[1] else { panic!() };
+        assert_eq!(gray.len(), 6);
+        assert_eq!(gray.image(3, &ctx).unwrap().size(), (w, h));
+        let c = color.image(3, &ctx).unwrap();
+        assert_eq!(c.channels(), Channels::Rgba);
+        assert!(c.data().chunks_exact(4).any(|p| p[0] > 0.5));
+    }
+}

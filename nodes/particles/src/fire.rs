@@ -1,0 +1,382 @@
+//! Rendering a spreading fire (Perry 1994 §3.4): the burning mesh shaded by a key light and by the
+//! flame lights of §3.2.4, char on its surface (§3.4.1), and a particle flame (§3.2.1–3.2.3)
+//! grown from every live flame root of the spread; the `particles.render_fire` node.
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+use pyrograph_core::{
+    CookCtx, FnNode, Image, Inputs, Mesh, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, SpreadState,
+    TimeDep, Value, WindField,
+};
+use pyrograph_render::{Blend, DrawList, Vertex, View, render};
+use rayon::prelude::*;
+
+use crate::flame::{DEFAULT_CENTER, DEFAULT_EDGE, FlameParams, Ramp, Root, Shape, trace, validate_params};
+use crate::render::{LightParams, flame_lights, view_from_inputs};
+use crate::wind::{WindSampler, validate_wind};
+
+/// Adds `particles.render_fire`.
+pub fn register(registry: &mut Registry) {
+    registry.add(FnNode::new(render_fire_desc(), cook_render_fire));
+}
+
+/// How a fire is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FireLook {
+    /// The flame grown at each root (its `lifetime`, `respawn` and `seed` are unused: roots carry their own).
+    pub flame: FlameParams,
+    /// Fraction of a root's life over which its flame grows in, and over which it dies out.
+    pub fade: (f32, f32),
+    /// Frames per second of the spread clip (the noise time of a flame is `time · fps`).
+    pub fps: f32,
+    /// Straight RGBA albedo of the mesh.
+    pub mesh_color: [f32; 4],
+    /// Light reaching the mesh from elsewhere.
+    pub ambient: f32,
+    /// Direction towards the key light.
+    pub sun: Vec3,
+    /// Key light strength.
+    pub sun_strength: f32,
+    /// Flame lights (§3.2.4); `None` for no flame light on the mesh.
+    pub lights: Option<LightParams>,
+    /// Background colour.
+    pub background: [f32; 4],
+}
+
+impl Default for FireLook {
+    fn default() -> Self {
+        FireLook {
+            flame: FlameParams {
+                steps: 14,
+                sides: 12,
+                dt: 0.03,
+                speed: 1.0,
+                normalize: true,
+                size: 0.06,
+                size_jitter: 0.3,
+                shape: default_shape(),
+                ..FlameParams::default()
+            },
+            fade: (0.15, 0.35),
+            fps: 24.0,
+            mesh_color: [0.62, 0.55, 0.45, 1.0],
+            ambient: 0.2,
+            sun: Vec3::new(0.4, 1.0, 0.7),
+            sun_strength: 0.55,
+            lights: Some(LightParams { intensity: 0.01, flicker: 0.35, rate: 0.35, seed: 0 }),
+            background: [0.02, 0.02, 0.03, 1.0],
+        }
+    }
+}
+
+const WIDTH_RAMP: &str = "0: 0.67; 0.5: 1.07; 1: 0.5";
+const HEIGHT_RAMP: &str = "0: 0.2; 1: 0.9";
+
+fn default_shape() -> Shape {
+    match (Ramp::parse(WIDTH_RAMP), Ramp::parse(HEIGHT_RAMP)) {
+        (Ok(width), Ok(height)) => Shape::Ramp { width, height },
+        _ => Shape::perry(),
+    }
+}
+
+fn fade(age: f32, life: f32, (grow, die): (f32, f32)) -> f32 {
+    let a = if life > 0.0 { (age / life).clamp(0.0, 1.0) } else { 1.0 };
+    let up = if grow > 0.0 { a / grow } else { 1.0 };
+    let down = if die > 0.0 { (1.0 - a) / die } else { 1.0 };
+    up.min(down).clamp(0.0, 1.0)
+}
+
+/// A particle flame at every live root of `state` (Perry §3.4: the root is `p(0)`, the face normal
+/// the initial direction of `v_p`), faded in and out over the root's life. Group = root id.
+pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> Particles {
+    let p = &look.flame;
+    let t = state.time * look.fps;
+    let per_root: Vec<Vec<Particle>> = state
+        .roots
+        .par_iter()
+        .map(|r| {
+            let f = fade(r.age, r.lifetime, look.fade);
+            if f <= 0.0 {
+                return Vec::new();
+            }
+            let root = Root { position: Vec3::from_array(r.position), direction: Vec3::from_array(r.direction) };
+            let path = trace(&root, wind, p, t);
+            if path.iter().any(|(q, _)| !q.is_finite()) {
+                return Vec::new();
+            }
+            let jitter = 1.0 + p.size_jitter * (2.0 * crate::flame::unit_random(p.seed, r.id as usize, 3) - 1.0);
+            let size = p.size * jitter * (0.35 + 0.65 * f);
+            let n = path.len();
+            path.iter()
+                .enumerate()
+                .map(|(s, (q, v))| {
+                    let a = if n > 1 { s as f32 / (n - 1) as f32 } else { 0.0 };
+                    let (mut center, mut edge) = (p.center.eval(a), p.edge.eval(a));
+                    center[3] *= f;
+                    edge[3] *= f;
+                    Particle {
+                        position: q.to_array(),
+                        velocity: v.to_array(),
+                        size: (p.shape.scale(s, n) * size).to_array(),
+                        center,
+                        edge,
+                        weight: s as f32,
+                        group: r.id,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    Particles { particles: per_root.concat(), sides: p.sides, time: t }
+}
+
+/// Light arriving at `p` with normal `n`: key light plus Σ I·rgb·cosθ / (1 + d²) over `lights`.
+fn shade(p: Vec3, n: Vec3, lights: &Particles, look: &FireLook, sun: Vec3) -> Vec3 {
+    let mut l = Vec3::splat(look.ambient + look.sun_strength * n.dot(sun).max(0.0));
+    for q in &lights.particles {
+        let d = Vec3::from_array(q.position) - p;
+        let d2 = d.length_squared();
+        let cos = if d2 > 0.0 { (n.dot(d) / d2.sqrt()).max(0.0) } else { 1.0 };
+        l += Vec3::new(q.center[0], q.center[1], q.center[2]) * (q.weight * cos / (1.0 + d2));
+    }
+    l
+}
+
+fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> Vec<DrawList> {
+    let sun = look.sun.normalize_or_zero();
+    let albedo = Vec3::new(look.mesh_color[0], look.mesh_color[1], look.mesh_color[2]);
+    let chunk = (mesh.triangles.len() / (rayon::current_num_threads() * 4)).max(256);
+    mesh.triangles
+        .par_chunks(chunk)
+        .enumerate()
+        .map(|(ci, tris)| {
+            let mut list = DrawList::new(view);
+            for (k, tri) in tris.iter().enumerate() {
+                let t = ci * chunk + k;
+                let n = Vec3::from_array(mesh.normals[t]);
+                let v = tri.map(|i| {
+                    let p = Vec3::from_array(mesh.positions[i as usize]);
+                    let c = albedo * shade(p, n, lights, look, sun);
+                    Vertex::new(p, [c.x, c.y, c.z, 1.0])
+                });
+                list.triangle(v, Blend::Opaque);
+            }
+            list
+        })
+        .collect()
+}
+
+fn draw_char(view: &View, chars: &Particles) -> DrawList {
+    let mut list = DrawList::new(view);
+    let sides = chars.sides.clamp(3, 64) as usize;
+    let ring: Vec<(f32, f32)> = (0..sides).map(|k| (std::f32::consts::TAU * k as f32 / sides as f32).sin_cos()).collect();
+    for q in &chars.particles {
+        let c = Vec3::from_array(q.position);
+        let n = Vec3::from_array(q.velocity).normalize_or_zero();
+        if n == Vec3::ZERO || !c.is_finite() {
+            continue;
+        }
+        let u = n.any_orthonormal_vector();
+        let w = n.cross(u);
+        let centre = Vertex::new(c, q.center);
+        let rim = |k: usize| {
+            let (s, co) = ring[k % sides];
+            Vertex::new(c + (u * co * q.size[0]) + (w * s * q.size[1]), q.edge)
+        };
+        for k in 0..sides {
+            list.triangle([centre, rim(k), rim(k + 1)], Blend::Over);
+        }
+    }
+    list
+}
+
+fn draw_flames(view: &View, flames: &Particles) -> Vec<DrawList> {
+    let sides = flames.sides.max(3);
+    let chunk = (flames.particles.len() / (rayon::current_num_threads() * 4)).max(512);
+    flames
+        .particles
+        .par_chunks(chunk)
+        .map(|c| {
+            let mut list = DrawList::new(view);
+            for q in c {
+                list.particle(Vec3::from_array(q.position), Vec2::from_array(q.size), sides, q.center, q.edge, Blend::Additive);
+            }
+            list
+        })
+        .collect()
+}
+
+/// One frame of a burning mesh (Perry §3.4): the mesh shaded by a key light and the flame lights,
+/// char discs laid on the surface (blended "over"), and the root flames added to saturation.
+pub fn render_fire(
+    view: &View,
+    mesh: &Mesh,
+    state: &SpreadState,
+    wind: &WindField,
+    chars: &Particles,
+    look: &FireLook,
+) -> Result<Image, NodeError> {
+    validate_params(&look.flame)?;
+    validate_wind(wind, "wind")?;
+    if mesh.normals.len() != mesh.triangles.len() {
+        return Err(NodeError::port("mesh", "the mesh has no face normals: load it with particles.mesh_load"));
+    }
+    let sampler = WindSampler::new(wind);
+    let flames = root_flames(state, &sampler, look);
+    let lights = match &look.lights {
+        Some(lp) => flame_lights(&flames, lp),
+        None => Particles::default(),
+    };
+    let mut lists = draw_mesh(view, mesh, &lights, look);
+    lists.push(draw_char(view, chars));
+    lists.extend(draw_flames(view, &flames));
+    Ok(render(view, &lists, look.background).to_image())
+}
+
+fn render_fire_desc() -> NodeDesc {
+    let d = FireLook::default();
+    NodeDesc::new(
+        "particles.render_fire",
+        "Particles",
+        TimeDep::PerFrame,
+        "Renders a spreading fire (Perry 1994 §3.4): the mesh, Gouraud-shaded by a key light and by a point light \
+         per flame (§3.2.4); char discs laid flat on the surface (§3.4.1, connect particles.char); and at every \
+         live flame root of the spread a particle flame (§3.2.1–3.2.3) that starts along the face normal, moves \
+         through the wind field, grows in after the root is dropped and dies out at the end of its lifetime l_f. \
+         Flames blend additively to saturation. Connect the Clip<SpreadState> of particles.fire_spread to get a \
+         clip of frames.",
+    )
+    .input(PortDesc::new("spread", PortType::SpreadState, "Spread state (particles.fire_spread)."))
+    .input(PortDesc::new("mesh", PortType::Mesh, "The burning mesh (particles.mesh_load)."))
+    .input(PortDesc {
+        default: Some(Value::WindField(Arc::new(WindField::default()))),
+        ..PortDesc::new("wind", PortType::WindField, "Wind field the flames move in (particles.wind_field).")
+    })
+    .input(PortDesc {
+        default: Some(Value::Particles(Arc::new(Particles::default()))),
+        ..PortDesc::new("char", PortType::Particles, "Char discs (particles.char); default none.")
+    })
+    .input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
+    .input(PortDesc::int("height", 360, (1, 16384), "Image height in pixels."))
+    .input(PortDesc::vec3("camera_position", [2.2, 1.5, 2.6], "Eye position."))
+    .input(PortDesc::vec3("camera_target", [0.0, 0.2, 0.0], "Point looked at."))
+    .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
+    .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
+    .input(PortDesc::float("near", 0.05, (0.0001, 1e6), "Near plane distance."))
+    .input(PortDesc::float("far", 100.0, (0.001, 1e7), "Far plane distance."))
+    .input(PortDesc::color("background", d.background, "Background colour (straight RGBA)."))
+    .input(PortDesc::color("mesh_color", d.mesh_color, "Mesh albedo."))
+    .input(PortDesc::float("ambient", d.ambient as f64, (0.0, 1.0), "Ambient light on the mesh."))
+    .input(PortDesc::vec3("sun_direction", [0.4, 1.0, 0.7], "Direction towards the key light."))
+    .input(PortDesc::float("sun", d.sun_strength as f64, (0.0, 10.0), "Key light strength."))
+    .input(PortDesc::float("fps", 24.0, (1.0, 240.0), "Frames per second of the spread (noise time = time · fps)."))
+    .input(PortDesc::int("steps", d.flame.steps as i64, (1, 1000), "Particle steps per flame."))
+    .input(PortDesc::int("triangles", d.flame.sides as i64, (3, 256), "Triangles per particle."))
+    .input(PortDesc::float("dt", d.flame.dt as f64, (0.001, 10.0), "Time step of the flame trajectory integration."))
+    .input(PortDesc::float("speed", d.flame.speed as f64, (0.0, 100.0), "Initial speed along the face normal."))
+    .input(PortDesc::bool("normalize", d.flame.normalize, "Re-normalize |v_p| every step (§3.2.3)."))
+    .input(PortDesc::float("flame_size", d.flame.size as f64, (0.0, 1000.0), "Particle radius in world units."))
+    .input(PortDesc::float("size_jitter", d.flame.size_jitter as f64, (0.0, 1.0), "Random per-flame size variation."))
+    .input(PortDesc::string("width_ramp", WIDTH_RAMP, "Particle width scale over normalized age."))
+    .input(PortDesc::string("height_ramp", HEIGHT_RAMP, "Particle height scale over normalized age."))
+    .input(PortDesc::string("center_ramp", DEFAULT_CENTER, "Centre vertex RGBA over normalized age: `pos: r g b a; …`."))
+    .input(PortDesc::string("edge_ramp", DEFAULT_EDGE, "Rim vertex RGBA over normalized age: `pos: r g b a; …`."))
+    .input(PortDesc::float("grow", d.fade.0 as f64, (0.0, 1.0), "Fraction of a root's life over which its flame grows in."))
+    .input(PortDesc::float("die", d.fade.1 as f64, (0.0, 1.0), "Fraction of a root's life over which its flame dies out."))
+    .input(PortDesc::bool("lights", true, "Light the mesh by a point light per flame (§3.2.4)."))
+    .input(PortDesc::float("light_intensity", 0.01, (0.0, 1000.0), "Mean intensity of each flame light."))
+    .input(PortDesc::float("flicker", 0.35, (0.0, 1.0), "Relative flicker of the flame lights."))
+    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the flame size variation and light flicker."))
+    .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
+}
+
+fn ramp<const N: usize>(i: &Inputs<'_>, name: &str) -> Result<Ramp<N>, NodeError> {
+    Ramp::parse(i.string(name)?).map_err(|m| NodeError::port(name, m))
+}
+
+fn cook_render_fire(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+    let view = view_from_inputs(i)?;
+    let seed = i.int("seed")?;
+    let seed = u32::try_from(seed).map_err(|_| NodeError::port("seed", format!("must be 0..=4294967295, got {seed}")))?;
+    let sun = pyrograph_render::ports::vec3(i, "sun_direction")?;
+    let look = FireLook {
+        flame: FlameParams {
+            steps: i.usize("steps")?,
+            sides: u32::try_from(i.usize("triangles")?).map_err(|_| NodeError::port("triangles", "too large"))?,
+            dt: i.float("dt")? as f32,
+            speed: i.float("speed")? as f32,
+            normalize: i.bool("normalize")?,
+            size: i.float("flame_size")? as f32,
+            size_jitter: i.float("size_jitter")? as f32,
+            shape: Shape::Ramp { width: ramp(i, "width_ramp")?, height: ramp(i, "height_ramp")? },
+            center: ramp(i, "center_ramp")?,
+            edge: ramp(i, "edge_ramp")?,
+            seed,
+            ..FlameParams::default()
+        },
+        fade: (i.float("grow")? as f32, i.float("die")? as f32),
+        fps: i.float("fps")? as f32,
+        mesh_color: i.color("mesh_color")?,
+        ambient: i.float("ambient")? as f32,
+        sun,
+        sun_strength: i.float("sun")? as f32,
+        lights: if i.bool("lights")? {
+            Some(LightParams {
+                intensity: i.float("light_intensity")? as f32,
+                flicker: i.float("flicker")? as f32,
+                rate: 0.35,
+                seed,
+            })
+        } else {
+            None
+        },
+        background: i.color("background")?,
+    };
+    ctx.check_cancel()?;
+    let image =
+        render_fire(&view, i.mesh("mesh")?, i.spread_state("spread")?, i.wind_field("wind")?, i.particles("char")?, &look)?;
+    Ok(vec![Value::Image(Arc::new(image))])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{build_mesh, cube};
+    use crate::spread::{Ignition, Spread, SpreadParams, Surface, spread_wind};
+    use pyrograph_render::Camera;
+
+    #[test]
+    fn a_burning_cube_shows_the_mesh_the_flames_and_the_char() {
+        let mesh = build_mesh(&cube(1.0, 4), 0, true).unwrap();
+        let surface = Arc::new(Surface::new(&mesh).unwrap());
+        let (face, bary, _) = surface.nearest(Vec3::new(0.0, 0.5, 0.0));
+        let params = SpreadParams { lifetime: 0.6, ..SpreadParams::default() };
+        let mut s = Spread::new(surface, vec![Ignition { face, bary, time: 0.0 }], params).unwrap();
+        let wind = WindField::default();
+        let w = spread_wind(&wind);
+        for _ in 0..36 {
+            s.step(1.0 / 24.0, &w);
+        }
+        let state = s.state();
+        assert!(!state.roots.is_empty() && !state.char_marks.is_empty());
+        let chars = crate::char::char_particles(&state, &crate::char::CharParams { glow: false, ..Default::default() });
+        let cam = Camera::new(Vec3::new(0.0, 3.0, 0.01), Vec3::ZERO, Vec3::Y, 40.0, 0.05, 100.0).unwrap();
+        let view = View::new(cam, 96, 96).unwrap();
+        let look = FireLook::default();
+        let img = render_fire(&view, &mesh, &state, &wind, &chars, &look).unwrap();
+        let px = |x: u32, y: u32| {
+            let d = img.data();
+            let k = ((y * 96 + x) * 4) as usize;
+            [d[k], d[k + 1], d[k + 2]]
+        };
+        // Looking down on the top face (it spans pixels ≈ 22–74): its corner is lit mesh, the
+        // burning ring around the ignition point is bright flame.
+        let corner = px(25, 25);
+        assert!(corner[0] > 0.1 && corner[0] < 0.9, "mesh {corner:?}");
+        let bright = img.data().chunks(4).filter(|p| p[0] > 0.95 && p[1] > 0.3).count();
+        assert!(bright > 20, "flame pixels: {bright}");
+        let none = render_fire(&view, &mesh, &SpreadState::default(), &wind, &Particles::default(), &look).unwrap();
+        assert!(none.data().chunks(4).all(|p| p[0] < 0.95), "no roots, no flames");
+    }
+}

@@ -114,6 +114,29 @@ fn f_vec(lam: &Lambda, z: &[f64]) -> Vec<f64> {
     out
 }
 
+/// The converged covariances of the forward pass, from frame `from` on.
+struct SteadyFilter {
+    l: Mat<f64>,
+    w: Mat<f64>,
+    logdet: f64,
+    pp: Mat<f64>,
+    pf: Mat<f64>,
+    fp: Mat<f64>,
+    from: usize,
+}
+
+/// Whether two covariances agree to 1e-10 of their largest entry (converged).
+fn same(a: &Mat<f64>, b: &Mat<f64>) -> bool {
+    let (mut scale, mut diff) = (0.0f64, 0.0f64);
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            scale = scale.max(a[(i, j)].abs());
+            diff = diff.max((a[(i, j)] - b[(i, j)]).abs());
+        }
+    }
+    diff <= 1e-10 * scale.max(1e-300)
+}
+
 /// The exact E-step: Kalman filter, RTS smoother and lag-one covariances on the stacked state.
 /// `y` is `frames × D` row-major (scaled).
 pub fn kalman_estep(y: &[f64], frames: usize, lam: &Lambda) -> Result<Stats, String> {
@@ -125,7 +148,29 @@ pub fn kalman_estep(y: &[f64], frames: usize, lam: &Lambda) -> Result<Stats, Str
     let mut p_filt: Vec<Mat<f64>> = Vec::with_capacity(frames);
     let mut fp: Vec<Mat<f64>> = Vec::with_capacity(frames); // F P_filt[t]
     let mut ll = 0.0;
+    // The system is time-invariant, so the covariances converge to steady values after a few
+    // frames; from then on they (and the gain) are reused instead of recomputed — the same
+    // numbers to the convergence test's tolerance, at the cost of the mean updates only.
+    let mut steady: Option<SteadyFilter> = None;
     for t in 0..frames {
+        let yt = &y[t * dim..(t + 1) * dim];
+        if let Some(sf) = &steady {
+            let mp = f_vec(lam, &m_filt[t - 1]);
+            let mut v = Mat::<f64>::from_fn(dim, 1, |i, _| yt[i] - mp[i]);
+            solve_lower_triangular_in_place(sf.l.as_ref(), v.as_mut(), Par::Seq);
+            let quad: f64 = (0..dim).map(|i| v[(i, 0)] * v[(i, 0)]).sum();
+            ll += -0.5 * (dim as f64 * LN_2PI + sf.logdet + quad);
+            let mut mf = mp.clone();
+            for (j, m) in mf.iter_mut().enumerate() {
+                *m += (0..dim).map(|i| sf.w[(i, j)] * v[(i, 0)]).sum::<f64>();
+            }
+            fp.push(sf.fp.clone());
+            m_pred.push(mp);
+            p_pred.push(sf.pp.clone());
+            m_filt.push(mf);
+            p_filt.push(sf.pf.clone());
+            continue;
+        }
         let (mp, pp) = if t == 0 {
             (lam.mu0.clone(), Mat::<f64>::from_fn(n, n, |i, j| if i == j { lam.v0 } else { 0.0 }))
         } else {
@@ -141,7 +186,6 @@ pub fn kalman_estep(y: &[f64], frames: usize, lam: &Lambda) -> Result<Stats, Str
             fp.push(g);
             (mp, pp)
         };
-        let yt = &y[t * dim..(t + 1) * dim];
         let mut s = pp.submatrix(0, 0, dim, dim).to_owned();
         for i in 0..dim {
             s[(i, i)] += lam.r[i];
@@ -162,6 +206,10 @@ pub fn kalman_estep(y: &[f64], frames: usize, lam: &Lambda) -> Result<Stats, Str
         let mut pf = pp.clone();
         matmul(pf.as_mut(), Accum::Add, w.transpose(), w.as_ref(), -1.0, Par::Seq);
         symmetrize(&mut pf);
+        if t >= 1 && same(&pp, &p_pred[t - 1]) && same(&pf, &p_filt[t - 1]) {
+            let fpt = f_left(a, pf.as_ref(), dim);
+            steady = Some(SteadyFilter { l: l.to_owned(), w, logdet, pp: pp.clone(), pf: pf.clone(), fp: fpt, from: t });
+        }
         m_pred.push(mp);
         p_pred.push(pp);
         m_filt.push(mf);
@@ -187,28 +235,61 @@ pub fn kalman_estep(y: &[f64], frames: usize, lam: &Lambda) -> Result<Stats, Str
     let mut ms = m_filt[frames - 1].clone();
     let mut ps = p_filt[frames - 1].clone();
     add_obs(&mut st, &y[(frames - 1) * dim..frames * dim], &ms, &ps);
+    // In the steady zone (P_filt[t] and P_pred[t+1] both steady) Jᵀ is constant, and once the
+    // smoothed covariance stops changing it stays put: both are then reused.
+    let steady_from = steady.as_ref().map_or(usize::MAX, |s| s.from);
+    let mut steady_jt: Option<Mat<f64>> = None;
+    let mut settled: Option<(Mat<f64>, Mat<f64>)> = None; // (cross, P_s) once converged
     for t in (0..frames - 1).rev() {
+        let in_steady = t >= steady_from;
+        if !in_steady {
+            settled = None;
+        }
         // Jᵀ = P_pred[t+1]⁻¹ F P_filt[t]
-        let llt = p_pred[t + 1]
-            .llt(Side::Lower)
-            .map_err(|_| format!("predicted covariance at frame {} is not positive definite", t + 1))?;
-        let mut jt = fp[t].clone();
-        llt.solve_in_place(jt.as_mut());
+        let jt = match (&steady_jt, in_steady) {
+            (Some(j), true) => j.clone(),
+            _ => {
+                let llt = p_pred[t + 1]
+                    .llt(Side::Lower)
+                    .map_err(|_| format!("predicted covariance at frame {} is not positive definite", t + 1))?;
+                let mut jt = fp[t].clone();
+                llt.solve_in_place(jt.as_mut());
+                if in_steady {
+                    steady_jt = Some(jt.clone());
+                }
+                jt
+            }
+        };
         // Cov(z_{t+1}, z_t | y) = P_s[t+1] Jᵀ; only the x rows are needed.
-        let mut cross = Mat::<f64>::zeros(dim, n);
-        matmul(cross.as_mut(), Accum::Replace, ps.as_ref().subrows(0, dim), jt.as_ref(), 1.0, Par::Seq);
+        let cross = match &settled {
+            Some((c, _)) => c.clone(),
+            None => {
+                let mut cross = Mat::<f64>::zeros(dim, n);
+                matmul(cross.as_mut(), Accum::Replace, ps.as_ref().subrows(0, dim), jt.as_ref(), 1.0, Par::Seq);
+                cross
+            }
+        };
         let mut ms_prev = m_filt[t].clone();
         let diff: Vec<f64> = (0..n).map(|i| ms[i] - m_pred[t + 1][i]).collect();
         for (i, m) in ms_prev.iter_mut().enumerate() {
             *m += (0..n).map(|k| jt[(k, i)] * diff[k]).sum::<f64>();
         }
-        let mut delta = ps.clone();
-        delta -= &p_pred[t + 1];
-        let mut tmp = Mat::<f64>::zeros(n, n);
-        matmul(tmp.as_mut(), Accum::Replace, delta.as_ref(), jt.as_ref(), 1.0, Par::Seq);
-        let mut ps_prev = p_filt[t].clone();
-        matmul(ps_prev.as_mut(), Accum::Add, jt.transpose(), tmp.as_ref(), 1.0, Par::Seq);
-        symmetrize(&mut ps_prev);
+        let ps_prev = match &settled {
+            Some((_, p)) => p.clone(),
+            None => {
+                let mut delta = ps.clone();
+                delta -= &p_pred[t + 1];
+                let mut tmp = Mat::<f64>::zeros(n, n);
+                matmul(tmp.as_mut(), Accum::Replace, delta.as_ref(), jt.as_ref(), 1.0, Par::Seq);
+                let mut ps_prev = p_filt[t].clone();
+                matmul(ps_prev.as_mut(), Accum::Add, jt.transpose(), tmp.as_ref(), 1.0, Par::Seq);
+                symmetrize(&mut ps_prev);
+                if in_steady && same(&ps_prev, &ps) {
+                    settled = Some((cross.clone(), ps_prev.clone()));
+                }
+                ps_prev
+            }
+        };
 
         // Transition t → t+1: x = ms[..dim], z_prev = ms_prev.
         for i in 0..dim {
@@ -441,25 +522,29 @@ fn yt_at(y: &[f64], dim: usize, t: usize) -> &[f64] {
 /// The M-step: [A d] = S_xu S_uu⁻¹, Q = (S_xx − [A d] S_xuᵀ) / (T − 1), r_i = mean E[(y − x)²]
 /// (not below `min_r`), μ_0 = E[z_1 | y]. Every block maximizes its own term of the expected
 /// complete-data log-likelihood, so the likelihood cannot decrease (exact E-step).
-pub fn m_step(st: &Stats, lam: &Lambda, min_r: f64) -> Result<Lambda, String> {
+pub fn m_step(st: &Stats, lam: &Lambda, min_r: f64, learn_d: bool) -> Result<Lambda, String> {
     let (dim, n) = (lam.dim, lam.state_dim());
     let tn = st.transitions as f64;
-    let mut suu = Mat::<f64>::zeros(n + 1, n + 1);
+    // Regressors u = [z_{t−1}, 1], or z_{t−1} alone when d is held at 0.
+    let nu = if learn_d { n + 1 } else { n };
+    let mut suu = Mat::<f64>::zeros(nu, nu);
     suu.as_mut().submatrix_mut(0, 0, n, n).copy_from(st.szz.as_ref());
-    for i in 0..n {
-        suu[(i, n)] = st.sz1[i];
-        suu[(n, i)] = st.sz1[i];
+    if learn_d {
+        for i in 0..n {
+            suu[(i, n)] = st.sz1[i];
+            suu[(n, i)] = st.sz1[i];
+        }
+        suu[(n, n)] = tn;
     }
-    suu[(n, n)] = tn;
     symmetrize(&mut suu);
     let llt = suu
         .llt(Side::Lower)
         .map_err(|_| "the state statistics are singular: too few frames or linearly dependent parameters".to_string())?;
     // Θᵀ = S_uu⁻¹ S_xuᵀ
-    let mut theta_t = Mat::<f64>::from_fn(n + 1, dim, |j, i| if j < n { st.sxz[(i, j)] } else { st.sx1[i] });
+    let mut theta_t = Mat::<f64>::from_fn(nu, dim, |j, i| if j < n { st.sxz[(i, j)] } else { st.sx1[i] });
     llt.solve_in_place(theta_t.as_mut());
     let a = Mat::<f64>::from_fn(dim, n, |i, j| theta_t[(j, i)]);
-    let d: Vec<f64> = (0..dim).map(|i| theta_t[(n, i)]).collect();
+    let d: Vec<f64> = (0..dim).map(|i| if learn_d { theta_t[(n, i)] } else { 0.0 }).collect();
     // Q = (S_xx − Θ S_xuᵀ) / (T − 1)
     let mut q = st.sxx.clone();
     for i in 0..dim {
@@ -468,7 +553,9 @@ pub fn m_step(st: &Stats, lam: &Lambda, min_r: f64) -> Result<Lambda, String> {
             for j in 0..n {
                 s += theta_t[(j, i)] * st.sxz[(k, j)];
             }
-            s += theta_t[(n, i)] * st.sx1[k];
+            if learn_d {
+                s += theta_t[(n, i)] * st.sx1[k];
+            }
             q[(i, k)] -= s;
         }
     }
@@ -505,6 +592,60 @@ pub fn initial_lambda(y: &[f64], frames: usize, dim: usize, order: usize, r0: f6
         mu0,
         v0: 1.0,
     }
+}
+
+/// λ_0 from conditional least squares: the M-step applied to the observations taken as exact
+/// states (x_t = y_t, no covariance), i.e. the ordinary VAR(K) regression of y_t on
+/// [y_{t−1} … y_{t−K}, 1] — the maximum of the likelihood in the limit of no observation noise.
+/// EM then only has to find the observation noise and the small corrections it brings.
+pub fn least_squares_lambda(
+    y: &[f64],
+    frames: usize,
+    dim: usize,
+    order: usize,
+    r0: f64,
+    learn_d: bool,
+) -> Result<Lambda, String> {
+    let n = dim * order;
+    let stacked = |t: usize| -> Vec<f64> {
+        // z_t = [x_t, x_{t−1}, …, x_{t−K+1}]
+        (0..order).flat_map(|k| y[(t - k) * dim..(t - k + 1) * dim].iter().copied()).collect()
+    };
+    let mut st = Stats {
+        log_likelihood: 0.0,
+        sxz: Mat::zeros(dim, n),
+        sx1: vec![0.0; dim],
+        szz: Mat::zeros(n, n),
+        sz1: vec![0.0; n],
+        sxx: Mat::zeros(dim, dim),
+        transitions: frames - order,
+        obs_sq: vec![0.0; dim],
+        frames,
+        z1: stacked(order - 1),
+    };
+    for t in order..frames {
+        let (x, z) = (&y[t * dim..(t + 1) * dim], stacked(t - 1));
+        for i in 0..dim {
+            st.sx1[i] += x[i];
+            for j in 0..n {
+                st.sxz[(i, j)] += x[i] * z[j];
+            }
+            for j in 0..dim {
+                st.sxx[(i, j)] += x[i] * x[j];
+            }
+        }
+        for i in 0..n {
+            st.sz1[i] += z[i];
+            for j in 0..n {
+                st.szz[(i, j)] += z[i] * z[j];
+            }
+        }
+    }
+    let mut lam = m_step(&st, &initial_lambda(y, frames, dim, order, r0), r0, learn_d)?;
+    lam.r = vec![r0; dim];
+    // μ_0 is the first stacked state of the frames (z_1 = [y_1, y_1, …] as in the diagonal start).
+    lam.mu0 = initial_lambda(y, frames, dim, order, r0).mu0;
+    Ok(lam)
 }
 
 /// AR(K) coefficients of a zero-mean series by the Yule–Walker equations (Levinson–Durbin),

@@ -73,7 +73,8 @@ pub struct ArModel {
     pub d: Vec<f64>,
     /// Noise matrix B, `dim × dim` row-major (w_t is unit Gaussian).
     pub b: Vec<f64>,
-    /// Observation noise variances (`dim`; the diagonal of the observation covariance).
+    /// Observation noise variances (`dim`; the diagonal of the observation covariance), in the
+    /// unit-variance space of the learning.
     pub observation_noise: Vec<f64>,
     /// Per-parameter offset subtracted before scaling (the training mean).
     pub offset: Vec<f64>,

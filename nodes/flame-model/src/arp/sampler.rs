@@ -26,6 +26,8 @@ pub struct ArSampler {
     x: Vec<f64>,
     offset: Vec<f64>,
     scale: Vec<f64>,
+    /// Observation noise standard deviations (scaled space).
+    obs_sd: Vec<f64>,
     rng: Rng,
 }
 
@@ -63,6 +65,7 @@ impl ArSampler {
             x: vec![0.0; dim],
             offset: model.offset.clone(),
             scale: model.scale.clone(),
+            obs_sd: model.observation_noise.iter().map(|r| r.max(0.0).sqrt()).collect(),
             rng: Rng::new(seed),
         };
         s.set_history(&model.initial)?;
@@ -97,15 +100,8 @@ impl ArSampler {
         self.rng.fill_normal(&mut self.w);
         for i in 0..dim {
             let row = &self.a[i * n..(i + 1) * n];
-            let mut s = self.d[i];
-            for (aij, zj) in row.iter().zip(&self.z) {
-                s += aij * zj;
-            }
             let brow = &self.b[i * dim..i * dim + self.b_len[i]];
-            for (bij, wj) in brow.iter().zip(&self.w) {
-                s += bij * wj;
-            }
-            self.x[i] = s;
+            self.x[i] = self.d[i] + dot(row, &self.z) + dot(brow, &self.w);
         }
         self.z.copy_within(0..n - dim, dim);
         self.z[..dim].copy_from_slice(&self.x);
@@ -120,6 +116,39 @@ impl ArSampler {
             *o = m + s * x;
         }
     }
+}
+
+impl ArSampler {
+    /// One step of eq. 2 seen through the learned observation noise (y_t = x_t + v_t): what a
+    /// camera filming the synthesized flame would measure, with the footage's frame-to-frame
+    /// flicker. The noise does not feed back into the process.
+    #[inline]
+    pub fn observe(&mut self, out: &mut [f64]) {
+        self.step_scaled();
+        let dim = self.dim;
+        self.rng.fill_normal(&mut self.w[..dim]);
+        for i in 0..dim {
+            out[i] = self.offset[i] + self.scale[i] * (self.x[i] + self.obs_sd[i] * self.w[i]);
+        }
+    }
+}
+
+/// Σ a_i b_i over the shorter length, with eight independent partial sums: a single running
+/// sum is one long chain of dependent adds (the compiler may not reorder float adds), which made
+/// the sampler latency-bound.
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0f64; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = ca.remainder().iter().zip(cb.remainder()).map(|(x, y)| x * y).sum();
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 /// A control value that moves linearly from `start` (first frame) to `end` (last frame).
@@ -180,6 +209,10 @@ pub struct Controls {
     pub width: Ramp,
     /// Overall scale factor.
     pub scale: Ramp,
+    /// Add the learned observation noise to each output row ([`ArSampler::observe`]), so the
+    /// synthesized series has the training footage's statistics, flicker included; off gives
+    /// the noise-free process x_t.
+    pub observation_noise: bool,
 }
 
 impl Default for Controls {
@@ -190,6 +223,7 @@ impl Default for Controls {
             height: Ramp::constant(1.0),
             width: Ramp::constant(1.0),
             scale: Ramp::constant(1.0),
+            observation_noise: true,
         }
     }
 }
@@ -227,7 +261,11 @@ pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls
     let r = roles(&model.names);
     let bend_w: Vec<f64> = (0..r.path.len()).map(|j| controls.bend_shape.weight(j, r.path.len())).collect();
     for (f, row) in data.chunks_exact_mut(dim).enumerate() {
-        s.step(row);
+        if controls.observation_noise {
+            s.observe(row);
+        } else {
+            s.step(row);
+        }
         let (bend, hf, wf, sf) = (
             controls.bend.at(f, frames),
             controls.height.at(f, frames),
@@ -272,6 +310,11 @@ pub(super) fn sample_desc() -> NodeDesc {
     .input(PortDesc::float("height", 1.0, (0.0, 100.0), "Factor on the flame height (§5.1)."))
     .input(PortDesc::float("width", 1.0, (0.0, 100.0), "Factor on the width parameters (§5.1)."))
     .input(PortDesc::float("scale", 1.0, (0.0, 100.0), "Factor on the whole flame: path, width and height (§5.1)."))
+    .input(PortDesc::bool(
+        "observation_noise",
+        true,
+        "Add the learned observation noise to each frame (the footage's flicker, and its statistics); off: the smooth process x_t.",
+    ))
     .input(PortDesc::bool("ramp", false, "Ramp every control linearly from its value to its `_end` value over the frames."))
     .input(PortDesc::float("bend_end", 0.0, (-1.0e6, 1.0e6), &ramp_doc("Bend offset")))
     .input(PortDesc::float("height_end", 1.0, (0.0, 100.0), &ramp_doc("Height factor")))
@@ -299,7 +342,14 @@ pub fn controls_from_inputs(i: &Inputs<'_>) -> Result<Controls, NodeError> {
         "quadratic" => BendShape::Quadratic,
         other => return Err(NodeError::port("bend_shape", format!("unknown option '{other}'"))),
     };
-    Ok(Controls { bend: pair("bend")?, bend_shape, height: pair("height")?, width: pair("width")?, scale: pair("scale")? })
+    Ok(Controls {
+        bend: pair("bend")?,
+        bend_shape,
+        height: pair("height")?,
+        width: pair("width")?,
+        scale: pair("scale")?,
+        observation_noise: i.bool("observation_noise")?,
+    })
 }
 
 pub(super) fn cook_sample(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {

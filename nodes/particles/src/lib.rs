@@ -56,4 +56,39 @@ mod tests {
         assert_eq!(img.size(), (32, 24));
         assert!(img.data().chunks(4).any(|p| p[0] > 0.5), "some flame pixels are bright");
     }
+
+    #[test]
+    fn bad_meshes_and_ignitions_are_errors_naming_the_node_file_line_and_port() {
+        let dir = std::env::temp_dir().join(format!("pyrograph-bad-mesh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("garbled.obj"), "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 1 x 0\nf 1 2 3\n").unwrap();
+        std::fs::write(dir.join("points.obj"), "v 0 0 0\nv 1 0 0\nv 1 0 1\n").unwrap();
+        std::fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+        let mut registry = Registry::with_builtins();
+        super::register(&mut registry);
+        let doc = GraphDoc::from_ron(
+            r#"(version: 1, nodes: {
+                "garbled": (type: "particles.mesh_load", params: {"source": "obj", "path": "garbled.obj"}),
+                "points": (type: "particles.mesh_load", params: {"source": "obj", "path": "points.obj"}),
+                "flat": (type: "particles.mesh_load", params: {"source": "obj", "path": "flat.obj"}),
+                "cube": (type: "particles.mesh_load", params: {"source": "cube"}),
+                "spread": (type: "particles.fire_spread", params: {"ignite": "0.5 0.1 0; 3 0 0"}),
+            }, edges: [("cube.mesh", "spread.mesh")])"#,
+        )
+        .unwrap();
+        let graph = Graph::build(&doc, &registry, &dir, &BuildOptions::default()).unwrap();
+        let error = |endpoint: &str| match Evaluator::new().output(&graph, endpoint, &CookCtx::new()) {
+            Ok(_) => panic!("{endpoint} cooked without an error"),
+            Err(e) => e.to_string(),
+        };
+        let e = error("garbled.mesh");
+        assert!(e.contains("port 'path'") && e.contains("garbled.obj") && e.contains("line 4") && e.contains("1 x 0"), "{e}");
+        let e = error("points.mesh");
+        assert!(e.contains("points.obj") && e.contains("no faces"), "{e}");
+        let e = error("flat.mesh");
+        assert!(e.contains("flat.obj") && e.contains("face 1 is degenerate"), "{e}");
+        let e = error("spread.spread");
+        assert!(e.contains("port 'ignite'") && e.contains("ignition 2") && e.contains("off the mesh"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

@@ -1241,6 +1241,72 @@ mod tests {
     }
 
     #[test]
+    fn a_boundary_edge_stops_every_point_on_the_edge() {
+        let surf = surface(&plane(1.0, 2));
+        let p = SpreadParams { double_burn: false, ..SpreadParams::default() };
+        let mut s = Spread::new(surf.clone(), vec![at(&surf, Vec3::new(0.05, 0.0, -0.1))], p).unwrap();
+        // The farthest corner is ≈ 0.78 away; at q_o/K = 0.225 per second that is ≈ 3.5 s.
+        run(&mut s, 5.0, 1.0 / 24.0, &still());
+        let ring = &s.loops()[0];
+        assert!(ring.len() > 16, "points were inserted as the ring grew");
+        for c in ring {
+            assert!(!c.alive, "point at {} still moving", c.position);
+            let off = (c.position.x.abs().max(c.position.z.abs()) - 0.5).abs();
+            assert!(off < 1e-4 && c.position.y.abs() < 1e-6, "stopped at {}, {off} from the rim", c.position);
+        }
+        assert!(s.state().extinguished.len() >= ring.len());
+        // A stopped fire stays stopped.
+        let before = s.state().boundaries;
+        run(&mut s, 0.5, 1.0 / 24.0, &still());
+        assert_eq!(s.state().boundaries, before);
+    }
+
+    #[test]
+    fn curvature_speeds_the_spread_towards_convex_edges_and_slows_it_towards_concave_ones() {
+        let outside = surface(&cube(1.0, 1));
+        let mut inverted = cube(1.0, 1);
+        inverted.polygons.iter_mut().for_each(|p| p.reverse());
+        let inside = surface(&inverted);
+        let d_t = 0.2;
+        // Points on the y = +0.5 face, at distances from its edge x = +0.5.
+        for (surf, sign) in [(&outside, 1.0f32), (&inside, -1.0)] {
+            for (d, want) in [(0.0f32, 0.5f32), (0.05, 0.375), (0.1, 0.25), (0.3, 0.0)] {
+                let p = Vec3::new(0.5 - d, 0.5, 0.03);
+                let (face, _, dist) = surf.nearest(p);
+                assert!(dist < 1e-6);
+                let got = surf.curvature(face, p, d_t);
+                assert!((got - (1.0 + sign * want)).abs() < 1e-4, "sign {sign}, d = {d}: factor {got}");
+                assert_eq!(surf.curvature(face, p, 0.0), 1.0, "d_t = 0 turns curvature off");
+            }
+        }
+        // A spreading fire reaches a convex edge sooner with the curvature term than without.
+        let reach = |d_t: f32| {
+            let p = SpreadParams { d_t, double_burn: false, ..SpreadParams::default() };
+            let mut s = Spread::new(outside.clone(), vec![at(&outside, Vec3::new(0.2, 0.5, 0.0))], p).unwrap();
+            let mut steps = 0;
+            while s.loops()[0].iter().all(|c| c.position.y > 0.5 - 1e-6) {
+                s.step(0.01, &still());
+                steps += 1;
+                assert!(steps < 1000, "never left the top face");
+            }
+            steps
+        };
+        let (with, without) = (reach(0.2), reach(0.0));
+        println!("steps to the first edge: {with} with curvature, {without} without");
+        assert!(with < without, "{with} vs {without}");
+    }
+
+    #[test]
+    fn a_mesh_without_faces_cannot_burn() {
+        let e = Surface::new(&Mesh::default()).unwrap_err();
+        assert!(e.contains("no faces"), "{e}");
+        let mesh = build_mesh(&cube(1.0, 1), 0, true).unwrap();
+        let broken = Mesh { neighbors: Vec::new(), ..mesh };
+        let e = Surface::new(&broken).unwrap_err();
+        assert!(e.contains("inconsistent"), "{e}");
+    }
+
+    #[test]
     fn table_3_1_ranges_are_the_port_ranges() {
         let d = fire_spread_desc();
         let range = |n: &str| d.inputs[d.input_index(n).unwrap()].range;

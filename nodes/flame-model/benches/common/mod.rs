@@ -13,8 +13,11 @@ pub fn footage() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/footage"))
 }
 
+/// Gray planes, one per frame, and their shared (width, height).
+pub type GrayFrames = (Vec<Vec<f32>>, (u32, u32));
+
 /// The candle-black frames and their size, or `None` (with a message) when the footage is absent.
-pub fn candle_frames() -> Option<(Vec<Vec<f32>>, (u32, u32))> {
+pub fn candle_frames() -> Option<GrayFrames> {
     let dir = footage().join("candle-black/frames");
     let Ok(entries) = std::fs::read_dir(&dir) else {
         eprintln!("skipping: no footage at {} (set PYROGRAPH_FOOTAGE)", dir.display());

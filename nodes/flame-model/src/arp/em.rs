@@ -627,11 +627,11 @@ pub fn least_squares_lambda(
         let (x, z) = (&y[t * dim..(t + 1) * dim], stacked(t - 1));
         for i in 0..dim {
             st.sx1[i] += x[i];
-            for j in 0..n {
-                st.sxz[(i, j)] += x[i] * z[j];
+            for (j, zj) in z.iter().enumerate() {
+                st.sxz[(i, j)] += x[i] * zj;
             }
-            for j in 0..dim {
-                st.sxx[(i, j)] += x[i] * x[j];
+            for (j, xj) in x.iter().enumerate() {
+                st.sxx[(i, j)] += x[i] * xj;
             }
         }
         for i in 0..n {

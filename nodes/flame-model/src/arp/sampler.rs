@@ -127,8 +127,8 @@ impl ArSampler {
         self.step_scaled();
         let dim = self.dim;
         self.rng.fill_normal(&mut self.w[..dim]);
-        for i in 0..dim {
-            out[i] = self.offset[i] + self.scale[i] * (self.x[i] + self.obs_sd[i] * self.w[i]);
+        for (i, o) in out.iter_mut().enumerate().take(dim) {
+            *o = self.offset[i] + self.scale[i] * (self.x[i] + self.obs_sd[i] * self.w[i]);
         }
     }
 }

@@ -9,7 +9,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{BVec4A, Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
 use pyrograph_core::{Channels, Image};
 use rayon::prelude::*;
 
@@ -197,21 +197,16 @@ fn clip_polygon(mut poly: Vec<ClipVert>) -> Vec<ClipVert> {
     poly
 }
 
-/// Most rim vertices a particle may have and still take the scanline fast path.
-const MAX_FAN: usize = 256;
+/// Most rim vertices a particle may have and still take the scanline fast path (its per-pixel
+/// cost grows with the side count; Perry's particles have 3–20 sides).
+const MAX_FAN: usize = 64;
 
-/// One rim edge of a fuzzy particle, as the affine function `L(p) = 1 + b·dx + c·dy` of the
-/// pixel offset `(dx, dy)` from the particle's centre: 1 at the centre, 0 on the edge's line.
-/// Inside the fan triangle of that edge `L` is exactly the centre vertex's barycentric weight.
-#[derive(Clone, Copy, Debug)]
-struct FanEdge {
-    b: f32,
-    c: f32,
-    /// `1 / b` (0 when `b` is 0).
-    inv_b: f32,
-    /// `1 / (b − b_next)` with the next edge of the rim.
-    inv_db_next: f32,
-}
+/// One rim edge of a fuzzy particle, `[b, c, p, q]`: the affine function `L(p) = 1 + b·dx + c·dy`
+/// of the pixel offset `(dx, dy)` from the particle's centre, 1 at the centre and 0 on the edge's
+/// line, and that line's crossing of row `dy` at `dx = p + q·dy` (`p = −1/b`, `q = −c/b`; both 0
+/// for a horizontal edge). Inside the fan triangle of that edge `L` is exactly the centre
+/// vertex's barycentric weight.
+type FanEdge = [f32; 4];
 
 /// A fuzzy particle ready for scanline rasterization: a convex polygon around `(cx, cy)` whose
 /// colour is `edge + (center − edge)·L` with `L = min_k L_k` (the Gouraud fan, computed per row
@@ -222,9 +217,15 @@ struct FanSetup {
     cy: f32,
     /// Pixel rows touched, inclusive, clamped to the viewport.
     rows: (i32, i32),
-    /// First of this fan's edges in `DrawList::fan_edges`, and their count.
+    /// First of this fan's edges in `DrawList::fan_edges`: the edges whose fan triangles reach
+    /// the rows at or above the centre (`dy ≤ 0`), then those reaching the rows at or below it (a
+    /// row needs only the triangles it crosses); each half ordered left-facing (`b > 0`),
+    /// right-facing (`b < 0`), then horizontal, with these counts.
     first: u32,
-    n: u32,
+    counts: [[u8; 3]; 2],
+    /// Alpha within [0, 1] and colour ≥ 0 at the centre and at the rim (so everywhere between):
+    /// additive blending needs no clamping of the source.
+    in_range: bool,
     /// Straight RGBA at the rim and centre − rim.
     edge: [f32; 4],
     delta: [f32; 4],
@@ -444,11 +445,31 @@ impl DrawList {
             return;
         }
         let (r, u) = self.view.camera.billboard_axes(center);
+        self.disc(center, (r * half.x, u * half.y), sides, center_rgba, edge_rgba, blend);
+    }
+
+    /// A fuzzy disc in any plane: the N-gon of `sides` triangles around `center` with rim vertices
+    /// at `center + axis_a·cos θ + axis_b·sin θ` (`axes` = `(axis_a, axis_b)`), coloured like [`DrawList::particle`] (which is
+    /// the camera-facing case) and rasterized the same way. For small discs, such as char marks
+    /// lying on a surface, screen-space interpolation differs from perspective-correct by far
+    /// less than one 8-bit level.
+    pub fn disc(
+        &mut self,
+        center: Vec3,
+        (axis_a, axis_b): (Vec3, Vec3),
+        sides: u32,
+        center_rgba: [f32; 4],
+        edge_rgba: [f32; 4],
+        blend: Blend,
+    ) {
+        if sides < 3 || !center.is_finite() || !axis_a.is_finite() || !axis_b.is_finite() {
+            return;
+        }
         let vp = self.view.view_proj;
         // Projection is linear in homogeneous coordinates: project the centre and the two axes once.
         let c = vp * center.extend(1.0);
-        let rc = vp * (r * half.x).extend(0.0);
-        let uc = vp * (u * half.y).extend(0.0);
+        let rc = vp * axis_a.extend(0.0);
+        let uc = vp * axis_b.extend(0.0);
         let (cc, ec) = (Vec4::from_array(center_rgba), Vec4::from_array(edge_rgba));
         if self.ring.len() != sides as usize {
             let step = std::f32::consts::TAU / sides as f32;
@@ -504,7 +525,9 @@ impl DrawList {
         if vs.iter().any(|v| !(0.0..=1.0).contains(&v.z)) {
             return false;
         }
-        let start = self.fan_edges.len();
+        // Each kept edge with the halves its fan triangle reaches (bit 0: rows at or above the
+        // centre, bit 1: at or below) and its side (0 left-facing, 1 right-facing, 2 horizontal).
+        let (mut kept, mut m) = ([([0.0f32; 4], 0u8, 0u8); MAX_FAN], 0);
         let mut sign = 0i64;
         for k in 0..n {
             let (p, q) = (&rim[k], &rim[(k + 1) % n]);
@@ -514,24 +537,44 @@ impl DrawList {
             }
             let ec = edge_fn(p, q, c.x, c.y);
             if ec == 0 || (sign != 0 && ec.signum() != sign) {
-                self.fan_edges.truncate(start);
                 return false;
             }
             sign = ec.signum();
-            let (ec, sub) = (ec as f64, SUB as f64);
-            let b = (-(ey as f64) * sub / ec) as f32;
-            let cy = (ex as f64 * sub / ec) as f32;
-            self.fan_edges.push(FanEdge { b, c: cy, inv_b: if b != 0.0 { 1.0 / b } else { 0.0 }, inv_db_next: 0.0 });
+            let (exf, eyf, ecf, sub) = (ex as f64, ey as f64, ec as f64, SUB as f64);
+            // One division for all four coefficients: 1/ec = ey·r and 1/ey = ec·r.
+            let edge = if ey != 0 {
+                let r = 1.0 / (ecf * eyf);
+                [-eyf * eyf * sub * r, exf * eyf * sub * r, ecf * ecf * r / sub, exf * ecf * r].map(|v| v as f32)
+            } else {
+                [0.0, (exf * sub / ecf) as f32, 0.0, 0.0]
+            };
+            let b = edge[0];
+            let (py, qy) = (p.y - c.y, q.y - c.y);
+            let halves = u8::from(py.min(qy) <= 0) | (u8::from(py.max(qy) >= 0) << 1);
+            let side = if b > 0.0 {
+                0
+            } else if b < 0.0 {
+                1
+            } else {
+                2
+            };
+            kept[m] = (edge, halves, side);
+            m += 1;
         }
-        let m = self.fan_edges.len() - start;
         if m < 3 {
-            self.fan_edges.truncate(start);
             return false;
         }
-        for k in 0..m {
-            let next = self.fan_edges[start + (k + 1) % m].b;
-            let e = &mut self.fan_edges[start + k];
-            e.inv_db_next = 1.0 / (e.b - next);
+        let first = self.fan_edges.len();
+        let mut counts = [[0u8; 3]; 2];
+        for (half, count) in counts.iter_mut().enumerate() {
+            for (side, count) in count.iter_mut().enumerate() {
+                for (e, halves, s) in &kept[..m] {
+                    if halves & (1 << half) != 0 && usize::from(*s) == side {
+                        self.fan_edges.push(*e);
+                        *count += 1;
+                    }
+                }
+            }
         }
         // Depth plane through the centre and the two rim vertices spanning the largest area.
         let px = |v: &SVert| ((v.x - c.x) as f64 / SUB as f64, (v.y - c.y) as f64 / SUB as f64, (v.z - c.z) as f64);
@@ -550,12 +593,14 @@ impl DrawList {
             (0.0, 0.0)
         };
         let delta = std::array::from_fn(|i| center[i] - edge[i]);
+        let in_range = [center, edge].iter().all(|c| (0.0..=1.0).contains(&c[3]) && c[..3].iter().all(|&v| v >= 0.0));
         self.fans.push(FanSetup {
             cx: c.x as f32 / SUB as f32,
             cy: c.y as f32 / SUB as f32,
             rows: (rows.0 as i32, rows.1 as i32),
-            first: start as u32,
-            n: m as u32,
+            first: first as u32,
+            counts,
+            in_range,
             edge,
             delta,
             z: [c.z, gx as f32, gy as f32],
@@ -583,6 +628,7 @@ impl DrawList {
         self.bin_tri([base, base + 1, base + 2], blend, None);
     }
 
+    #[inline(always)]
     fn raster_prim(&self, index: u32, band: &mut Band<'_>) {
         match self.prims[index as usize] {
             Prim::Tri { v, blend, tex } => {
@@ -592,11 +638,13 @@ impl DrawList {
             }
             Prim::Fan { fan, blend } => {
                 let f = &self.fans[fan as usize];
-                let edges = &self.fan_edges[f.first as usize..(f.first + f.n) as usize];
+                let (first, [above, below]) = (f.first as usize, f.counts.map(|c| c.iter().map(|&n| n as usize).sum::<usize>()));
+                let halves = [&self.fan_edges[first..first + above], &self.fan_edges[first + above..first + above + below]];
                 match blend {
-                    Blend::Additive => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Additive)),
-                    Blend::Over => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Over)),
-                    Blend::Opaque => raster_fan(band, f, edges, |d, s| blend_pixel(d, s, Blend::Opaque)),
+                    Blend::Additive if f.in_range => raster_fan(band, f, halves, add_in_range),
+                    Blend::Additive => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Additive)),
+                    Blend::Over => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Over)),
+                    Blend::Opaque => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Opaque)),
                 }
             }
         }
@@ -635,6 +683,7 @@ struct Band<'a> {
 
 /// `(b − a) × (p − a)` in fixed point: positive when `p` is on the inner side of a
 /// positively-oriented triangle.
+#[inline(always)]
 fn edge_fn(a: &SVert, b: &SVert, px: i64, py: i64) -> i64 {
     (b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x)
 }
@@ -647,60 +696,25 @@ fn is_top_left(a: &SVert, b: &SVert) -> bool {
 
 /// Scanline rasterization of a fuzzy particle within one band. Per row: the span is the
 /// intersection of the rim edges' half-planes `L_k ≥ 0` (pixel centres in `[x_left, x_right)`),
-/// and the colour follows the lower envelope `min_k L_k`, walked sector by sector from the
-/// edge that bounds the span on the left; within a sector `L` is linear along the row.
-fn raster_fan(band: &mut Band<'_>, f: &FanSetup, edges: &[FanEdge], blend: impl Fn(&mut [f32; 4], [f32; 4])) {
-    let n = edges.len();
+/// and the colour follows the lower envelope `min_k L_k` (inside the fan triangle of edge k,
+/// `L_k` is the smallest; see [`fill_fan_span`]).
+#[inline(always)]
+fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend: impl Fn(&mut [f32; 4], Vec4)) {
     let r0 = f.rows.0.max(band.y0 as i32);
     let r1 = f.rows.1.min(band.y1 as i32 - 1);
     let w = band.width as i32;
-    let (next, prev) = (|k: usize| if k + 1 == n { 0 } else { k + 1 }, |k: usize| if k == 0 { n - 1 } else { k - 1 });
-    // The edges bounding the span on the left (b > 0) and right (b < 0); found by a full scan on
-    // the first row, then by stepping along the rim as the rows go down.
-    let (mut kl, mut kr) = (usize::MAX, usize::MAX);
+    let mut offsets = [[0.0f32; 2]; MAX_FAN];
     for y in r0..=r1 {
         let dy = y as f32 + 0.5 - f.cy;
-        let a = |k: usize| 1.0 + edges[k].c * dy;
-        // Where edge k's line crosses the row, relative to the centre.
-        let cross = |k: usize| -a(k) * edges[k].inv_b;
-        if kl == usize::MAX || kr == usize::MAX {
-            let (mut xl, mut xr) = (f32::NEG_INFINITY, f32::INFINITY);
-            for (k, e) in edges.iter().enumerate() {
-                if e.b > 0.0 && cross(k) > xl {
-                    (xl, kl) = (cross(k), k);
-                } else if e.b < 0.0 && cross(k) < xr {
-                    (xr, kr) = (cross(k), k);
-                }
-            }
-            if kl == usize::MAX || kr == usize::MAX {
-                return;
-            }
-        } else {
-            // The left boundary is the largest crossing of a left-facing edge, unimodal along the rim.
-            for _ in 0..n {
-                let (kn, kp) = (next(kl), prev(kl));
-                if edges[kn].b > 0.0 && cross(kn) > cross(kl) {
-                    kl = kn;
-                } else if edges[kp].b > 0.0 && cross(kp) > cross(kl) {
-                    kl = kp;
-                } else {
-                    break;
-                }
-            }
-            for _ in 0..n {
-                let (kn, kp) = (next(kr), prev(kr));
-                if edges[kn].b < 0.0 && cross(kn) < cross(kr) {
-                    kr = kn;
-                } else if edges[kp].b < 0.0 && cross(kp) < cross(kr) {
-                    kr = kp;
-                } else {
-                    break;
-                }
-            }
-        }
-        let (xl, xr) = (cross(kl), cross(kr));
-        // Written so a NaN crossing (degenerate edge) also skips the row.
-        if xl >= xr || xl.is_nan() || xr.is_nan() {
+        let half = usize::from(dy > 0.0);
+        let (edges, [left, right, _]) = (halves[half], f.counts[half].map(usize::from));
+        // Where each edge's line crosses the row, relative to the centre: the span is right of
+        // every left-facing edge's crossing and left of every right-facing one's.
+        let cross = |&[_, _, p, q]: &FanEdge| p + q * dy;
+        let xl = edges[..left].iter().map(cross).fold(f32::NEG_INFINITY, |m, x| if x > m { x } else { m });
+        let xr = edges[left..left + right].iter().map(cross).fold(f32::INFINITY, |m, x| if x < m { x } else { m });
+        // Written so an unbounded side (no such edge) also skips the row.
+        if !(xl < xr && xl.is_finite() && xr.is_finite()) {
             continue;
         }
         let px0 = ceil_i32(f.cx + xl - 0.5).max(0);
@@ -708,59 +722,19 @@ fn raster_fan(band: &mut Band<'_>, f: &FanSetup, edges: &[FanEdge], blend: impl 
         if px0 > px1 {
             continue;
         }
-        let at = |k: usize, xd: f32| a(k) + edges[k].b * xd;
-        // The sector of the first pixel: the left-bounding edge's, unless the row starts clipped
-        // at the viewport's left side; L_k is unimodal around the rim, so descend to its minimum.
-        let mut k = kl;
-        let xd0 = px0 as f32 + 0.5 - f.cx;
-        for _ in 0..n {
-            let (kn, kp) = (next(k), prev(k));
-            let cur = at(k, xd0);
-            if at(kn, xd0) < cur {
-                k = kn;
-            } else if at(kp, xd0) < cur {
-                k = kp;
-            } else {
-                break;
-            }
-        }
         let line = (y as usize - band.y0) * band.width;
         let zrow = f.z[0] + f.z[2] * dy;
-        let mut x = px0;
-        for guard in 0..=2 * n {
-            // Where a neighbouring edge's function drops below this one's: the next sector.
-            let (kn, kp) = (next(k), prev(k));
-            let (mut bp, mut to) = (f32::INFINITY, k);
-            if edges[kn].b < edges[k].b {
-                let t = (a(kn) - a(k)) * edges[k].inv_db_next;
-                if t < bp {
-                    (bp, to) = (t, kn);
-                }
-            }
-            if edges[kp].b < edges[k].b {
-                let t = (a(k) - a(kp)) * edges[kp].inv_db_next;
-                if t < bp {
-                    (bp, to) = (t, kp);
-                }
-            }
-            let last = to == k || guard == 2 * n || bp + f.cx >= px1 as f32 + 0.5 || bp.is_nan();
-            let end = if last { px1 } else { (ceil_i32(f.cx + bp - 0.5) - 1).min(px1) };
-            if end >= x {
-                let xd = x as f32 + 0.5 - f.cx;
-                let (l, dl) = (at(k, xd), edges[k].b);
-                let span = line + x as usize..line + end as usize + 1;
-                let z = (zrow + f.z[1] * xd, f.z[1]);
-                if band.has_opaque {
-                    fill_fan_span(&mut band.color[span.clone()], Some(&band.depth[span]), l, dl, z, f, &blend);
-                } else {
-                    fill_fan_span(&mut band.color[span], None, l, dl, z, f, &blend);
-                }
-                x = end + 1;
-            }
-            if last || x > px1 {
-                break;
-            }
-            k = to;
+        for (o, [b, c, _, _]) in offsets.iter_mut().zip(edges) {
+            *o = [1.0 + c * dy, *b];
+        }
+        let env = &offsets[..edges.len()];
+        let span = line + px0 as usize..line + px1 as usize + 1;
+        let xd0 = px0 as f32 + 0.5 - f.cx;
+        let z = (zrow + f.z[1] * xd0, f.z[1]);
+        if band.has_opaque {
+            fill_fan_span(&mut band.color[span.clone()], Some(&band.depth[span]), xd0, z, env, f, &blend);
+        } else {
+            fill_fan_span(&mut band.color[span], None, xd0, z, env, f, &blend);
         }
     }
 }
@@ -772,29 +746,56 @@ fn ceil_i32(x: f32) -> i32 {
     i + i32::from((i as f32) < x)
 }
 
-/// Blends one run of a particle row: `L` starts at `l` and steps by `dl`, depth likewise.
+/// Pixels per block of [`fill_fan_span`]: the lower envelope is evaluated for a block at a time
+/// so the loop over edges vectorizes.
+const FAN_LANES: usize = 8;
+
+/// Blends one row span of a particle starting `xd0` pixels right of its centre: per pixel,
+/// `L = min_k (offset_k + slope_k·xd)` over every rim edge, branch-free in blocks of
+/// [`FAN_LANES`]. Walking the envelope sector by sector needs fewer multiplies but a
+/// data-dependent branch per sector, and particles a few pixels wide cross a sector every
+/// three pixels; measured 2–3× slower at 1,000 flames.
 #[inline(always)]
 fn fill_fan_span(
     color: &mut [[f32; 4]],
     depth: Option<&[f32]>,
-    mut l: f32,
-    dl: f32,
-    (mut z, dz): (f32, f32),
+    xd0: f32,
+    (z0, dz): (f32, f32),
+    env: &[[f32; 2]],
     f: &FanSetup,
-    blend: &impl Fn(&mut [f32; 4], [f32; 4]),
+    blend: &impl Fn(&mut [f32; 4], Vec4),
 ) {
-    let (e, d) = (f.edge, f.delta);
-    for (i, dst) in color.iter_mut().enumerate() {
-        let visible = depth.is_none_or(|zb| z <= zb[i]);
-        if visible {
-            let t = l.clamp(0.0, 1.0);
-            blend(dst, [e[0] + d[0] * t, e[1] + d[1] * t, e[2] + d[2] * t, e[3] + d[3] * t]);
+    let (e, d) = (Vec4::from_array(f.edge), Vec4::from_array(f.delta));
+    for (block, dst) in color.chunks_mut(FAN_LANES).enumerate() {
+        let base = xd0 + (block * FAN_LANES) as f32;
+        let xd: [f32; FAN_LANES] = std::array::from_fn(|i| base + i as f32);
+        let mut l = [f32::INFINITY; FAN_LANES];
+        for &[o, b] in env {
+            for (li, &x) in l.iter_mut().zip(&xd) {
+                let v = o + b * x;
+                // Written as a compare, not `f32::min`, so it lowers to one `minps`.
+                *li = if v < *li { v } else { *li };
+            }
         }
-        l += dl;
-        z += dz;
+        for (i, px) in dst.iter_mut().enumerate() {
+            let visible = depth.is_none_or(|zb| z0 + dz * (xd[i] - xd0) <= zb[block * FAN_LANES + i]);
+            if visible {
+                blend(px, e + d * l[i].clamp(0.0, 1.0));
+            }
+        }
     }
 }
 
+/// Additive blending of a straight-alpha source already known to have alpha in [0, 1] and
+/// colour ≥ 0 (see `FanSetup::in_range`): [`blend_pixel`]'s `Additive` without its clamps, four
+/// lanes at once.
+#[inline(always)]
+fn add_in_range(dst: &mut [f32; 4], src: Vec4) {
+    let weight = Vec4::select(BVec4A::new(true, true, true, false), src.wwww(), Vec4::ONE);
+    *dst = (Vec4::from_array(*dst) + src * weight).min(Vec4::ONE).to_array();
+}
+
+#[inline(always)]
 fn raster_tri(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend, tex: Option<&Image>) {
     let area = edge_fn(a, b, c.x, c.y);
     let (b, c, area) = match area.cmp(&0) {
@@ -822,6 +823,8 @@ fn raster_tri(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend
         dy[k] = (q.x - p.x) * SUB;
     }
     let inv_area = 1.0 / area as f32;
+    let [ca, cb, cc] = [a, b, c].map(|v| Vec4::from_array(v.c));
+    let tex = tex.and_then(Texels::new);
     let depth_write = blend == Blend::Opaque;
     let depth_test = depth_write || band.has_opaque;
     let wide = x1 - x0 >= 8;
@@ -857,19 +860,13 @@ fn raster_tri(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend
                 if (0.0..=1.0).contains(&z) && (!depth_test || z <= band.depth[i]) {
                     let iw = a.iw * l0 + b.iw * l1 + c.iw * l2;
                     let inv = 1.0 / iw;
-                    let mut src = [0.0f32; 4];
-                    for (ch, s) in src.iter_mut().enumerate() {
-                        *s = (a.c[ch] * l0 + b.c[ch] * l1 + c.c[ch] * l2) * inv;
-                    }
-                    if let Some(t) = tex {
+                    let mut src = (ca * l0 + cb * l1 + cc * l2) * inv;
+                    if let Some(t) = &tex {
                         let u = (a.uv[0] * l0 + b.uv[0] * l1 + c.uv[0] * l2) * inv;
                         let v = (a.uv[1] * l0 + b.uv[1] * l1 + c.uv[1] * l2) * inv;
-                        let texel = sample_bilinear(t, u, v);
-                        for ch in 0..4 {
-                            src[ch] *= texel[ch];
-                        }
+                        src *= t.sample(u, v);
                     }
-                    blend_pixel(&mut band.color[i], src, blend);
+                    blend_vec4(&mut band.color[i], src, blend);
                     if depth_write {
                         band.depth[i] = z;
                     }
@@ -885,46 +882,65 @@ fn raster_tri(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend
     }
 }
 
-/// Bilinear, clamp-to-edge sample of an RGBA image at `(u, v)` (0,0 = top-left corner).
+/// An RGBA texture's samples, checked once per triangle instead of once per pixel.
+struct Texels<'a> {
+    data: &'a [f32],
+    width: usize,
+    height: usize,
+}
+
+impl<'a> Texels<'a> {
+    /// `None` for an empty or non-RGBA image (which samples as transparent black).
+    #[inline(always)]
+    fn new(img: &'a Image) -> Option<Texels<'a>> {
+        let (width, height) = (img.width() as usize, img.height() as usize);
+        (width > 0 && height > 0 && img.channels() == Channels::Rgba).then(|| Texels { data: img.data(), width, height })
+    }
+
+    /// Bilinear, clamp-to-edge sample at `(u, v)` (0,0 = top-left corner), four channels at once.
+    #[inline(always)]
+    fn sample(&self, u: f32, v: f32) -> Vec4 {
+        let (w, h) = (self.width, self.height);
+        let fx = (u * w as f32 - 0.5).clamp(0.0, (w - 1) as f32);
+        let fy = (v * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
+        // Both ≥ 0 after the clamp (a NaN clamps to NaN and casts to 0): truncation is floor.
+        let (x0, y0) = (fx as usize, fy as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+        let at = |x: usize, y: usize| {
+            let i = (y * w + x) * 4;
+            Vec4::from_slice(&self.data[i..i + 4])
+        };
+        let top = at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx;
+        let bottom = at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx;
+        top * (1.0 - ty) + bottom * ty
+    }
+}
+
+/// Bilinear, clamp-to-edge sample of an RGBA image at `(u, v)` (0,0 = top-left corner);
+/// transparent black for an empty or non-RGBA image.
 pub fn sample_bilinear(img: &Image, u: f32, v: f32) -> [f32; 4] {
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    if w == 0 || h == 0 || img.channels() != Channels::Rgba {
-        return [0.0; 4];
-    }
-    let fx = (u * w as f32 - 0.5).clamp(0.0, (w - 1) as f32);
-    let fy = (v * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
-    let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-    let d = img.data();
-    let px = |x: usize, y: usize, ch: usize| d[(y * w + x) * 4 + ch];
-    let mut out = [0.0; 4];
-    for (ch, o) in out.iter_mut().enumerate() {
-        let top = px(x0, y0, ch) * (1.0 - tx) + px(x1, y0, ch) * tx;
-        let bottom = px(x0, y1, ch) * (1.0 - tx) + px(x1, y1, ch) * tx;
-        *o = top * (1.0 - ty) + bottom * ty;
-    }
-    out
+    Texels::new(img).map_or([0.0; 4], |t| t.sample(u, v).to_array())
 }
 
 /// Blends straight-alpha `src` into the premultiplied framebuffer pixel `dst`.
 pub fn blend_pixel(dst: &mut [f32; 4], src: [f32; 4], blend: Blend) {
-    let a = src[3].clamp(0.0, 1.0);
-    match blend {
-        Blend::Opaque => *dst = [src[0], src[1], src[2], 1.0],
-        Blend::Over => {
-            for ch in 0..3 {
-                dst[ch] = src[ch] * a + dst[ch] * (1.0 - a);
-            }
-            dst[3] = a + dst[3] * (1.0 - a);
-        }
-        Blend::Additive => {
-            for ch in 0..3 {
-                dst[ch] = (dst[ch] + src[ch].max(0.0) * a).min(1.0);
-            }
-            dst[3] = (dst[3] + a).min(1.0);
-        }
+    blend_vec4(dst, Vec4::from_array(src), blend);
+}
+
+/// [`blend_pixel`], four channels at once.
+#[inline(always)]
+fn blend_vec4(dst: &mut [f32; 4], src: Vec4, blend: Blend) {
+    let a = src.w.clamp(0.0, 1.0);
+    let rgb = BVec4A::new(true, true, true, false);
+    let d = Vec4::from_array(*dst);
+    *dst = match blend {
+        Blend::Opaque => Vec4::select(rgb, src, Vec4::ONE),
+        // rgb: src·a + dst·(1 − a); alpha: a + dst·(1 − a).
+        Blend::Over => Vec4::select(rgb, src, Vec4::ONE) * a + d * (1.0 - a),
+        Blend::Additive => (d + Vec4::select(rgb, src.max(Vec4::ZERO), Vec4::ONE) * a).min(Vec4::ONE),
     }
+    .to_array();
 }
 
 /// A rendered frame: premultiplied RGBA and depth.
@@ -975,19 +991,39 @@ impl Framebuffer {
 /// Premultiplied pixels to straight-alpha RGBA samples (see [`Framebuffer::to_image`]).
 fn write_straight(color: &[[f32; 4]], out: &mut [f32]) {
     for (p, o) in color.iter().zip(out.chunks_exact_mut(4)) {
-        let a = p[3].max(p[0]).max(p[1]).max(p[2]).min(1.0);
-        if a > 0.0 {
-            let inv = 1.0 / a;
-            o.copy_from_slice(&[(p[0] * inv).min(1.0), (p[1] * inv).min(1.0), (p[2] * inv).min(1.0), a]);
+        let p = Vec4::from_array(*p);
+        let a = p.max_element().min(1.0);
+        let straight = if a > 0.0 {
+            Vec4::select(BVec4A::new(true, true, true, false), (p / a).min(Vec4::ONE), Vec4::splat(a))
         } else {
-            o.copy_from_slice(&[0.0; 4]);
-        }
+            Vec4::ZERO
+        };
+        o.copy_from_slice(&straight.to_array());
     }
 }
 
 /// Rasterizes every list's primitives that touch band `bi` into `band`: opaque ones first
 /// (depth test and write), then blended ones (depth test only where something opaque was drawn).
 fn raster_band(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above; the function only lets the compiler
+        // vectorize safe code with it.
+        return unsafe { raster_band_avx2(lists, view, bi, band) };
+    }
+    raster_band_generic(lists, view, bi, band)
+}
+
+/// [`raster_band_generic`] compiled for AVX2 (the particle envelope runs 8 lanes wide). Results
+/// are bit-identical to the baseline build: no fused multiply-adds, no library calls.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn raster_band_avx2(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+    raster_band_generic(lists, view, bi, band)
+}
+
+#[inline(always)]
+fn raster_band_generic(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
     let usable = |l: &&DrawList| l.view.width == view.width && l.view.height == view.height;
     band.has_opaque = lists.iter().filter(usable).any(|l| !l.bins[0][bi].is_empty());
     for pass in 0..2 {

@@ -9,7 +9,7 @@ use pyrograph_core::{
     CookCtx, FnNode, Image, Inputs, Mesh, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, SpreadState,
     TimeDep, Value, WindField,
 };
-use pyrograph_render::{Blend, DrawList, Vertex, View, render};
+use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::flame::{DEFAULT_CENTER, DEFAULT_EDGE, FlameParams, Ramp, Root, Shape, trace, validate_params};
@@ -131,21 +131,88 @@ pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> 
     Particles { particles: per_root.concat(), sides: p.sides, time: t }
 }
 
-/// Light arriving at `p` with normal `n`: key light plus Σ I·rgb·cosθ / (1 + d²) over `lights`.
-fn shade(p: Vec3, n: Vec3, lights: &Particles, look: &FireLook, sun: Vec3) -> Vec3 {
-    let mut l = Vec3::splat(look.ambient + look.sun_strength * n.dot(sun).max(0.0));
-    for q in &lights.particles {
-        let d = Vec3::from_array(q.position) - p;
-        let d2 = d.length_squared();
-        let cos = if d2 > 0.0 { (n.dot(d) / d2.sqrt()).max(0.0) } else { 1.0 };
-        l += Vec3::new(q.center[0], q.center[1], q.center[2]) * (q.weight * cos / (1.0 + d2));
-    }
-    l
+/// Flame lights as columns (position, and colour times intensity), so the sum over them in
+/// [`shade`] vectorizes.
+struct LightColumns {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    r: Vec<f32>,
+    g: Vec<f32>,
+    b: Vec<f32>,
 }
+
+impl LightColumns {
+    fn new(lights: &Particles) -> LightColumns {
+        let col = |f: fn(&Particle) -> f32| lights.particles.iter().map(f).collect();
+        LightColumns {
+            x: col(|q| q.position[0]),
+            y: col(|q| q.position[1]),
+            z: col(|q| q.position[2]),
+            r: col(|q| q.center[0] * q.weight),
+            g: col(|q| q.center[1] * q.weight),
+            b: col(|q| q.center[2] * q.weight),
+        }
+    }
+}
+
+/// Light arriving at `p` with normal `n`: key light plus Σ I·rgb·cosθ / (1 + d²) over `lights`
+/// (cosθ taken as 1 for a light exactly at `p`).
+fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) -> Vec3 {
+    // Eight partial sums over fixed-size chunks, so the loop runs eight lights at a time
+    // (floats do not reassociate on their own).
+    const LANES: usize = 8;
+    let mut sums = [[0.0f32; LANES]; 3];
+    let mut add = |k: usize, [x, y, z, r, g, b]: [f32; 6]| {
+        let (dx, dy, dz) = (x - p.x, y - p.y, z - p.z);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        let cos = if d2 > 0.0 { ((n.x * dx + n.y * dy + n.z * dz) / d2.sqrt()).max(0.0) } else { 1.0 };
+        let f = cos / (1.0 + d2);
+        sums[0][k] += r * f;
+        sums[1][k] += g * f;
+        sums[2][k] += b * f;
+    };
+    let c = [&lights.x, &lights.y, &lights.z, &lights.r, &lights.g, &lights.b];
+    let full = lights.x.len() / LANES * LANES;
+    for start in (0..full).step_by(LANES) {
+        let chunk: [&[f32; LANES]; 6] = c.map(|col| col[start..start + LANES].try_into().expect("a full chunk"));
+        for k in 0..LANES {
+            add(k, chunk.map(|col| col[k]));
+        }
+    }
+    for i in full..lights.x.len() {
+        add(i - full, c.map(|col| col[i]));
+    }
+    let [r, g, b] = sums.map(|lanes| lanes.iter().sum::<f32>());
+    Vec3::splat(look.ambient + look.sun_strength * n.dot(sun).max(0.0)) + Vec3::new(r, g, b)
+}
+
+/// A mesh corner's shading key: its position's and its face normal's bits (flat-shaded faces
+/// that share a vertex light it differently; triangles of one face share the value, also when
+/// the mesh repeats the vertex per triangle).
+type CornerKey = ([u32; 3], [u32; 3]);
 
 fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> Vec<DrawList> {
     let sun = look.sun.normalize_or_zero();
     let albedo = Vec3::new(look.mesh_color[0], look.mesh_color[1], look.mesh_color[2]);
+    let key =
+        |t: usize, i: u32| -> CornerKey { (mesh.positions[i as usize].map(f32::to_bits), mesh.normals[t].map(f32::to_bits)) };
+    // Shading sums over every flame light, so it is done once per distinct (vertex, normal)
+    // rather than once per triangle corner (a grid mesh shares each vertex among six).
+    let mut keys: Vec<CornerKey> =
+        mesh.triangles.iter().enumerate().flat_map(|(t, tri)| tri.iter().map(move |&i| key(t, i))).collect();
+    keys.par_sort_unstable();
+    keys.dedup();
+    let lights = LightColumns::new(lights);
+    let colors: Vec<[f32; 4]> = keys
+        .par_iter()
+        .map(|&(p, n)| {
+            let p = Vec3::from_array(p.map(f32::from_bits));
+            let c = albedo * shade(p, Vec3::from_array(n.map(f32::from_bits)), &lights, look, sun);
+            [c.x, c.y, c.z, 1.0]
+        })
+        .collect();
+    let color_of = |k: CornerKey| keys.binary_search(&k).map_or([0.0, 0.0, 0.0, 1.0], |j| colors[j]);
     let chunk = (mesh.triangles.len() / (rayon::current_num_threads() * 4)).max(256);
     mesh.triangles
         .par_chunks(chunk)
@@ -154,12 +221,7 @@ fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> V
             let mut list = DrawList::new(view);
             for (k, tri) in tris.iter().enumerate() {
                 let t = ci * chunk + k;
-                let n = Vec3::from_array(mesh.normals[t]);
-                let v = tri.map(|i| {
-                    let p = Vec3::from_array(mesh.positions[i as usize]);
-                    let c = albedo * shade(p, n, lights, look, sun);
-                    Vertex::new(p, [c.x, c.y, c.z, 1.0])
-                });
+                let v = tri.map(|i| Vertex::new(Vec3::from_array(mesh.positions[i as usize]), color_of(key(t, i))));
                 list.triangle(v, Blend::Opaque);
             }
             list
@@ -169,8 +231,7 @@ fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> V
 
 fn draw_char(view: &View, chars: &Particles) -> DrawList {
     let mut list = DrawList::new(view);
-    let sides = chars.sides.clamp(3, 64) as usize;
-    let ring: Vec<(f32, f32)> = (0..sides).map(|k| (std::f32::consts::TAU * k as f32 / sides as f32).sin_cos()).collect();
+    let sides = chars.sides.clamp(3, 64);
     for q in &chars.particles {
         let c = Vec3::from_array(q.position);
         let n = Vec3::from_array(q.velocity).normalize_or_zero();
@@ -179,14 +240,7 @@ fn draw_char(view: &View, chars: &Particles) -> DrawList {
         }
         let u = n.any_orthonormal_vector();
         let w = n.cross(u);
-        let centre = Vertex::new(c, q.center);
-        let rim = |k: usize| {
-            let (s, co) = ring[k % sides];
-            Vertex::new(c + (u * co * q.size[0]) + (w * s * q.size[1]), q.edge)
-        };
-        for k in 0..sides {
-            list.triangle([centre, rim(k), rim(k + 1)], Blend::Over);
-        }
+        list.disc(c, (u * q.size[0], w * q.size[1]), sides, q.center, q.edge, Blend::Over);
     }
     list
 }
@@ -231,7 +285,7 @@ pub fn render_fire(
     let mut lists = draw_mesh(view, mesh, &lights, look);
     lists.push(draw_char(view, chars));
     lists.extend(draw_flames(view, &flames));
-    Ok(render(view, &lists, look.background).to_image())
+    Ok(render_image(view, &lists, look.background))
 }
 
 fn render_fire_desc() -> NodeDesc {

@@ -294,6 +294,13 @@ impl DrawList {
         }
     }
 
+    /// [`DrawList::snap`] of a position alone (colour and uv left zero).
+    fn snap_position(&self, pos: Vec4) -> SVert {
+        let iw = 1.0 / pos.w;
+        let s = self.view.to_screen(pos);
+        SVert { x: round_i64(s.x * SUB as f32), y: round_i64(s.y * SUB as f32), z: pos.z * iw, iw, c: [0.0; 4], uv: [0.0; 2] }
+    }
+
     fn snap(&self, v: &ClipVert) -> SVert {
         let iw = 1.0 / v.pos.w;
         let s = self.view.to_screen(v.pos);
@@ -489,6 +496,21 @@ impl DrawList {
             }
             return;
         }
+        if n <= MAX_FAN && blend != Blend::Opaque {
+            // The scanline path needs positions only: snap them on the stack, no colours.
+            let mut pts = [SVert { x: 0, y: 0, z: 0.0, iw: 0.0, c: [0.0; 4], uv: [0.0; 2] }; MAX_FAN + 1];
+            pts[0] = self.snap_position(c);
+            for k in 0..n {
+                pts[k + 1] = self.snap_position(ring_at(k, &self.ring).pos);
+            }
+            let Some(rows) = self.pixel_rows(pts[..=n].iter()) else { return };
+            if self.fan_setup(&pts[..=n], rows, center_rgba, edge_rgba) {
+                let bands = (rows.0 as usize / BAND_ROWS, rows.1 as usize / BAND_ROWS);
+                let fan = self.fans.len() as u32 - 1;
+                self.push_prim(Prim::Fan { fan, blend }, blend, bands);
+                return;
+            }
+        }
         let first = self.verts.len();
         let s = self.snap(&centre);
         self.verts.push(s);
@@ -496,31 +518,20 @@ impl DrawList {
             let s = self.snap(&ring_at(k, &self.ring));
             self.verts.push(s);
         }
-        let Some((row0, row1)) = self.pixel_rows(self.verts[first..].iter()) else {
-            self.verts.truncate(first);
-            return;
-        };
-        let bands = (row0 as usize / BAND_ROWS, row1 as usize / BAND_ROWS);
-        if blend != Blend::Opaque && self.fan_setup(first, n, (row0, row1), center_rgba, edge_rgba) {
-            self.verts.truncate(first);
-            let fan = self.fans.len() as u32 - 1;
-            self.push_prim(Prim::Fan { fan, blend }, blend, bands);
-        } else {
-            for k in 0..n {
-                let v = [first as u32, (first + 1 + k) as u32, (first + 1 + (k + 1) % n) as u32];
-                self.bin_tri(v, blend, None);
-            }
+        for k in 0..n {
+            let v = [first as u32, (first + 1 + k) as u32, (first + 1 + (k + 1) % n) as u32];
+            self.bin_tri(v, blend, None);
         }
     }
 
-    /// Prepares the scanline form of the fan whose centre is `verts[first]` and rim the next `n`
-    /// vertices; `false` (nothing pushed) when it cannot take that path: degenerate, not convex
-    /// around its centre, beyond the far plane or too many sides.
-    fn fan_setup(&mut self, first: usize, n: usize, rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
-        if n > MAX_FAN {
+    /// Prepares the scanline form of the fan whose centre is `vs[0]` and rim the rest of `vs`;
+    /// `false` (nothing pushed) when it cannot take that path: degenerate, not convex around its
+    /// centre, beyond the far plane or too many sides.
+    fn fan_setup(&mut self, vs: &[SVert], rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
+        let n = vs.len() - 1;
+        if n > MAX_FAN || n < 3 {
             return false;
         }
-        let vs = &self.verts[first..first + 1 + n];
         let (c, rim) = (&vs[0], &vs[1..]);
         if vs.iter().any(|v| !(0.0..=1.0).contains(&v.z)) {
             return false;

@@ -529,7 +529,7 @@ impl DrawList {
     /// centre, beyond the far plane or too many sides.
     fn fan_setup(&mut self, vs: &[SVert], rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
         let n = vs.len() - 1;
-        if n > MAX_FAN || n < 3 {
+        if !(3..=MAX_FAN).contains(&n) {
             return false;
         }
         let (c, rim) = (&vs[0], &vs[1..]);

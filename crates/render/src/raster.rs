@@ -201,12 +201,18 @@ fn clip_polygon(mut poly: Vec<ClipVert>) -> Vec<ClipVert> {
 /// cost grows with the side count; Perry's particles have 3–20 sides).
 const MAX_FAN: usize = 64;
 
-/// One rim edge of a fuzzy particle, `[b, c, p, q]`: the affine function `L(p) = 1 + b·dx + c·dy`
-/// of the pixel offset `(dx, dy)` from the particle's centre, 1 at the centre and 0 on the edge's
-/// line, and that line's crossing of row `dy` at `dx = p + q·dy` (`p = −1/b`, `q = −c/b`; both 0
-/// for a horizontal edge). Inside the fan triangle of that edge `L` is exactly the centre
-/// vertex's barycentric weight.
-type FanEdge = [f32; 4];
+/// One rim edge of a fuzzy particle, `[b, c, p, q, reach]`: the affine function
+/// `L(p) = 1 + b·dx + c·dy` of the pixel offset `(dx, dy)` from the particle's centre, 1 at the
+/// centre and 0 on the edge's line; that line's crossing of row `dy` at `dx = p + q·dy`
+/// (`p = −1/b`, `q = −c/b`; both 0 for a horizontal edge); and how far from the centre its fan
+/// triangle reaches, in pixels, signed so that the rows of its half it crosses are those with
+/// `reach ≤ ±dy` (− for the rows above the centre, + below). Inside the fan triangle of the edge
+/// `L` is exactly the centre vertex's barycentric weight.
+type FanEdge = [f32; 5];
+
+/// Slack on [`FanEdge`]'s reach test, in pixels: taking an edge a row does not cross is harmless
+/// (its `L` is not the smallest there), missing one is not.
+const REACH_SLACK: f32 = 1e-3;
 
 /// A fuzzy particle ready for scanline rasterization: a convex polygon around `(cx, cy)` whose
 /// colour is `edge + (center − edge)·L` with `L = min_k L_k` (the Gouraud fan, computed per row
@@ -538,7 +544,7 @@ impl DrawList {
         }
         // Each kept edge with the halves its fan triangle reaches (bit 0: rows at or above the
         // centre, bit 1: at or below) and its side (0 left-facing, 1 right-facing, 2 horizontal).
-        let (mut kept, mut m) = ([([0.0f32; 4], 0u8, 0u8); MAX_FAN], 0);
+        let (mut kept, mut m) = ([([0.0f32; 5], 0u8, 0u8, (0.0f32, 0.0f32)); MAX_FAN], 0);
         let mut sign = 0i64;
         for k in 0..n {
             let (p, q) = (&rim[k], &rim[(k + 1) % n]);
@@ -555,9 +561,9 @@ impl DrawList {
             // One division for all four coefficients: 1/ec = ey·r and 1/ey = ec·r.
             let edge = if ey != 0 {
                 let r = 1.0 / (ecf * eyf);
-                [-eyf * eyf * sub * r, exf * eyf * sub * r, ecf * ecf * r / sub, exf * ecf * r].map(|v| v as f32)
+                [-eyf * eyf * sub * r, exf * eyf * sub * r, ecf * ecf * r / sub, exf * ecf * r, 0.0].map(|v| v as f32)
             } else {
-                [0.0, (exf * sub / ecf) as f32, 0.0, 0.0]
+                [0.0, (exf * sub / ecf) as f32, 0.0, 0.0, 0.0]
             };
             let b = edge[0];
             let (py, qy) = (p.y - c.y, q.y - c.y);
@@ -569,7 +575,8 @@ impl DrawList {
             } else {
                 2
             };
-            kept[m] = (edge, halves, side);
+            let (ymin, ymax) = (py.min(qy) as f32 / SUB as f32, py.max(qy) as f32 / SUB as f32);
+            kept[m] = (edge, halves, side, (ymin, ymax));
             m += 1;
         }
         if m < 3 {
@@ -579,12 +586,17 @@ impl DrawList {
         let mut counts = [[0u8; 3]; 2];
         for (half, count) in counts.iter_mut().enumerate() {
             for (side, count) in count.iter_mut().enumerate() {
-                for (e, halves, s) in &kept[..m] {
+                let group = self.fan_edges.len();
+                for (e, halves, s, (ymin, ymax)) in &kept[..m] {
                     if halves & (1 << half) != 0 && usize::from(*s) == side {
-                        self.fan_edges.push(*e);
+                        let mut e = *e;
+                        e[4] = if half == 0 { *ymin } else { -*ymax };
+                        self.fan_edges.push(e);
                         *count += 1;
                     }
                 }
+                // Nearest reach first, so a row's edges are a prefix of the group.
+                self.fan_edges[group..].sort_unstable_by(|a, b| a[4].total_cmp(&b[4]));
             }
         }
         // Depth plane through the centre and the two rim vertices spanning the largest area.
@@ -719,11 +731,16 @@ fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend:
         let dy = y as f32 + 0.5 - f.cy;
         let half = usize::from(dy > 0.0);
         let (edges, [left, right, _]) = (halves[half], f.counts[half].map(usize::from));
+        let (lefts, rest) = edges.split_at(left);
+        let (rights, flats) = rest.split_at(right);
+        // The edges whose fan triangles this row crosses: a prefix of each group.
+        let limit = if half == 0 { dy } else { -dy } + REACH_SLACK;
+        let (lefts, rights, flats) = (crossed(lefts, limit), crossed(rights, limit), crossed(flats, limit));
         // Where each edge's line crosses the row, relative to the centre: the span is right of
         // every left-facing edge's crossing and left of every right-facing one's.
-        let cross = |&[_, _, p, q]: &FanEdge| p + q * dy;
-        let xl = edges[..left].iter().map(cross).fold(f32::NEG_INFINITY, |m, x| if x > m { x } else { m });
-        let xr = edges[left..left + right].iter().map(cross).fold(f32::INFINITY, |m, x| if x < m { x } else { m });
+        let cross = |&[_, _, p, q, _]: &FanEdge| p + q * dy;
+        let xl = lefts.iter().map(cross).fold(f32::NEG_INFINITY, |m, x| if x > m { x } else { m });
+        let xr = rights.iter().map(cross).fold(f32::INFINITY, |m, x| if x < m { x } else { m });
         // Written so an unbounded side (no such edge) also skips the row.
         if !(xl < xr && xl.is_finite() && xr.is_finite()) {
             continue;
@@ -735,10 +752,12 @@ fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend:
         }
         let line = (y as usize - band.y0) * band.width;
         let zrow = f.z[0] + f.z[2] * dy;
-        for (o, [b, c, _, _]) in offsets.iter_mut().zip(edges) {
-            *o = [1.0 + c * dy, *b];
+        let mut count = 0;
+        for [b, c, ..] in lefts.iter().chain(rights).chain(flats) {
+            offsets[count] = [1.0 + c * dy, *b];
+            count += 1;
         }
-        let env = &offsets[..edges.len()];
+        let env = &offsets[..count];
         let span = line + px0 as usize..line + px1 as usize + 1;
         let xd0 = px0 as f32 + 0.5 - f.cx;
         let z = (zrow + f.z[1] * xd0, f.z[1]);
@@ -748,6 +767,12 @@ fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend:
             fill_fan_span(&mut band.color[span], None, xd0, z, env, f, &blend);
         }
     }
+}
+
+/// The first edges of `group` (sorted by reach) that reach `limit`.
+#[inline(always)]
+fn crossed(group: &[FanEdge], limit: f32) -> &[FanEdge] {
+    &group[..group.iter().take_while(|e| e[4] <= limit).count()]
 }
 
 /// `ceil(x)` for values well inside the `i32` range (no libm call without SSE4.1).

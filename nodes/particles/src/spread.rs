@@ -15,12 +15,16 @@
 //! Speeds are in distance units per second. A point that would leave its face is split at the
 //! edge and its heading rotated into the neighbour by the edge's pre-stored rotation (§3.3.2,
 //! Figure 3-8); on a boundary edge it stops. Neighbours more than `d_s` apart get a new point
-//! between them, placed by walking the surface and heading along the boundary's outward normal.
-//! With double-burn prevention on, a point whose move (position at t−1 → t) meets another
-//! segment of the boundary at t−1 is not allowed to move and goes out (Figure 3-9); the test uses
-//! a uniform grid of boundary segments, so a step is O(n) for n points. Every point drops a flame
-//! root each `d_d` it travels (§3.4): the face normal is the flame's initial direction, and the
-//! root lives `l_f`; when it dies it leaves a char mark (§3.4.1).
+//! between them, placed by walking the surface and heading between its live neighbours' headings;
+//! none is inserted that would head into the burnt side. With double-burn prevention on, a point
+//! whose move (position at t−1 → t) meets another segment of the boundary at t−1 (or as proposed
+//! at t) is not allowed to move and goes out (Figure 3-9), and so are two neighbours whose
+//! segment turns over (they met) and a point that runs along its own segment. Segments and moves
+//! bend where they cross an edge (Perry §4: geodesics, not chords). The test uses a uniform grid
+//! of boundary segments, so a step is O(n) for n points. Runs of extinguished points are thinned
+//! where that hardly changes the boundary, so stopped fronts do not pile up. Every point drops a
+//! flame root each `d_d` it travels (§3.4): the face normal is the flame's initial direction, and
+//! the root lives `l_f`; when it dies it leaves a char mark (§3.4.1).
 
 use std::collections::BTreeMap;
 use std::hash::{Hash, Hasher};
@@ -306,6 +310,53 @@ impl Surface {
         }
         (face, project(&self.faces[face as usize], pos), heading, false)
     }
+
+    /// The straight way from `a` on face `fa` to `b` on face `fb` over the surface: on adjacent
+    /// faces it bends where the unfolded line crosses their shared edge. Perry §4: the boundary
+    /// test needs geodesics; a 3D chord across a convex edge runs inside the solid, and fronts
+    /// meeting at the edge slip past each other under it.
+    fn chord(&self, fa: u32, a: Vec3, fb: u32, b: Vec3) -> Chord {
+        let straight = Chord { a, mid: (a + b) * 0.5, b };
+        if fa == fb {
+            return straight;
+        }
+        let f = &self.faces[fa as usize];
+        let Some(e) = (0..3).find(|&e| f.neighbor[e] == fb) else { return straight };
+        let (v0, v1) = (f.v[e], f.v[(e + 1) % 3]);
+        let flat = v0 + f.rotation[e].inverse() * (b - v0);
+        let (da, db) = ((a - v0).dot(f.inward[e]), (flat - v0).dot(f.inward[e]));
+        let s = if da - db > 1e-9 { (da / (da - db)).clamp(0.0, 1.0) } else { 0.5 };
+        let edge = v1 - v0;
+        let t = ((a.lerp(flat, s) - v0).dot(edge) / edge.length_squared()).clamp(0.0, 1.0);
+        Chord { a, mid: v0 + edge * t, b }
+    }
+}
+
+/// A boundary segment or a move over the surface, `a → mid → b`: bent at `mid` where it
+/// crosses an edge, else `mid` is the midpoint.
+#[derive(Clone, Copy, Debug)]
+struct Chord {
+    a: Vec3,
+    mid: Vec3,
+    b: Vec3,
+}
+
+impl Chord {
+    fn pieces(&self) -> [(Vec3, Vec3); 2] {
+        [(self.a, self.mid), (self.mid, self.b)]
+    }
+
+    /// Whether it passes within `tol` of the segment `c → d` at a fraction of its length (0 at
+    /// `a`, 1 at `b`) that `at` accepts.
+    fn meets(&self, c: Vec3, d: Vec3, tol: f32, at: impl Fn(f32) -> bool) -> bool {
+        let first = (self.mid - self.a).length();
+        let total = (first + (self.b - self.mid).length()).max(1e-12);
+        self.pieces().into_iter().enumerate().any(|(k, (a, b))| {
+            let (s, dist) = segment_distance(a, b, c, d);
+            let along = if k == 0 { s * first } else { first + s * (total - first) };
+            dist < tol && at(along / total)
+        })
+    }
 }
 
 fn project(f: &Face, p: Vec3) -> Vec3 {
@@ -556,7 +607,9 @@ impl Spread {
                 .map(|(ring, m)| ring.iter().zip(m).map(|(cp, mv)| mv.map_or(*cp, |(np, _, _)| np)).collect())
                 .collect();
             let cell = self.params.d_s.max(1e-6) * 2.0;
-            let (old_grid, new_grid) = rayon::join(|| SegmentGrid::new(&self.loops, cell), || SegmentGrid::new(&proposed, cell));
+            let surface = &*self.surface;
+            let (old_grid, new_grid) =
+                rayon::join(|| SegmentGrid::new(surface, &self.loops, cell), || SegmentGrid::new(surface, &proposed, cell));
             let tol = 0.02 * self.params.d_s;
             self.loops
                 .par_iter()
@@ -566,8 +619,14 @@ impl Spread {
                         .into_par_iter()
                         .map(|j| match &moves[li][j] {
                             Some((np, _, moved)) if *moved > 0.0 => {
-                                let (a, b) = (ring[j].position, np.position);
-                                old_grid.crosses(&self.loops, li, j, a, b, tol) || new_grid.crosses(&proposed, li, j, a, b, tol)
+                                let n = ring.len();
+                                let path = surface.chord(ring[j].face, ring[j].position, np.face, np.position);
+                                // The segment test skips the point's own two segments: check them here.
+                                [(j + n - 1) % n, (j + 1) % n]
+                                    .into_iter()
+                                    .any(|k| met_neighbour(surface, (&ring[j], np), (&ring[k], &proposed[li][k]), tol))
+                                    || old_grid.crosses(li, j, &path, tol)
+                                    || new_grid.crosses(li, j, &path, tol)
                             }
                             _ => false,
                         })
@@ -618,9 +677,43 @@ impl Spread {
                 }
             }
         }
+        self.thin_dead_runs();
         self.insert_points();
         self.time += dt;
         self.ignite_due();
+    }
+
+    /// Drops an extinguished point between extinguished neighbours when the boundary hardly
+    /// changes: they are within `d_s` of each other (the tip of a slit where two fronts met,
+    /// burnt on both sides), or within `2 d_s` with the point at most `d_s/4` off the line between
+    /// them. The loop stays closed and a barrier for the double-burn test; without this every
+    /// stopped front keeps its points forever.
+    fn thin_dead_runs(&mut self) {
+        let ds = self.params.d_s;
+        for ring in &mut self.loops {
+            let n = ring.len();
+            if n <= 4 || ring.iter().all(|c| c.alive) {
+                continue;
+            }
+            // Start at a live point when there is one: the first kept point is never dropped.
+            let start = ring.iter().position(|c| c.alive).unwrap_or(0);
+            let mut out: Vec<ControlPoint> = Vec::with_capacity(n);
+            out.push(ring[start]);
+            for k in 1..n {
+                let (cp, next) = (ring[(start + k) % n], ring[(start + k + 1) % n]);
+                let last = out[out.len() - 1];
+                let span = (next.position - last.position).length();
+                let off = segment_distance(cp.position, cp.position, last.position, next.position).1;
+                let dead = !cp.alive && !last.alive && !next.alive;
+                // Keep at least four points, so the loop stays a loop.
+                let left = out.len() + (n - k);
+                if dead && left > 4 && (span <= ds || (span <= 2.0 * ds && off <= 0.25 * ds)) {
+                    continue;
+                }
+                out.push(cp);
+            }
+            *ring = out;
+        }
     }
 
     /// Inserts a point between neighbours more than `d_s` apart (§3.3.2).
@@ -653,10 +746,23 @@ impl Spread {
                 let (face, position, _, hit) = surface.advance(a.face, a.position, dir, len * 0.5);
                 let fm = &surface.faces[face as usize];
                 let tangent = b.position - a.position;
-                let tangent = (tangent - fm.n * tangent.dot(fm.n)).normalize_or_zero();
-                let mut heading = tangent.cross(fm.n).normalize_or_zero();
+                let outward = (tangent - fm.n * tangent.dot(fm.n)).cross(fm.n).normalize_or_zero();
+                // Between the live neighbours' headings, carried into this face, like the ignition
+                // ring's own points: the gap's outward normal would drift sideways across the
+                // neighbours wherever the speed depends on the heading (wind) and fold the front.
+                let fb = &surface.faces[b.face as usize];
+                let carried = |c: &ControlPoint, from: Vec3| {
+                    if c.alive { Quat::from_rotation_arc(from, fm.n) * c.heading } else { Vec3::ZERO }
+                };
+                let h = carried(&a, fa.n) + carried(&b, fb.n);
+                let mut heading = (h - fm.n * h.dot(fm.n)).normalize_or_zero();
                 if heading == Vec3::ZERO {
-                    heading = (a.heading + b.heading).normalize_or_zero();
+                    heading = outward;
+                }
+                // A point heading into the burnt side cannot move the front (it would run along
+                // a trail or die at once, every step): leave the gap open.
+                if !hit && heading.dot(outward) < 0.0 {
+                    continue;
                 }
                 let alive = !hit && heading != Vec3::ZERO;
                 if !alive {
@@ -682,9 +788,31 @@ impl Spread {
     }
 }
 
+/// Whether point `a` (moving from `a.0` to `a.1`) has met its neighbour `b` (moving from `b.0`
+/// to `b.1`), which Figure 3-9's test cannot see as it skips a point's own segments: the
+/// segment between them turns over (one end crosses it forwards, the other backwards: two
+/// fronts closing in on each other), or `a` ends up on it (it runs along its own boundary,
+/// burning nothing, and would draw a needle of points behind it).
+fn met_neighbour(surface: &Surface, a: (&ControlPoint, &ControlPoint), b: (&ControlPoint, &ControlPoint), tol: f32) -> bool {
+    let before = surface.chord(a.0.face, a.0.position, b.0.face, b.0.position);
+    let inside = |t: f32| t > 0.01 && t < 0.99;
+    if before.meets(a.1.position, a.1.position, tol, inside) {
+        return true;
+    }
+    let after = surface.chord(a.1.face, a.1.position, b.1.face, b.1.position);
+    let out = |from: Vec3, to: Vec3, c: &ControlPoint, moved: Vec3| {
+        (to - from).cross(surface.faces[c.face as usize].n).normalize_or_zero().dot(moved)
+    };
+    let da = out(before.a, before.mid, a.0, a.1.position - a.0.position);
+    let db = out(before.mid, before.b, b.0, b.1.position - b.0.position);
+    da.min(db) < -tol && da.max(db) > tol && before.pieces().into_iter().any(|(c, d)| after.meets(c, d, tol, inside))
+}
+
 /// A uniform hash grid of the boundary's segments (Figure 3-9's test without O(n²)).
 struct SegmentGrid {
     cell: f32,
+    /// Each loop's segments `j → j + 1` over the surface.
+    segments: Vec<Vec<Chord>>,
     /// (cell key, loop, segment start index), sorted by key.
     entries: Vec<(u64, u32, u32)>,
 }
@@ -697,13 +825,13 @@ fn cell_key(c: [i32; 3]) -> u64 {
 }
 
 impl SegmentGrid {
-    fn cells(&self, a: Vec3, b: Vec3, pad: f32, mut f: impl FnMut(u64)) {
-        let lo = ((a.min(b) - Vec3::splat(pad)) / self.cell).floor();
-        let hi = ((a.max(b) + Vec3::splat(pad)) / self.cell).floor();
+    fn cells(&self, c: &Chord, pad: f32, mut f: impl FnMut(u64)) {
+        let lo = ((c.a.min(c.mid).min(c.b) - Vec3::splat(pad)) / self.cell).floor();
+        let hi = ((c.a.max(c.mid).max(c.b) + Vec3::splat(pad)) / self.cell).floor();
         let span = hi - lo;
         if span.x > 64.0 || span.y > 64.0 || span.z > 64.0 {
             // A segment this long is degenerate input; test it against its end cells only.
-            for p in [a, b] {
+            for p in [c.a, c.b] {
                 let c = (p / self.cell).floor();
                 f(cell_key([c.x as i32, c.y as i32, c.z as i32]));
             }
@@ -718,14 +846,24 @@ impl SegmentGrid {
         }
     }
 
-    fn new(loops: &[Vec<ControlPoint>], cell: f32) -> SegmentGrid {
-        let mut g = SegmentGrid { cell, entries: Vec::new() };
+    fn new(surface: &Surface, loops: &[Vec<ControlPoint>], cell: f32) -> SegmentGrid {
+        let segments: Vec<Vec<Chord>> = loops
+            .par_iter()
+            .map(|ring| {
+                let n = ring.len();
+                (0..n)
+                    .map(|j| {
+                        let (p, q) = (ring[j], ring[(j + 1) % n]);
+                        surface.chord(p.face, p.position, q.face, q.position)
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut g = SegmentGrid { cell, segments, entries: Vec::new() };
         let mut entries = Vec::new();
-        for (li, ring) in loops.iter().enumerate() {
-            let n = ring.len();
-            for j in 0..n {
-                let (a, b) = (ring[j].position, ring[(j + 1) % n].position);
-                g.cells(a, b, 0.0, |k| entries.push((k, li as u32, j as u32)));
+        for (li, ring) in g.segments.iter().enumerate() {
+            for (j, seg) in ring.iter().enumerate() {
+                g.cells(seg, 0.0, |k| entries.push((k, li as u32, j as u32)));
             }
         }
         entries.par_sort_unstable();
@@ -734,12 +872,12 @@ impl SegmentGrid {
         g
     }
 
-    /// Whether the move `a → b` of point `j` of loop `li` meets a boundary segment not incident to it.
-    fn crosses(&self, loops: &[Vec<ControlPoint>], li: usize, j: usize, a: Vec3, b: Vec3, tol: f32) -> bool {
-        let n = loops[li].len();
+    /// Whether the move `path` of point `j` of loop `li` meets a boundary segment not incident to it.
+    fn crosses(&self, li: usize, j: usize, path: &Chord, tol: f32) -> bool {
+        let n = self.segments[li].len();
         let prev = (j + n - 1) % n;
         let mut hit = false;
-        self.cells(a, b, tol, |k| {
+        self.cells(path, tol, |k| {
             if hit {
                 return;
             }
@@ -752,10 +890,8 @@ impl SegmentGrid {
                 if sl == li && (sj == j || sj == prev) {
                     continue;
                 }
-                let ring = &loops[sl];
-                let (c, d) = (ring[sj].position, ring[(sj + 1) % ring.len()].position);
-                let (s, dist) = segment_distance(a, b, c, d);
-                if dist < tol && s > 0.01 {
+                // Touching at the start of the move is not a crossing.
+                if self.segments[sl][sj].pieces().into_iter().any(|(c, d)| path.meets(c, d, tol, |t| t > 0.01)) {
                     hit = true;
                     return;
                 }
@@ -1182,6 +1318,111 @@ mod tests {
         assert_eq!(worst_on, 0);
         assert!(worst_off > 0, "the test has teeth: without prevention the fronts pass through each other");
         assert!(on.loops()[0].iter().all(|c| !c.alive), "with prevention the fire goes out");
+    }
+
+    fn dead_points(s: &Spread) -> usize {
+        s.loops().iter().flatten().filter(|c| !c.alive).count()
+    }
+
+    /// Perimeter of the convex hull of the control points seen from above (the XZ plane).
+    fn hull_perimeter_xz(s: &Spread) -> f32 {
+        let mut p: Vec<(f32, f32)> = s.loops().iter().flatten().map(|c| (c.position.x, c.position.z)).collect();
+        p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        p.dedup();
+        let turns_left =
+            |o: (f32, f32), a: (f32, f32), b: (f32, f32)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0) > 0.0;
+        let half = |points: &mut dyn Iterator<Item = (f32, f32)>| {
+            let mut h: Vec<(f32, f32)> = Vec::new();
+            for q in points {
+                while h.len() >= 2 && !turns_left(h[h.len() - 2], h[h.len() - 1], q) {
+                    h.pop();
+                }
+                h.push(q);
+            }
+            h.pop();
+            h
+        };
+        let mut hull = half(&mut p.iter().copied());
+        hull.extend(half(&mut p.iter().rev().copied()));
+        (0..hull.len())
+            .map(|k| {
+                let (a, b) = (hull[k], hull[(k + 1) % hull.len()]);
+                (a.0 - b.0).hypot(a.1 - b.1)
+            })
+            .sum()
+    }
+
+    /// Fraction of a grid of points on the sides of the unit cube within `r` of a flame root or
+    /// char mark: how much of it has burnt.
+    fn burnt_fraction_of_unit_cube(s: &Spread, r: f32) -> f32 {
+        let st = s.state();
+        let marks: Vec<Vec3> =
+            st.roots.iter().map(|m| m.position).chain(st.char_marks.iter().map(|m| m.position)).map(Vec3::from_array).collect();
+        let n = 20;
+        let mut burnt = 0;
+        for axis in 0..3 {
+            for side in [-0.5f32, 0.5] {
+                for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))) {
+                    let mut p = Vec3::ZERO;
+                    p[axis] = side;
+                    p[(axis + 1) % 3] = (i as f32 + 0.5) / n as f32 - 0.5;
+                    p[(axis + 2) % 3] = (j as f32 + 0.5) / n as f32 - 0.5;
+                    burnt += usize::from(marks.iter().any(|m| (*m - p).length() < r));
+                }
+            }
+        }
+        burnt as f32 / (6 * n * n) as f32
+    }
+
+    #[test]
+    fn in_wind_the_point_count_stays_within_three_per_d_s_of_the_burnt_perimeter() {
+        let surf = surface(&plane(4.0, 16));
+        let p = SpreadParams { d_s: 0.05, ..SpreadParams::default() };
+        let mut s = Spread::new(surf.clone(), vec![at(&surf, Vec3::ZERO)], p.clone()).unwrap();
+        let wind = |_: Vec3| Vec3::new(2.0, 0.3, 0.5);
+        let rim = 16.0;
+        let mut most = 0;
+        for step in 1..=360 {
+            s.step(1.0 / 24.0, &wind);
+            let (n, dead) = (s.point_count(), dead_points(&s));
+            let bound = 3.0 * hull_perimeter_xz(&s) / p.d_s + p.points as f32;
+            assert!(n as f32 <= bound, "step {step}: {n} points, more than {bound:.0}");
+            // Points only stop on the rim here (one ignition, no fronts meet).
+            assert!(dead as f32 <= 3.0 * rim / p.d_s, "step {step}: {dead} stopped points along a rim of {rim}");
+            most = most.max(n);
+        }
+        // After 15 s even the upwind front (0.225/s) has reached the farthest corner (≈ 2.8 away).
+        assert!(s.loops().iter().flatten().all(|c| !c.alive), "the fire is out");
+        let out = s.point_count();
+        run(&mut s, 2.0, 1.0 / 24.0, &wind);
+        println!("at most {most} points; {out} when the fire is out, on a rim of {rim} (d_s = {})", p.d_s);
+        assert_eq!(s.point_count(), out, "a fire that is out keeps its points");
+    }
+
+    #[test]
+    fn the_burning_cube_needs_a_few_hundred_points_and_still_burns_all_over() {
+        // graphs/burning-cube.ron without its translation.
+        let surf = surface(&cube(1.0, 8));
+        let p = SpreadParams { d_t: 0.1, d_s: 0.05, ..SpreadParams::default() };
+        let mut s = Spread::new(surf.clone(), vec![at(&surf, Vec3::new(0.5, -0.3, -0.15))], p.clone()).unwrap();
+        let wind = spread_wind(&WindField { k_g: 2.0, large: LargeWind::Constant([-0.15, 0.0, 0.35]), ..WindField::default() });
+        // Generous: three points per d_s along fronts as long as the cube's twelve edges together.
+        let bound = 3.0 * 12.0 / p.d_s + p.points as f32;
+        let mut counts = Vec::new();
+        for frame in 1..=240 {
+            s.step(1.0 / 24.0, &wind);
+            assert!(s.point_count() as f32 <= bound, "frame {frame}: {} points, more than {bound}", s.point_count());
+            if frame % 48 == 0 {
+                counts.push((s.point_count(), dead_points(&s)));
+            }
+        }
+        let burnt = burnt_fraction_of_unit_cube(&s, 0.06);
+        println!("(points, stopped) every 2 s: {counts:?}; {:.1} % of the cube burnt", burnt * 100.0);
+        assert!(burnt > 0.99, "only {:.1} % of the cube burnt", burnt * 100.0);
+        assert!(s.loops().iter().flatten().all(|c| !c.alive), "the fire is out after 10 s");
+        let out = s.point_count();
+        run(&mut s, 2.0, 1.0 / 24.0, &wind);
+        assert_eq!(s.point_count(), out, "a fire that is out keeps its points");
     }
 
     #[test]

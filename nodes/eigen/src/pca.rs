@@ -10,6 +10,7 @@
 use std::sync::Arc;
 
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use pyrograph_core::{
     Basis, Channels, Clip, CookCtx, FnNode, FrameRef, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
@@ -83,10 +84,21 @@ pub fn train(
     // Eq. 16: L = AᵀA (M × M) as one f32 matrix product (as numpy's float32 gram-trick peer does;
     // faer's blocked kernels accumulate in registers, so the sum over N pixels stays accurate),
     // then widened to f64 for the eigen decomposition.
+    // L is symmetric: only its lower triangle is computed (half the flops, as BLAS's syrk).
     let a = MatRef::from_column_major_slice(&frames, n, m);
     let mut gram32 = Mat::<f32>::zeros(m, m);
-    matmul(gram32.as_mut(), Accum::Replace, a.transpose(), a, 1.0, par());
-    let gram = Mat::<f64>::from_fn(m, m, |i, j| f64::from(0.5 * (gram32[(i, j)] + gram32[(j, i)])));
+    triangular::matmul(
+        gram32.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        a.transpose(),
+        BlockStructure::Rectangular,
+        a,
+        BlockStructure::Rectangular,
+        1.0,
+        par(),
+    );
+    let gram = Mat::<f64>::from_fn(m, m, |i, j| f64::from(gram32[(i.max(j), i.min(j))]));
     drop(gram32);
 
     let eig = gram.self_adjoint_eigen(Side::Lower).map_err(|e| format!("eigen decomposition failed: {e:?}"))?;

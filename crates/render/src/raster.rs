@@ -248,11 +248,15 @@ pub struct DrawList {
     prims: Vec<Prim>,
     fans: Vec<FanSetup>,
     fan_edges: Vec<FanEdge>,
+    /// `fan_setup`'s per-edge working list (kept edge, halves, side, y range), reused.
+    fan_scratch: Vec<([f32; 5], u8, u8, (f32, f32))>,
     textures: Vec<Arc<Image>>,
     /// Per pass (0 opaque, 1 blended), per band, the primitives touching it in submission order.
     bins: [Vec<Vec<u32>>; 2],
     /// `(cos, sin)` of the rim angles for the last particle side count.
     ring: Vec<(f32, f32)>,
+    /// The current disc's rim in clip space, reused.
+    rim_clip: Vec<Vec4>,
 }
 
 /// A texture added to a [`DrawList`].
@@ -269,9 +273,11 @@ impl DrawList {
             prims: Vec::new(),
             fans: Vec::new(),
             fan_edges: Vec::new(),
+            fan_scratch: Vec::new(),
             textures: Vec::new(),
             bins: [vec![Vec::new(); bands], vec![Vec::new(); bands]],
             ring: Vec::new(),
+            rim_clip: Vec::new(),
         }
     }
 
@@ -494,21 +500,26 @@ impl DrawList {
             ClipVert { pos: c + rc * co + uc * s, color: ec, uv: Vec2::ZERO }
         };
         let n = sides as usize;
-        let all_inside = inside_all(c) && (0..n).all(|k| inside_all(ring_at(k, &self.ring).pos));
+        let mut rim = std::mem::take(&mut self.rim_clip);
+        rim.clear();
+        rim.extend(self.ring.iter().map(|&(co, s)| c + rc * co + uc * s));
+        let all_inside = inside_all(c) && rim.iter().all(|&p| inside_all(p));
         if !all_inside {
             for k in 0..n {
                 let (a, b) = (ring_at(k, &self.ring), ring_at((k + 1) % n, &self.ring));
                 self.push_clipped([centre, a, b], blend, None);
             }
+            self.rim_clip = rim;
             return;
         }
         if n <= MAX_FAN && blend != Blend::Opaque {
             // The scanline path needs positions only: snap them on the stack, no colours.
             let mut pts = [SVert { x: 0, y: 0, z: 0.0, iw: 0.0, c: [0.0; 4], uv: [0.0; 2] }; MAX_FAN + 1];
             pts[0] = self.snap_position(c);
-            for k in 0..n {
-                pts[k + 1] = self.snap_position(ring_at(k, &self.ring).pos);
+            for (p, &q) in pts[1..].iter_mut().zip(&rim) {
+                *p = self.snap_position(q);
             }
+            self.rim_clip = rim;
             let Some(rows) = self.pixel_rows(pts[..=n].iter()) else { return };
             if self.fan_setup(&pts[..=n], rows, center_rgba, edge_rgba) {
                 let bands = (rows.0 as usize / BAND_ROWS, rows.1 as usize / BAND_ROWS);
@@ -544,7 +555,8 @@ impl DrawList {
         }
         // Each kept edge with the halves its fan triangle reaches (bit 0: rows at or above the
         // centre, bit 1: at or below) and its side (0 left-facing, 1 right-facing, 2 horizontal).
-        let (mut kept, mut m) = ([([0.0f32; 5], 0u8, 0u8, (0.0f32, 0.0f32)); MAX_FAN], 0);
+        let mut kept = std::mem::take(&mut self.fan_scratch);
+        kept.clear();
         let mut sign = 0i64;
         for k in 0..n {
             let (p, q) = (&rim[k], &rim[(k + 1) % n]);
@@ -554,6 +566,7 @@ impl DrawList {
             }
             let ec = edge_fn(p, q, c.x, c.y);
             if ec == 0 || (sign != 0 && ec.signum() != sign) {
+                self.fan_scratch = kept;
                 return false;
             }
             sign = ec.signum();
@@ -576,10 +589,10 @@ impl DrawList {
                 2
             };
             let (ymin, ymax) = (py.min(qy) as f32 / SUB as f32, py.max(qy) as f32 / SUB as f32);
-            kept[m] = (edge, halves, side, (ymin, ymax));
-            m += 1;
+            kept.push((edge, halves, side, (ymin, ymax)));
         }
-        if m < 3 {
+        if kept.len() < 3 {
+            self.fan_scratch = kept;
             return false;
         }
         let first = self.fan_edges.len();
@@ -587,7 +600,7 @@ impl DrawList {
         for (half, count) in counts.iter_mut().enumerate() {
             for (side, count) in count.iter_mut().enumerate() {
                 let group = self.fan_edges.len();
-                for (e, halves, s, (ymin, ymax)) in &kept[..m] {
+                for (e, halves, s, (ymin, ymax)) in &kept {
                     if halves & (1 << half) != 0 && usize::from(*s) == side {
                         let mut e = *e;
                         e[4] = if half == 0 { *ymin } else { -*ymax };
@@ -599,17 +612,14 @@ impl DrawList {
                 self.fan_edges[group..].sort_unstable_by(|a, b| a[4].total_cmp(&b[4]));
             }
         }
-        // Depth plane through the centre and the two rim vertices spanning the largest area.
+        self.fan_scratch = kept;
+        // Depth plane through the centre and the two rim vertices spanning the largest area
+        // (found with exact fixed-point cross products).
+        let (x0, y0) = (rim[0].x - c.x, rim[0].y - c.y);
+        let far = rim[1..].iter().max_by_key(|v| ((v.y - c.y) * x0 - (v.x - c.x) * y0).abs()).unwrap_or(&rim[0]);
         let px = |v: &SVert| ((v.x - c.x) as f64 / SUB as f64, (v.y - c.y) as f64 / SUB as f64, (v.z - c.z) as f64);
-        let p0 = px(&rim[0]);
-        let (mut best, mut det) = (p0, 0.0f64);
-        for v in &rim[1..] {
-            let p = px(v);
-            let d = p0.0 * p.1 - p.0 * p0.1;
-            if d.abs() > det.abs() {
-                (best, det) = (p, d);
-            }
-        }
+        let (p0, best) = (px(&rim[0]), px(far));
+        let det = p0.0 * best.1 - best.0 * p0.1;
         let (gx, gy) = if det.abs() > 1e-9 {
             ((p0.2 * best.1 - best.2 * p0.1) / det, (p0.0 * best.2 - best.0 * p0.2) / det)
         } else {

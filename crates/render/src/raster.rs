@@ -210,6 +210,11 @@ const MAX_FAN: usize = 64;
 /// `L` is exactly the centre vertex's barycentric weight.
 type FanEdge = [f32; 5];
 
+/// A fan edge during setup: the edge, the halves its triangle reaches (bit 0: rows at or above
+/// the centre, bit 1: at or below), its side (0 left-facing, 1 right-facing, 2 horizontal) and the
+/// y range of its ends relative to the centre, in pixels.
+type KeptEdge = (FanEdge, u8, u8, (f32, f32));
+
 /// Slack on [`FanEdge`]'s reach test, in pixels: taking an edge a row does not cross is harmless
 /// (its `L` is not the smallest there), missing one is not.
 const REACH_SLACK: f32 = 1e-3;
@@ -248,8 +253,8 @@ pub struct DrawList {
     prims: Vec<Prim>,
     fans: Vec<FanSetup>,
     fan_edges: Vec<FanEdge>,
-    /// `fan_setup`'s per-edge working list (kept edge, halves, side, y range), reused.
-    fan_scratch: Vec<([f32; 5], u8, u8, (f32, f32))>,
+    /// `fan_setup`'s per-edge working list, reused.
+    fan_scratch: Vec<KeptEdge>,
     textures: Vec<Arc<Image>>,
     /// Per pass (0 opaque, 1 blended), per band, the primitives touching it in submission order.
     bins: [Vec<Vec<u32>>; 2],

@@ -175,9 +175,8 @@ fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) ->
     let c = [&lights.x, &lights.y, &lights.z, &lights.r, &lights.g, &lights.b];
     let full = lights.x.len() / LANES * LANES;
     for start in (0..full).step_by(LANES) {
-        let chunk: [&[f32; LANES]; 6] = c.map(|col| col[start..start + LANES].try_into().expect("a full chunk"));
         for k in 0..LANES {
-            add(k, chunk.map(|col| col[k]));
+            add(k, c.map(|col| col[start + k]));
         }
     }
     for i in full..lights.x.len() {

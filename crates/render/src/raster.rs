@@ -286,6 +286,16 @@ impl DrawList {
         }
     }
 
+    /// Makes room for `count` more particles of `sides` sides, so a list of many particles is
+    /// not copied each time one of its arrays outgrows its capacity.
+    pub fn reserve_particles(&mut self, count: usize, sides: u32) {
+        self.prims.reserve(count);
+        self.fans.reserve(count);
+        // Each rim edge is kept once per half of the particle its fan triangle reaches: all of
+        // them once, plus the (at most two) edges whose triangles span the centre row.
+        self.fan_edges.reserve(count * (sides.min(MAX_FAN as u32) as usize + 2));
+    }
+
     /// The view this list draws for.
     pub fn view(&self) -> &View {
         &self.view

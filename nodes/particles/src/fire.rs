@@ -231,6 +231,7 @@ fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> V
 fn draw_char(view: &View, chars: &Particles) -> DrawList {
     let mut list = DrawList::new(view);
     let sides = chars.sides.clamp(3, 64);
+    list.reserve_particles(chars.particles.len(), sides);
     for q in &chars.particles {
         let c = Vec3::from_array(q.position);
         let n = Vec3::from_array(q.velocity).normalize_or_zero();
@@ -252,6 +253,7 @@ fn draw_flames(view: &View, flames: &Particles) -> Vec<DrawList> {
         .par_chunks(chunk)
         .map(|c| {
             let mut list = DrawList::new(view);
+            list.reserve_particles(c.len(), sides);
             for q in c {
                 list.particle(Vec3::from_array(q.position), Vec2::from_array(q.size), sides, q.center, q.edge, Blend::Additive);
             }

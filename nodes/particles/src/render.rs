@@ -94,6 +94,7 @@ pub fn render_particles(
         .par_chunks(chunk)
         .map(|c| {
             let mut list = DrawList::new(view);
+            list.reserve_particles(c.len(), sides);
             for q in c {
                 list.particle(Vec3::from_array(q.position), Vec2::from_array(q.size), sides, q.center, q.edge, blend);
             }

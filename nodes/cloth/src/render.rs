@@ -9,7 +9,7 @@ use glam::Vec3;
 use pyrograph_core::{
     ClothState, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
 };
-use pyrograph_render::{Blend, Camera, DrawList, Vertex, View, render_image};
+use pyrograph_render::{Blend, Camera, DrawList, TextureId, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::textures::builtin_textures;
@@ -88,7 +88,57 @@ fn world_positions(camera: &Camera, cloth: &ClothState, i: usize) -> Vec<Vec3> {
     cloth.flame(i).unwrap_or(&[]).iter().map(|p| root + r * p[0] + u * p[1] + f * p[2]).collect()
 }
 
-fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, tex: Option<pyrograph_render::TextureId>, p: &RenderParams) {
+/// What every textured cloth of a `w × h` grid shares: the texture coordinates of its masses
+/// (uv (0,0) is the texture's top-left: the top row of the cloth) and its two triangles per cell.
+struct ClothMesh {
+    uv: Vec<[f32; 2]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl ClothMesh {
+    fn new(w: usize, h: usize) -> Self {
+        let (wd, hd) = ((w.max(2) - 1) as f32, (h.max(2) - 1) as f32);
+        let uv = (0..h).flat_map(|r| (0..w).map(move |c| [c as f32 / wd, 1.0 - r as f32 / hd])).collect();
+        let idx = |r: usize, c: usize| (r * w + c) as u32;
+        let triangles = (0..h.saturating_sub(1))
+            .flat_map(|r| (0..w.saturating_sub(1)).map(move |c| (r, c)))
+            .flat_map(|(r, c)| {
+                let (a, b, cc, d) = (idx(r, c), idx(r, c + 1), idx(r + 1, c + 1), idx(r + 1, c));
+                [[a, b, cc], [a, cc, d]]
+            })
+            .collect();
+        ClothMesh { uv, triangles }
+    }
+}
+
+/// Flame `i` as one indexed textured mesh (each cloth vertex is projected once), its vertices
+/// built in `verts` (reused between flames).
+fn draw_textured_flame(
+    list: &mut DrawList,
+    cloth: &ClothState,
+    i: usize,
+    mesh: &ClothMesh,
+    verts: &mut Vec<Vertex>,
+    tex: TextureId,
+    p: &RenderParams,
+) {
+    let camera = *list.view().camera();
+    let root = Vec3::from_array(cloth.roots[i]);
+    let (r, u, f) = flame_axes(&camera, root);
+    let masses = cloth.flame(i).unwrap_or(&[]);
+    if masses.len() != mesh.uv.len() {
+        return;
+    }
+    verts.clear();
+    verts.extend(masses.iter().zip(&mesh.uv).map(|(q, &uv)| Vertex {
+        position: root + r * q[0] + u * q[1] + f * q[2],
+        color: p.tint,
+        uv,
+    }));
+    list.mesh(verts, &mesh.triangles, Some(tex), p.blend);
+}
+
+fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, p: &RenderParams) {
     let camera = *list.view().camera();
     let (w, h) = (cloth.width as usize, cloth.height as usize);
     let pos = world_positions(&camera, cloth, i);
@@ -96,29 +146,8 @@ fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, tex: Option<pyr
         return;
     }
     let at = |r: usize, c: usize| pos[r * w + c];
-    match (p.mode, tex) {
-        (Mode::Textured, Some(t)) => {
-            // uv (0,0) is the texture's top-left: the top row of the cloth. One indexed mesh, so
-            // each cloth vertex is projected once.
-            let verts: Vec<Vertex> = (0..h)
-                .flat_map(|r| (0..w).map(move |c| (r, c)))
-                .map(|(r, c)| Vertex {
-                    position: at(r, c),
-                    color: p.tint,
-                    uv: [c as f32 / (w - 1) as f32, 1.0 - r as f32 / (h - 1) as f32],
-                })
-                .collect();
-            let idx = |r: usize, c: usize| (r * w + c) as u32;
-            let tris: Vec<[u32; 3]> = (0..h - 1)
-                .flat_map(|r| (0..w - 1).map(move |c| (r, c)))
-                .flat_map(|(r, c)| {
-                    let (a, b, cc, d) = (idx(r, c), idx(r, c + 1), idx(r + 1, c + 1), idx(r + 1, c));
-                    [[a, b, cc], [a, cc, d]]
-                })
-                .collect();
-            list.mesh(&verts, &tris, Some(t), p.blend);
-        }
-        (Mode::Wireframe, _) => {
+    match p.mode {
+        Mode::Wireframe => {
             // World size of one pixel at unit distance: 2·tan(fov/2) / height.
             let focal = camera.projection_matrix(1.0).y_axis.y;
             let pixel = 2.0 / (focal * list.view().height() as f32);
@@ -141,7 +170,7 @@ fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, tex: Option<pyr
                 }
             }
         }
-        _ => {
+        Mode::Cloth | Mode::Textured => {
             let eye = camera.position();
             for r in 0..h - 1 {
                 for c in 0..w - 1 {
@@ -166,6 +195,7 @@ pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: 
     let dist = |i: usize| (Vec3::from_array(cloth.roots[i]) - eye).length_squared();
     order.sort_by(|&a, &b| dist(b).total_cmp(&dist(a)).then(a.cmp(&b)));
     let chunk = (order.len() / (rayon::current_num_threads() * 4)).max(4);
+    let mesh = ClothMesh::new(cloth.width as usize, cloth.height as usize);
     let lists: Vec<DrawList> = order
         .par_chunks(chunk)
         .map(|flames| {
@@ -174,10 +204,13 @@ pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: 
                 Textures::Builtin => builtin_textures().iter().map(|t| list.add_texture(t)).collect(),
                 Textures::Single(t) => vec![list.add_texture(t)],
             };
+            let mut verts = Vec::new();
             for &i in flames {
                 let seed = cloth.seeds.get(i).copied().unwrap_or(i as u32) as usize;
-                let tex = ids.get(seed % ids.len().max(1)).copied();
-                draw_flame(&mut list, cloth, i, tex, p);
+                match (p.mode, ids.get(seed % ids.len().max(1))) {
+                    (Mode::Textured, Some(&tex)) => draw_textured_flame(&mut list, cloth, i, &mesh, &mut verts, tex, p),
+                    _ => draw_flame(&mut list, cloth, i, p),
+                }
             }
             list
         })

@@ -911,9 +911,13 @@ fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &
             colors: [ca, cb, cc],
         };
         let shade = PixelShade { tex: tex.as_ref(), blend, depth_test, depth_write };
-        for (k, y) in (y0..=y1).enumerate() {
-            let rows = tri.row_at(dy, k as i32);
+        // The steps per row fit an `i32` like the edge functions (see `small_extent`).
+        let (mut rows, dy) = (tri.row, dy.map(|d| d as i32));
+        for y in y0..=y1 {
             small_tri_row(band, &tri, rows, (y as usize - band.y0) * band.width, &shade);
+            for (r, d) in rows.iter_mut().zip(dy) {
+                *r += d;
+            }
         }
         return;
     }
@@ -1002,15 +1006,6 @@ struct SmallTri {
     colors: [Vec4; 3],
 }
 
-impl SmallTri {
-    /// The edge functions at the first pixel of the box's `k`-th row (`dy` per row in `i64`:
-    /// the product is formed in `i64` and fits `i32` by [`small_extent`]).
-    #[inline(always)]
-    fn row_at(&self, dy: [i64; 3], k: i32) -> [i32; 3] {
-        std::array::from_fn(|e| self.row[e] + (dy[e] * k as i64) as i32)
-    }
-}
-
 /// How a covered pixel is shaded and blended.
 struct PixelShade<'t, 'a> {
     tex: Option<&'t Texels<'a>>,
@@ -1029,8 +1024,10 @@ struct PixelShade<'t, 'a> {
 fn small_tri_row(band: &mut Band<'_>, t: &SmallTri, w: [i32; 3], line: usize, shade: &PixelShade<'_, '_>) {
     const N: usize = SMALL_LANES;
     let we: [[i32; N]; 3] = std::array::from_fn(|e| std::array::from_fn(|i| w[e] + t.dx[e] * i as i32));
-    let inside: [bool; N] = std::array::from_fn(|i| we[0][i] >= 0 && we[1][i] >= 0 && we[2][i] >= 0 && i <= t.span);
-    let mut mask = inside.iter().enumerate().fold(0u32, |m, (i, &b)| m | (u32::from(b) << i));
+    // A pixel is covered when no edge function is negative: when their OR has no sign bit.
+    let ored: [i32; N] = std::array::from_fn(|i| we[0][i] | we[1][i] | we[2][i]);
+    let mut mask = ored.iter().enumerate().fold(0u32, |m, (i, &v)| m | (u32::from(v >= 0) << i));
+    mask &= (2u32 << t.span) - 1;
     if mask == 0 {
         return;
     }

@@ -61,17 +61,22 @@ fn simulate_and_render(c: &mut Criterion) {
     let mut g = c.benchmark_group("cloth_frame_1280x720");
     g.sample_size(10);
     let n = 144;
-    let Ok(mut sim) = Simulation::new(&ClothParams::default(), &grid_roots(n, 1.5)) else { return };
     let Ok(cam) = Camera::new(Vec3::new(0.0, 9.0, 26.0), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 40.0, 0.1, 1000.0) else { return };
     let Ok(view) = View::new(cam, 1280, 720) else { return };
     let rp = RenderParams::default();
-    g.throughput(Throughput::Elements(1));
-    g.bench_function(BenchmarkId::new("simulate_render", n), |b| {
-        b.iter(|| {
-            let _ = sim.step_frame();
-            render_cloth(&view, &sim.snapshot(), Textures::Builtin, &rp)
-        })
-    });
+    // The node's default cloth (structural + shear + bend springs), and the same cloth with the
+    // project's springs only (horizontal and vertical, §Internal Forces).
+    let structural = ClothParams { shear: false, bend: false, ..ClothParams::default() };
+    for (name, params) in [("simulate_render", ClothParams::default()), ("simulate_render_structural", structural)] {
+        let Ok(mut sim) = Simulation::new(&params, &grid_roots(n, 1.5)) else { continue };
+        g.throughput(Throughput::Elements(1));
+        g.bench_function(BenchmarkId::new(name, n), |b| {
+            b.iter(|| {
+                let _ = sim.step_frame();
+                render_cloth(&view, &sim.snapshot(), Textures::Builtin, &rp)
+            })
+        });
+    }
     g.finish();
 }
 

@@ -733,8 +733,9 @@ struct Band<'a> {
     width: usize,
     y0: usize,
     y1: usize,
-    /// Whether any opaque primitive touches this band (otherwise depth is 1 everywhere and
-    /// blended primitives skip the depth test).
+    /// Whether any opaque primitive touches this band (otherwise depth is 1 everywhere,
+    /// blended primitives skip the depth test and `depth` is not used: `render_image` leaves it
+    /// empty).
     has_opaque: bool,
 }
 
@@ -1240,15 +1241,24 @@ unsafe fn raster_band_avx2(lists: &[DrawList], view: &View, bi: usize, band: &mu
 
 #[inline(always)]
 fn raster_band_generic(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
-    let usable = |l: &&DrawList| l.view.width == view.width && l.view.height == view.height;
-    band.has_opaque = lists.iter().filter(usable).any(|l| !l.bins[0][bi].is_empty());
+    band.has_opaque = band_has_opaque(lists, view, bi);
     for pass in 0..2 {
-        for list in lists.iter().filter(usable) {
+        for list in lists.iter().filter(|l| usable(l, view)) {
             for &p in &list.bins[pass][bi] {
                 list.raster_prim(p, band);
             }
         }
     }
+}
+
+/// Whether `list` was built for a view of `view`'s size (others are skipped).
+fn usable(list: &DrawList, view: &View) -> bool {
+    list.view.width == view.width && list.view.height == view.height
+}
+
+/// Whether any opaque primitive touches band `bi`: only then is its depth buffer read or written.
+fn band_has_opaque(lists: &[DrawList], view: &View, bi: usize) -> bool {
+    lists.iter().any(|l| usable(l, view) && !l.bins[0][bi].is_empty())
 }
 
 fn premultiply(background: [f32; 4]) -> [f32; 4] {
@@ -1288,7 +1298,10 @@ pub fn render_image(view: &View, lists: &[DrawList], background: [f32; 4]) -> Im
             color.clear();
             color.resize(rows * w, bg);
             depth.clear();
-            depth.resize(rows * w, 1.0);
+            if band_has_opaque(lists, view, bi) {
+                // Otherwise nothing reads or writes depth (see `Band::has_opaque`).
+                depth.resize(rows * w, 1.0);
+            }
             let y0 = bi * BAND_ROWS;
             let mut band = Band { color, depth, width: w, y0, y1: y0 + rows, has_opaque: false };
             raster_band(lists, view, bi, &mut band);

@@ -982,8 +982,8 @@ fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &
 const SMALL_LANES: usize = 8;
 
 /// Whether a triangle's edge functions, evaluated anywhere within its bounding box widened by
-/// [`SMALL_LANES`] pixels, fit an `i32`: both sides of its box below 64 pixels bound them by
-/// `2 · (64·SUB) · (73·SUB) < 2^31`.
+/// [`SMALL_LANES`] pixels (and one row), fit an `i32`: both sides of its box below 64 pixels
+/// bound them by `2 · (64·SUB) · (73·SUB) < 2^31`, and their steps per row by `64·SUB²`.
 #[inline(always)]
 fn small_extent(a: &SVert, b: &SVert, c: &SVert) -> bool {
     let span = |p: i64, q: i64, r: i64| p.max(q).max(r) - p.min(q).min(r);

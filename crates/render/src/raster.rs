@@ -263,6 +263,8 @@ pub struct DrawList {
     ring: Vec<(f32, f32)>,
     /// The current disc's rim in clip space, reused.
     rim_clip: Vec<Vec4>,
+    /// The current disc's centre and rim snapped to the screen, reused.
+    rim_snapped: Vec<SVert>,
     /// `mesh`'s clip-space vertices and their snapped indices, reused.
     mesh_scratch: (Vec<ClipVert>, Vec<u32>),
 }
@@ -286,6 +288,7 @@ impl DrawList {
             bins: [vec![Vec::new(); bands], vec![Vec::new(); bands]],
             ring: Vec::new(),
             rim_clip: Vec::new(),
+            rim_snapped: Vec::new(),
             mesh_scratch: (Vec::new(), Vec::new()),
         }
     }
@@ -537,19 +540,25 @@ impl DrawList {
             return;
         }
         if n <= MAX_FAN && blend != Blend::Opaque {
-            // The scanline path needs positions only: snap them on the stack, no colours.
-            let mut pts = [SVert { x: 0, y: 0, z: 0.0, iw: 0.0, c: [0.0; 4], uv: [0.0; 2] }; MAX_FAN + 1];
-            pts[0] = self.snap_position(c);
-            for (p, &q) in pts[1..].iter_mut().zip(&rim) {
-                *p = self.snap_position(q);
-            }
+            // The scanline path needs positions only: snap them (no colours) into a reused list
+            // (a fresh array per particle was 3 KB of zeroing each).
+            let mut pts = std::mem::take(&mut self.rim_snapped);
+            pts.clear();
+            pts.push(self.snap_position(c));
+            pts.extend(rim.iter().map(|&q| self.snap_position(q)));
             self.rim_clip = rim;
-            let Some(rows) = self.pixel_rows(pts[..=n].iter()) else { return };
-            if self.fan_setup(&pts[..=n], rows, center_rgba, edge_rgba) {
-                let bands = (rows.0 as usize / BAND_ROWS, rows.1 as usize / BAND_ROWS);
-                let fan = self.fans.len() as u32 - 1;
-                self.push_prim(Prim::Fan { fan, blend }, blend, bands);
-                return;
+            let rows = self.pixel_rows(pts.iter());
+            let fanned = rows.is_some_and(|rows| self.fan_setup(&pts, rows, center_rgba, edge_rgba));
+            self.rim_snapped = pts;
+            match (rows, fanned) {
+                (None, _) => return,
+                (Some(rows), true) => {
+                    let bands = (rows.0 as usize / BAND_ROWS, rows.1 as usize / BAND_ROWS);
+                    let fan = self.fans.len() as u32 - 1;
+                    self.push_prim(Prim::Fan { fan, blend }, blend, bands);
+                    return;
+                }
+                (Some(_), false) => {}
             }
         }
         let first = self.verts.len();

@@ -83,9 +83,15 @@ pub fn flame_axes(camera: &Camera, root: Vec3) -> (Vec3, Vec3, Vec3) {
 
 /// World positions of flame `i` of `cloth`, turned to face the camera.
 fn world_positions(camera: &Camera, cloth: &ClothState, i: usize) -> Vec<Vec3> {
+    let to_world = flame_to_world(camera, cloth, i);
+    cloth.flame(i).unwrap_or(&[]).iter().map(|p| to_world(*p)).collect()
+}
+
+/// Flame `i`'s local-to-world map, turned to face the camera.
+fn flame_to_world(camera: &Camera, cloth: &ClothState, i: usize) -> impl Fn([f32; 3]) -> Vec3 + use<> {
     let root = Vec3::from_array(cloth.roots[i]);
     let (r, u, f) = flame_axes(camera, root);
-    cloth.flame(i).unwrap_or(&[]).iter().map(|p| root + r * p[0] + u * p[1] + f * p[2]).collect()
+    move |p| root + r * p[0] + u * p[1] + f * p[2]
 }
 
 /// What every textured cloth of a `w × h` grid shares: the texture coordinates of its masses
@@ -122,19 +128,13 @@ fn draw_textured_flame(
     tex: TextureId,
     p: &RenderParams,
 ) {
-    let camera = *list.view().camera();
-    let root = Vec3::from_array(cloth.roots[i]);
-    let (r, u, f) = flame_axes(&camera, root);
+    let to_world = flame_to_world(list.view().camera(), cloth, i);
     let masses = cloth.flame(i).unwrap_or(&[]);
     if masses.len() != mesh.uv.len() {
         return;
     }
     verts.clear();
-    verts.extend(masses.iter().zip(&mesh.uv).map(|(q, &uv)| Vertex {
-        position: root + r * q[0] + u * q[1] + f * q[2],
-        color: p.tint,
-        uv,
-    }));
+    verts.extend(masses.iter().zip(&mesh.uv).map(|(q, &uv)| Vertex { position: to_world(*q), color: p.tint, uv }));
     list.mesh(verts, &mesh.triangles, Some(tex), p.blend);
 }
 

@@ -170,7 +170,7 @@ impl CookResult {
     /// Output `port` of node `id` (errors say why it is not there).
     pub fn output(&self, graph: &Graph, id: &str, port: &str) -> Result<Value, NodeError> {
         let res = self.results.get(id).ok_or_else(|| NodeError::msg(format!("node '{id}' was not cooked")))?;
-        let values = res.as_ref().map_err(Clone::clone)?;
+        let values = res.as_ref().map_err(|e| self.cause(e))?;
         let idx = graph.index(id).ok_or_else(|| NodeError::msg(format!("no node '{id}'")))?;
         let p = graph
             .node(idx)
@@ -179,6 +179,22 @@ impl CookResult {
             .output_index(port)
             .ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
         Ok(values[p].clone())
+    }
+
+    /// The error behind `e`: an "upstream failed" echo is followed up the chain of failed nodes to
+    /// the one that failed on its own, so a caller asking for a downstream output learns why
+    /// (the error names that node and its port), not only that something upstream broke.
+    fn cause(&self, e: &NodeError) -> NodeError {
+        let mut cur = e;
+        // A DAG's chain of echoes is at most as long as the list of results.
+        for _ in 0..=self.results.len() {
+            let NodeError::Upstream(up) = cur else { break };
+            match self.results.get(up.as_str()) {
+                Some(Err(next)) => cur = next,
+                _ => break,
+            }
+        }
+        cur.clone()
     }
 
     /// Every failed node with its error, in no particular order.

@@ -151,6 +151,20 @@ fn a_failing_node_marks_its_downstream_and_other_branches_still_cook() {
 }
 
 #[test]
+fn asking_for_a_downstream_output_reports_the_failing_nodes_own_error() {
+    let mut doc = two_branches();
+    doc.add_node("bad", NodeDoc::new("test.fail").param("fail", ParamValue::Bool(true)));
+    doc.add_node("after", NodeDoc::new("math.add"));
+    doc.add_node("last", NodeDoc::new("math.add"));
+    doc.connect("add.value", "bad.a").connect("bad.value", "after.a").connect("after.value", "last.a");
+    let g = build(&doc);
+    let mut ev = pyrograph_core::Evaluator::new();
+    // Two nodes below the failure: the echo is followed up to 'bad' and its port.
+    let err = ev.output(&g, "last.value", &CookCtx::new()).unwrap_err();
+    assert_eq!(err.to_string(), "node 'bad' (test.fail): port 'fail': asked to fail");
+}
+
+#[test]
 fn a_clip_into_a_per_frame_input_lifts_the_node() {
     let mut doc = GraphDoc::new();
     doc.add_node("ramp", NodeDoc::new("test.ramp").param("frames", ParamValue::Int(4)));

@@ -695,7 +695,7 @@ impl DrawList {
     }
 
     #[inline(always)]
-    fn raster_prim(&self, index: u32, band: &mut Band<'_>) {
+    fn raster_prim<const AVX2: bool>(&self, index: u32, band: &mut Band<'_>) {
         match self.prims[index as usize] {
             Prim::Tri { v, blend, tex } => {
                 let tex = tex.and_then(|t| self.textures.get(t as usize)).map(|t| &**t);
@@ -707,10 +707,10 @@ impl DrawList {
                 let (first, [above, below]) = (f.first as usize, f.counts.map(|c| c.iter().map(|&n| n as usize).sum::<usize>()));
                 let halves = [&self.fan_edges[first..first + above], &self.fan_edges[first + above..first + above + below]];
                 match blend {
-                    Blend::Additive if f.in_range => raster_fan(band, f, halves, add_in_range),
-                    Blend::Additive => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Additive)),
-                    Blend::Over => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Over)),
-                    Blend::Opaque => raster_fan(band, f, halves, |d, s| blend_vec4(d, s, Blend::Opaque)),
+                    Blend::Additive if f.in_range => raster_fan::<AVX2, true>(band, f, halves, add_in_range),
+                    Blend::Additive => raster_fan::<AVX2, false>(band, f, halves, |d, s| blend_vec4(d, s, Blend::Additive)),
+                    Blend::Over => raster_fan::<AVX2, false>(band, f, halves, |d, s| blend_vec4(d, s, Blend::Over)),
+                    Blend::Opaque => raster_fan::<AVX2, false>(band, f, halves, |d, s| blend_vec4(d, s, Blend::Opaque)),
                 }
             }
         }
@@ -766,7 +766,12 @@ fn is_top_left(a: &SVert, b: &SVert) -> bool {
 /// and the colour follows the lower envelope `min_k L_k` (inside the fan triangle of edge k,
 /// `L_k` is the smallest; see [`fill_fan_span`]).
 #[inline(always)]
-fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend: impl Fn(&mut [f32; 4], Vec4)) {
+fn raster_fan<const AVX2: bool, const ADD_IN_RANGE: bool>(
+    band: &mut Band<'_>,
+    f: &FanSetup,
+    halves: [&[FanEdge]; 2],
+    blend: impl Fn(&mut [f32; 4], Vec4),
+) {
     let r0 = f.rows.0.max(band.y0 as i32);
     let r1 = f.rows.1.min(band.y1 as i32 - 1);
     let w = band.width as i32;
@@ -806,9 +811,9 @@ fn raster_fan(band: &mut Band<'_>, f: &FanSetup, halves: [&[FanEdge]; 2], blend:
         let xd0 = px0 as f32 + 0.5 - f.cx;
         let z = (zrow + f.z[1] * xd0, f.z[1]);
         if band.has_opaque {
-            fill_fan_span(&mut band.color[span.clone()], Some(&band.depth[span]), xd0, z, env, f, &blend);
+            fill_fan_span::<AVX2, ADD_IN_RANGE>(&mut band.color[span.clone()], Some(&band.depth[span]), xd0, z, env, f, &blend);
         } else {
-            fill_fan_span(&mut band.color[span], None, xd0, z, env, f, &blend);
+            fill_fan_span::<AVX2, ADD_IN_RANGE>(&mut band.color[span], None, xd0, z, env, f, &blend);
         }
     }
 }
@@ -836,7 +841,7 @@ const FAN_LANES: usize = 8;
 /// data-dependent branch per sector, and particles a few pixels wide cross a sector every
 /// three pixels; measured 2–3× slower at 1,000 flames.
 #[inline(always)]
-fn fill_fan_span(
+fn fill_fan_span<const AVX2: bool, const ADD_IN_RANGE: bool>(
     color: &mut [[f32; 4]],
     depth: Option<&[f32]>,
     xd0: f32,
@@ -849,13 +854,12 @@ fn fill_fan_span(
     for (block, dst) in color.chunks_mut(FAN_LANES).enumerate() {
         let base = xd0 + (block * FAN_LANES) as f32;
         let xd: [f32; FAN_LANES] = std::array::from_fn(|i| base + i as f32);
-        let mut l = [f32::INFINITY; FAN_LANES];
-        for &[o, b] in env {
-            for (li, &x) in l.iter_mut().zip(&xd) {
-                let v = o + b * x;
-                // Written as a compare, not `f32::min`, so it lowers to one `minps`.
-                *li = if v < *li { v } else { *li };
-            }
+        let l = envelope::<AVX2>(env, base);
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 && ADD_IN_RANGE && depth.is_none() {
+            // SAFETY: `AVX2` is set only below `raster_band_avx2` (see `envelope`).
+            unsafe { add_block_avx2(dst, &l, f.edge, f.delta) };
+            continue;
         }
         for (i, px) in dst.iter_mut().enumerate() {
             let visible = depth.is_none_or(|zb| z0 + dz * (xd[i] - xd0) <= zb[block * FAN_LANES + i]);
@@ -863,6 +867,100 @@ fn fill_fan_span(
                 blend(px, e + d * l[i].clamp(0.0, 1.0));
             }
         }
+    }
+}
+
+/// The lower envelope `min_k (offset_k + slope_k·xd)` of a fan row's edges at the
+/// [`FAN_LANES`] pixels `xd = base, base + 1, …` (offsets from the particle's centre).
+/// `AVX2` is true only below [`raster_band_avx2`].
+#[inline(always)]
+fn envelope<const AVX2: bool>(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: `AVX2` is set only on the path below `raster_band_avx2`, which runs only
+        // after checking that the CPU supports AVX2.
+        return unsafe { envelope_avx2(env, base) };
+    }
+    let xd: [f32; FAN_LANES] = std::array::from_fn(|i| base + i as f32);
+    let mut l = [f32::INFINITY; FAN_LANES];
+    for &[offset, slope] in env {
+        for (li, &x) in l.iter_mut().zip(&xd) {
+            *li = lane_min(offset + slope * x, *li);
+        }
+    }
+    l
+}
+
+/// [`envelope`] in AVX2 with four running minima merged at the end. Written with intrinsics
+/// because a single chain of `vminps` waits out its latency (4 cycles on recent Intel cores)
+/// at every edge, and the compiler, given the independent chains in plain Rust, split them
+/// across mismatched registers and branched on the merge (measured 13 % slower than one
+/// chain); this form was 5 % faster at 1,000 flames. Bit-identical to the portable loop: the
+/// same separate multiply and add per lane (no FMA), and the minimum of non-NaN values does
+/// not depend on the order (`vminps(v, m)` keeps `m` when `v` is NaN, as `lane_min` does).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn envelope_avx2(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
+    use std::arch::x86_64::{__m256, _mm256_add_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setr_ps};
+    const _: () = assert!(FAN_LANES == 8, "one __m256 per block");
+    let xd = _mm256_add_ps(_mm256_set1_ps(base), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    let line = |&[offset, slope]: &[f32; 2]| _mm256_add_ps(_mm256_set1_ps(offset), _mm256_mul_ps(_mm256_set1_ps(slope), xd));
+    let mut m = [_mm256_set1_ps(f32::INFINITY); 4];
+    let mut quads = env.chunks_exact(4);
+    for quad in &mut quads {
+        for (m, e) in m.iter_mut().zip(quad) {
+            *m = _mm256_min_ps(line(e), *m);
+        }
+    }
+    for (m, e) in m.iter_mut().zip(quads.remainder()) {
+        *m = _mm256_min_ps(line(e), *m);
+    }
+    let l = _mm256_min_ps(_mm256_min_ps(m[0], m[1]), _mm256_min_ps(m[2], m[3]));
+    // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
+    unsafe { std::mem::transmute::<__m256, [f32; FAN_LANES]>(l) }
+}
+
+/// `v` if it is below `m`, else `m`: written as a compare, not `f32::min`, so it lowers to one
+/// `minps` (a NaN `v` never replaces `m`).
+#[inline(always)]
+fn lane_min(v: f32, m: f32) -> f32 {
+    if v < m { v } else { m }
+}
+
+/// A block of [`fill_fan_span`] blended with [`add_in_range`] (`blend` there) and no depth
+/// test, two pixels per AVX register instead of one per SSE register: the particles' usual
+/// case, where the per-pixel blend had become the larger half of a fan row's time. The same
+/// operations in the same order per channel as the portable loop, so bit-identical: the clamp
+/// as `min(1, max(0, l))` (what `f32::clamp` computes for a non-NaN `l`; the envelope is never
+/// NaN), `edge + delta·l`, then `min(dst + src·[a, a, a, 1], 1)`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_block_avx2(dst: &mut [[f32; 4]], l: &[f32; FAN_LANES], edge: [f32; 4], delta: [f32; 4]) {
+    use std::arch::x86_64::{
+        _mm256_add_ps, _mm256_blend_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_permutevar8x32_ps,
+        _mm256_set1_ps, _mm256_setr_epi32, _mm256_setr_ps, _mm256_setzero_ps, _mm256_shuffle_ps, _mm256_storeu_ps,
+    };
+    let twice = |[x, y, z, w]: [f32; 4]| _mm256_setr_ps(x, y, z, w, x, y, z, w);
+    let (one, e, d) = (_mm256_set1_ps(1.0), twice(edge), twice(delta));
+    let l_lanes = _mm256_setr_ps(l[0], l[1], l[2], l[3], l[4], l[5], l[6], l[7]);
+    let clamped = _mm256_min_ps(one, _mm256_max_ps(_mm256_setzero_ps(), l_lanes));
+    let last = dst.len().min(FAN_LANES).saturating_sub(1);
+    let mut pairs = dst.chunks_exact_mut(2);
+    for (k, pair) in (&mut pairs).enumerate() {
+        let k = 2 * k as i32;
+        let lk = _mm256_permutevar8x32_ps(clamped, _mm256_setr_epi32(k, k, k, k, k + 1, k + 1, k + 1, k + 1));
+        let src = _mm256_add_ps(e, _mm256_mul_ps(d, lk));
+        let weight = _mm256_blend_ps::<0b1000_1000>(_mm256_shuffle_ps::<0xff>(src, src), one);
+        let p = pair.as_mut_ptr().cast::<f32>();
+        // SAFETY: `p` points to the eight contiguous `f32`s of two adjacent pixels of `dst`
+        // (`pair` is two `[f32; 4]`), and the unaligned load and store accept any address.
+        unsafe {
+            let sum = _mm256_add_ps(_mm256_loadu_ps(p), _mm256_mul_ps(src, weight));
+            _mm256_storeu_ps(p, _mm256_min_ps(sum, one));
+        }
+    }
+    if let [px] = pairs.into_remainder() {
+        add_in_range(px, Vec4::from_array(edge) + Vec4::from_array(delta) * l[last].clamp(0.0, 1.0));
     }
 }
 
@@ -1237,7 +1335,7 @@ fn raster_band(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) 
         // vectorize safe code with it.
         return unsafe { raster_band_avx2(lists, view, bi, band) };
     }
-    raster_band_generic(lists, view, bi, band)
+    raster_band_generic::<false>(lists, view, bi, band)
 }
 
 /// [`raster_band_generic`] compiled for AVX2 (the particle envelope runs 8 lanes wide). Results
@@ -1245,16 +1343,16 @@ fn raster_band(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn raster_band_avx2(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
-    raster_band_generic(lists, view, bi, band)
+    raster_band_generic::<true>(lists, view, bi, band)
 }
 
 #[inline(always)]
-fn raster_band_generic(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+fn raster_band_generic<const AVX2: bool>(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
     band.has_opaque = band_has_opaque(lists, view, bi);
     for pass in 0..2 {
         for list in lists.iter().filter(|l| usable(l, view)) {
             for &p in &list.bins[pass][bi] {
-                list.raster_prim(p, band);
+                list.raster_prim::<AVX2>(p, band);
             }
         }
     }
@@ -1571,6 +1669,89 @@ mod tests {
     fn lcg(state: &mut u64) -> f32 {
         *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (*state >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_avx2_envelope_is_bit_identical_to_the_portable_one() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2, so only the portable envelope runs");
+            return;
+        }
+        // Every edge count a fan row can have up to 13 (each remainder of the four chains),
+        // offsets and slopes of both signs, blocks left and right of the centre.
+        let mut seed = 3u64;
+        let mut lowered = 0;
+        for edges in 0..=13 {
+            for _ in 0..200 {
+                let env: Vec<[f32; 2]> = (0..edges).map(|_| [2.0 * lcg(&mut seed) - 0.5, 0.6 * lcg(&mut seed) - 0.3]).collect();
+                let base = 40.0 * lcg(&mut seed) - 20.0;
+                let portable = envelope::<false>(&env, base);
+                let avx2 = envelope::<true>(&env, base);
+                assert_eq!(portable.map(f32::to_bits), avx2.map(f32::to_bits), "{edges} edges at {base}");
+                lowered += usize::from(portable.iter().any(|v| v.is_finite()));
+            }
+        }
+        // Guard against a vacuous pass: all rows but the empty ones have a finite envelope.
+        assert_eq!(lowered, 13 * 200);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn particles_rasterize_bit_identically_with_and_without_avx2() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("skipped: this CPU has no AVX2, so only the portable path runs");
+            return;
+        }
+        // Particles from under a pixel to 40 px wide, 3 to 24 sides, additive in range (the
+        // AVX2 blend path), additive out of range and "over", some over an opaque triangle
+        // (the depth-tested path), spans of every length modulo the 8-pixel block.
+        let view = screen_view(96, 64);
+        let mut list = DrawList::new(&view);
+        list.triangle(
+            [
+                Vertex::new(Vec3::new(-3.0, -3.0, -1.0), [0.2, 0.3, 0.4, 1.0]),
+                Vertex::new(Vec3::new(0.5, -3.0, -1.0), [0.2, 0.3, 0.4, 1.0]),
+                Vertex::new(Vec3::new(-3.0, 0.5, -1.0), [0.2, 0.3, 0.4, 1.0]),
+            ],
+            Blend::Opaque,
+        );
+        let mut seed = 11u64;
+        for k in 0..600 {
+            let center = Vec3::new(6.0 * lcg(&mut seed) - 3.0, 4.0 * lcg(&mut seed) - 2.0, lcg(&mut seed) - 0.5);
+            let half = Vec2::new(0.01 + 0.6 * lcg(&mut seed), 0.01 + 0.6 * lcg(&mut seed));
+            let sides = 3 + (lcg(&mut seed) * 22.0) as u32;
+            let (c, e) = (
+                [lcg(&mut seed), lcg(&mut seed), lcg(&mut seed), lcg(&mut seed)],
+                [lcg(&mut seed), 0.5, 0.1, 0.3 * lcg(&mut seed)],
+            );
+            let (blend, c) = match k % 5 {
+                3 => (Blend::Additive, [1.5, c[1], c[2], c[3]]),
+                4 => (Blend::Over, c),
+                _ => (Blend::Additive, c),
+            };
+            list.particle(center, half, sides, c, e, blend);
+        }
+        let frame = |avx2: bool| {
+            let (w, rows) = (96usize, 64usize);
+            let (mut color, mut depth) = (vec![[0.05, 0.0, 0.1, 1.0]; w * rows], vec![1.0f32; w * rows]);
+            for (bi, (c, d)) in color.chunks_mut(w * BAND_ROWS).zip(depth.chunks_mut(w * BAND_ROWS)).enumerate() {
+                let y0 = bi * BAND_ROWS;
+                let mut band = Band { y1: y0 + c.len() / w, color: c, depth: d, width: w, y0, has_opaque: false };
+                let lists = std::slice::from_ref(&list);
+                if avx2 {
+                    // SAFETY: AVX2 support is checked at the top of this test.
+                    unsafe { raster_band_avx2(lists, &view, bi, &mut band) };
+                } else {
+                    raster_band_generic::<false>(lists, &view, bi, &mut band);
+                }
+            }
+            color.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>()
+        };
+        let (portable, avx2) = (frame(false), frame(true));
+        let lit = portable.chunks(4).filter(|p| p[..3] != [0.05f32.to_bits(), 0, 0.1f32.to_bits()]).count();
+        assert!(lit > 96 * 64 / 2, "most of the frame is drawn ({lit} pixels)");
+        assert!(portable == avx2, "AVX2 and portable frames differ");
     }
 
     #[test]

@@ -283,9 +283,7 @@ fn gather_and_move(p: &mut [f32], v: &mut [f32], f: &mut [f32], g: &[&[f32]], of
         // per family (measured: the per-family passes were 8 % of a 144-flame cloth frame).
         ([a, b], [oa, ob]) => move_fused(p, v, [a, b], [*oa, *ob], m),
         ([a, b, c, d], [oa, ob, oc, od]) => move_fused(p, v, [a, b, c, d], [*oa, *ob, *oc, *od], m),
-        ([a, b, c, d, e, f], [oa, ob, oc, od, oe, of]) => {
-            move_fused(p, v, [a, b, c, d, e, f], [*oa, *ob, *oc, *od, *oe, *of], m)
-        }
+        ([a, b, c, d, e, f], [oa, ob, oc, od, oe, of]) => move_fused(p, v, [a, b, c, d, e, f], [*oa, *ob, *oc, *od, *oe, *of], m),
         _ => move_by_passes(p, v, f, g, offsets, m),
     }
 }
@@ -455,7 +453,10 @@ mod tests {
             for (form, (p, v)) in [("fused", fused), ("passes", passes)] {
                 assert_eq!(p[..WIDTH], p0[..WIDTH], "{families} families, {form}: pinned positions");
                 assert_eq!(v[..WIDTH], v0[..WIDTH], "{families} families, {form}: pinned velocities");
-                assert!(p[WIDTH..].iter().zip(&p0[WIDTH..]).all(|(a, b)| a != b), "{families} families, {form}: free masses move");
+                assert!(
+                    p[WIDTH..].iter().zip(&p0[WIDTH..]).all(|(a, b)| a != b),
+                    "{families} families, {form}: free masses move"
+                );
             }
         }
     }

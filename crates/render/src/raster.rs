@@ -802,9 +802,12 @@ fn raster_fan<const AVX2: bool, const ADD_IN_RANGE: bool>(
         let line = (y as usize - band.y0) * band.width;
         let zrow = f.z[0] + f.z[2] * dy;
         let mut count = 0;
-        for [b, c, ..] in lefts.iter().chain(rights).chain(flats) {
-            offsets[count] = [1.0 + c * dy, *b];
-            count += 1;
+        // A loop per group: a chained iterator branched at every edge on which group it was in.
+        for group in [lefts, rights, flats] {
+            for [b, c, ..] in group {
+                offsets[count] = [1.0 + c * dy, *b];
+                count += 1;
+            }
         }
         let env = &offsets[..count];
         let span = line + px0 as usize..line + px1 as usize + 1;

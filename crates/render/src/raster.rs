@@ -853,17 +853,17 @@ fn fill_fan_span<const AVX2: bool, const ADD_IN_RANGE: bool>(
     f: &FanSetup,
     blend: &impl Fn(&mut [f32; 4], Vec4),
 ) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 && ADD_IN_RANGE && depth.is_none() {
+        // SAFETY: `AVX2` is set only below `raster_band_avx2` (see `envelope`).
+        unsafe { add_span_avx2(color, xd0, env, f.edge, f.delta) };
+        return;
+    }
     let (e, d) = (Vec4::from_array(f.edge), Vec4::from_array(f.delta));
     for (block, dst) in color.chunks_mut(FAN_LANES).enumerate() {
         let base = xd0 + (block * FAN_LANES) as f32;
         let xd: [f32; FAN_LANES] = std::array::from_fn(|i| base + i as f32);
         let l = envelope::<AVX2>(env, base);
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 && ADD_IN_RANGE && depth.is_none() {
-            // SAFETY: `AVX2` is set only below `raster_band_avx2` (see `envelope`).
-            unsafe { add_block_avx2(dst, &l, f.edge, f.delta) };
-            continue;
-        }
         for (i, px) in dst.iter_mut().enumerate() {
             let visible = depth.is_none_or(|zb| z0 + dz * (xd[i] - xd0) <= zb[block * FAN_LANES + i]);
             if visible {
@@ -904,7 +904,16 @@ fn envelope<const AVX2: bool>(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn envelope_avx2(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
-    use std::arch::x86_64::{__m256, _mm256_add_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setr_ps};
+    // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
+    unsafe { std::mem::transmute::<std::arch::x86_64::__m256, [f32; FAN_LANES]>(envelope_m256(env, base)) }
+}
+
+/// [`envelope_avx2`] left in its register.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn envelope_m256(env: &[[f32; 2]], base: f32) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::{_mm256_add_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setr_ps};
     const _: () = assert!(FAN_LANES == 8, "one __m256 per block");
     let xd = _mm256_add_ps(_mm256_set1_ps(base), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     let line = |&[offset, slope]: &[f32; 2]| _mm256_add_ps(_mm256_set1_ps(offset), _mm256_mul_ps(_mm256_set1_ps(slope), xd));
@@ -918,9 +927,7 @@ fn envelope_avx2(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
     for (m, e) in m.iter_mut().zip(quads.remainder()) {
         *m = _mm256_min_ps(line(e), *m);
     }
-    let l = _mm256_min_ps(_mm256_min_ps(m[0], m[1]), _mm256_min_ps(m[2], m[3]));
-    // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
-    unsafe { std::mem::transmute::<__m256, [f32; FAN_LANES]>(l) }
+    _mm256_min_ps(_mm256_min_ps(m[0], m[1]), _mm256_min_ps(m[2], m[3]))
 }
 
 /// `v` if it is below `m`, else `m`: written as a compare, not `f32::min`, so it lowers to one
@@ -930,40 +937,47 @@ fn lane_min(v: f32, m: f32) -> f32 {
     if v < m { v } else { m }
 }
 
-/// A block of [`fill_fan_span`] blended with [`add_in_range`] (`blend` there) and no depth
-/// test, two pixels per AVX register instead of one per SSE register: the particles' usual
-/// case, where the per-pixel blend had become the larger half of a fan row's time. The same
-/// operations in the same order per channel as the portable loop, so bit-identical: the clamp
-/// as `min(1, max(0, l))` (what `f32::clamp` computes for a non-NaN `l`; the envelope is never
-/// NaN), `edge + delta·l`, then `min(dst + src·[a, a, a, 1], 1)`.
+/// A span of [`fill_fan_span`] blended with [`add_in_range`] (`blend` there) and no depth test,
+/// two pixels per AVX register instead of one per SSE register: the particles' usual case,
+/// where the per-pixel blend had become the larger half of a fan row's time. Written for the
+/// whole span (the constants set up once, the envelope kept in its register, the pixel pairs
+/// addressed directly) because the per-block form's slicing and set-up cost as much as its
+/// blending. The same operations in the same order per channel as the portable loop, so
+/// bit-identical: the clamp as `min(1, max(0, l))` (what `f32::clamp` computes for a non-NaN
+/// `l`; the envelope is never NaN), `edge + delta·l`, then `min(dst + src·[a, a, a, 1], 1)`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn add_block_avx2(dst: &mut [[f32; 4]], l: &[f32; FAN_LANES], edge: [f32; 4], delta: [f32; 4]) {
+fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32; 4], delta: [f32; 4]) {
     use std::arch::x86_64::{
-        _mm256_add_ps, _mm256_blend_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_permutevar8x32_ps,
-        _mm256_set1_ps, _mm256_setr_epi32, _mm256_setr_ps, _mm256_setzero_ps, _mm256_shuffle_ps, _mm256_storeu_ps,
+        __m256, _mm256_add_ps, _mm256_blend_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps,
+        _mm256_permutevar8x32_ps, _mm256_set1_ps, _mm256_setr_epi32, _mm256_setr_ps, _mm256_setzero_ps, _mm256_shuffle_ps,
+        _mm256_storeu_ps,
     };
     let twice = |[x, y, z, w]: [f32; 4]| _mm256_setr_ps(x, y, z, w, x, y, z, w);
     let (one, e, d) = (_mm256_set1_ps(1.0), twice(edge), twice(delta));
-    let l_lanes = _mm256_setr_ps(l[0], l[1], l[2], l[3], l[4], l[5], l[6], l[7]);
-    let clamped = _mm256_min_ps(one, _mm256_max_ps(_mm256_setzero_ps(), l_lanes));
-    let last = dst.len().min(FAN_LANES).saturating_sub(1);
-    let mut pairs = dst.chunks_exact_mut(2);
-    for (k, pair) in (&mut pairs).enumerate() {
-        let k = 2 * k as i32;
-        let lk = _mm256_permutevar8x32_ps(clamped, _mm256_setr_epi32(k, k, k, k, k + 1, k + 1, k + 1, k + 1));
-        let src = _mm256_add_ps(e, _mm256_mul_ps(d, lk));
-        let weight = _mm256_blend_ps::<0b1000_1000>(_mm256_shuffle_ps::<0xff>(src, src), one);
-        let p = pair.as_mut_ptr().cast::<f32>();
-        // SAFETY: `p` points to the eight contiguous `f32`s of two adjacent pixels of `dst`
-        // (`pair` is two `[f32; 4]`), and the unaligned load and store accept any address.
-        unsafe {
-            let sum = _mm256_add_ps(_mm256_loadu_ps(p), _mm256_mul_ps(src, weight));
-            _mm256_storeu_ps(p, _mm256_min_ps(sum, one));
+    for (block, dst) in color.chunks_mut(FAN_LANES).enumerate() {
+        let l = envelope_m256(env, xd0 + (block * FAN_LANES) as f32);
+        let clamped = _mm256_min_ps(one, _mm256_max_ps(_mm256_setzero_ps(), l));
+        let p = dst.as_mut_ptr().cast::<f32>();
+        for k in 0..dst.len() / 2 {
+            let k = 2 * k as i32;
+            let lk = _mm256_permutevar8x32_ps(clamped, _mm256_setr_epi32(k, k, k, k, k + 1, k + 1, k + 1, k + 1));
+            let src = _mm256_add_ps(e, _mm256_mul_ps(d, lk));
+            let weight = _mm256_blend_ps::<0b1000_1000>(_mm256_shuffle_ps::<0xff>(src, src), one);
+            // SAFETY: pixels `k` and `k + 1` are in `dst` (`k + 1 < dst.len()`), so `p + 4k` is
+            // the start of their eight contiguous `f32`s; the unaligned load and store accept
+            // any address.
+            unsafe {
+                let px = p.add(4 * k as usize);
+                let sum = _mm256_add_ps(_mm256_loadu_ps(px), _mm256_mul_ps(src, weight));
+                _mm256_storeu_ps(px, _mm256_min_ps(sum, one));
+            }
         }
-    }
-    if let [px] = pairs.into_remainder() {
-        add_in_range(px, Vec4::from_array(edge) + Vec4::from_array(delta) * l[last].clamp(0.0, 1.0));
+        if let Some(last) = dst.len().checked_sub(1).filter(|n| n % 2 == 0) {
+            // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
+            let l = unsafe { std::mem::transmute::<__m256, [f32; FAN_LANES]>(l) };
+            add_in_range(&mut dst[last], Vec4::from_array(edge) + Vec4::from_array(delta) * l[last].clamp(0.0, 1.0));
+        }
     }
 }
 

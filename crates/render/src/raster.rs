@@ -904,8 +904,15 @@ fn envelope<const AVX2: bool>(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn envelope_avx2(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
+    lanes(envelope_m256(env, base))
+}
+
+/// The eight lanes of `v`, in order.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn lanes(v: std::arch::x86_64::__m256) -> [f32; FAN_LANES] {
     // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
-    unsafe { std::mem::transmute::<std::arch::x86_64::__m256, [f32; FAN_LANES]>(envelope_m256(env, base)) }
+    unsafe { std::mem::transmute::<std::arch::x86_64::__m256, [f32; FAN_LANES]>(v) }
 }
 
 /// [`envelope_avx2`] left in its register.
@@ -949,9 +956,8 @@ fn lane_min(v: f32, m: f32) -> f32 {
 #[target_feature(enable = "avx2")]
 fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32; 4], delta: [f32; 4]) {
     use std::arch::x86_64::{
-        __m256, _mm256_add_ps, _mm256_blend_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps,
-        _mm256_permutevar8x32_ps, _mm256_set1_ps, _mm256_setr_epi32, _mm256_setr_ps, _mm256_setzero_ps, _mm256_shuffle_ps,
-        _mm256_storeu_ps,
+        _mm256_add_ps, _mm256_blend_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps, _mm256_permutevar8x32_ps,
+        _mm256_set1_ps, _mm256_setr_epi32, _mm256_setr_ps, _mm256_setzero_ps, _mm256_shuffle_ps, _mm256_storeu_ps,
     };
     let twice = |[x, y, z, w]: [f32; 4]| _mm256_setr_ps(x, y, z, w, x, y, z, w);
     let (one, e, d) = (_mm256_set1_ps(1.0), twice(edge), twice(delta));
@@ -974,9 +980,7 @@ fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32;
             }
         }
         if let Some(last) = dst.len().checked_sub(1).filter(|n| n % 2 == 0) {
-            // SAFETY: `__m256` and `[f32; 8]` are both 32 bytes of eight `f32` lanes in order.
-            let l = unsafe { std::mem::transmute::<__m256, [f32; FAN_LANES]>(l) };
-            add_in_range(&mut dst[last], Vec4::from_array(edge) + Vec4::from_array(delta) * l[last].clamp(0.0, 1.0));
+            add_in_range(&mut dst[last], Vec4::from_array(edge) + Vec4::from_array(delta) * lanes(l)[last].clamp(0.0, 1.0));
         }
     }
 }

@@ -64,7 +64,7 @@ impl Lattice {
 
     /// The analytic gradient of `noise::Perlin::new(seed)`'s 3-D noise at `q`. Written by hand
     /// because the `noise` crate evaluates values only; a gradient by central differences cost
-    /// six noise evaluations per wind sample, 70 % of simulating 1,000 flames. Same lattice,
+    /// six noise evaluations per wind sample, 69 % of simulating 1,000 flames. Same lattice,
     /// hash (`P[P[P[x] ^ y] ^ z]` on the low 8 bits), corner convention and quintic fade as
     /// `noise::core::perlin::perlin_3d`, differentiated (the clamp of the value to [−1, 1] is
     /// not: it does not act inside that range); the tests check it against central differences

@@ -700,7 +700,7 @@ impl DrawList {
             Prim::Tri { v, blend, tex } => {
                 let tex = tex.and_then(|t| self.textures.get(t as usize)).map(|t| &**t);
                 let [a, b, c] = v.map(|i| &self.verts[i as usize]);
-                raster_tri::<true>(band, a, b, c, blend, tex);
+                raster_tri::<true, AVX2>(band, a, b, c, blend, tex);
             }
             Prim::Fan { fan, blend } => {
                 let f = &self.fans[fan as usize];
@@ -995,7 +995,14 @@ fn add_in_range(dst: &mut [f32; 4], src: Vec4) {
 }
 
 #[inline(always)]
-fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &SVert, blend: Blend, tex: Option<&Image>) {
+fn raster_tri<const SMALL: bool, const AVX2: bool>(
+    band: &mut Band<'_>,
+    a: &SVert,
+    b: &SVert,
+    c: &SVert,
+    blend: Blend,
+    tex: Option<&Image>,
+) {
     let area = edge_fn(a, b, c.x, c.y);
     let (b, c, area) = match area.cmp(&0) {
         std::cmp::Ordering::Equal => return,
@@ -1032,6 +1039,8 @@ fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &
             span: (x1 - x0) as usize,
             row: row.map(|r| r as i32),
             dx: dx.map(|d| d as i32),
+            // The steps per row fit an `i32` like the edge functions (see `small_extent`).
+            dy: dy.map(|d| d as i32),
             inv_area,
             z: [a.z, b.z, c.z],
             iw: [a.iw, b.iw, c.iw],
@@ -1040,13 +1049,13 @@ fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &
             colors: [ca, cb, cc],
         };
         let shade = PixelShade { tex: tex.as_ref(), blend, depth_test, depth_write };
-        // The steps per row fit an `i32` like the edge functions (see `small_extent`).
-        let (mut rows, dy) = (tri.row, dy.map(|d| d as i32));
-        for y in y0..=y1 {
-            small_tri_row(band, &tri, rows, (y as usize - band.y0) * band.width, &shade);
-            for (r, d) in rows.iter_mut().zip(dy) {
-                *r += d;
-            }
+        let rows = (y0 as usize, y1 as usize);
+        // As many rows per tile as the box's width leaves lanes for: a dense cloth's triangles
+        // are 2–4 pixels wide, so one row per call left most lanes empty.
+        match tri.span {
+            0..=1 => small_tri_tiles::<2, AVX2>(band, &tri, rows, &shade),
+            2..=3 => small_tri_tiles::<4, AVX2>(band, &tri, rows, &shade),
+            _ => small_tri_tiles::<8, AVX2>(band, &tri, rows, &shade),
         }
         return;
     }
@@ -1105,21 +1114,23 @@ fn raster_tri<const SMALL: bool>(band: &mut Band<'_>, a: &SVert, b: &SVert, c: &
     }
 }
 
-/// Lanes of [`small_tri_row`]: triangles whose bounding box is at most this many pixels wide
-/// are rasterized a whole row at a time in vector lanes.
+/// Lanes of [`small_tri_tile`]: triangles whose bounding box is at most this many pixels wide
+/// are rasterized a tile of rows at a time in vector lanes.
 const SMALL_LANES: usize = 8;
 
 /// Whether a triangle's edge functions, evaluated anywhere within its bounding box widened by
 /// [`SMALL_LANES`] pixels (and one row), fit an `i32`: both sides of its box below 64 pixels
 /// bound them by `2 · (64·SUB) · (73·SUB) < 2^31`, and their steps per row by `64·SUB²`.
+/// (A tile of [`small_tri_tile`] reaches at most `SMALL_LANES / 2 − 1` rows below the box, and
+/// the steps between tiles `SMALL_LANES / 2` rows, both inside that margin.)
 #[inline(always)]
 fn small_extent(a: &SVert, b: &SVert, c: &SVert) -> bool {
     let span = |p: i64, q: i64, r: i64| p.max(q).max(r) - p.min(q).min(r);
     span(a.x, b.x, c.x) < 64 * SUB && span(a.y, b.y, c.y) < 64 * SUB
 }
 
-/// A triangle set up for [`small_tri_row`]: the edge functions at the first pixel of its box
-/// (top-left bias folded in) and their x steps, in `i32` (see [`small_extent`]), and its
+/// A triangle set up for [`small_tri_tile`]: the edge functions at the first pixel of its box
+/// (top-left bias folded in) and their x and y steps, in `i32` (see [`small_extent`]), and its
 /// vertices' attributes (colour and uv pre-multiplied by `iw`).
 struct SmallTri {
     x0: usize,
@@ -1127,6 +1138,7 @@ struct SmallTri {
     span: usize,
     row: [i32; 3],
     dx: [i32; 3],
+    dy: [i32; 3],
     inv_area: f32,
     z: [f32; 3],
     iw: [f32; 3],
@@ -1143,56 +1155,240 @@ struct PixelShade<'t, 'a> {
     depth_write: bool,
 }
 
-/// One row of a small triangle: coverage, barycentric weights, depth, `1/w` and the texture
-/// coordinates of all [`SMALL_LANES`] pixels at once (vector lanes, branch-free), then colour,
-/// texture and blending for the covered pixels only. Each lane does exactly the arithmetic of
-/// the per-pixel loop of [`raster_tri`], so the pixels are bit-identical to it; tiny
-/// triangles (a dense cloth or mesh far from the camera covers 2–4 pixels per triangle) spend
-/// most of their time on coverage tests and set-up that this does eight at a time.
+/// The rows `rows.0..=rows.1` of a small triangle, in tiles of `W` pixels by
+/// `SMALL_LANES / W` rows.
 #[inline(always)]
-fn small_tri_row(band: &mut Band<'_>, t: &SmallTri, w: [i32; 3], line: usize, shade: &PixelShade<'_, '_>) {
-    const N: usize = SMALL_LANES;
-    let we: [[i32; N]; 3] = std::array::from_fn(|e| std::array::from_fn(|i| w[e] + t.dx[e] * i as i32));
-    // A pixel is covered when no edge function is negative: when their OR has no sign bit.
-    let ored: [i32; N] = std::array::from_fn(|i| we[0][i] | we[1][i] | we[2][i]);
-    let mut mask = ored.iter().enumerate().fold(0u32, |m, (i, &v)| m | (u32::from(v >= 0) << i));
-    mask &= (2u32 << t.span) - 1;
-    if mask == 0 {
-        return;
-    }
-    let lerp = |k: &[f32; 3], l0: &[f32; N], l1: &[f32; N], l2: &[f32; N]| -> [f32; N] {
-        std::array::from_fn(|i| k[0] * l0[i] + k[1] * l1[i] + k[2] * l2[i])
-    };
-    let l1: [f32; N] = std::array::from_fn(|i| we[1][i] as f32 * t.inv_area);
-    let l2: [f32; N] = std::array::from_fn(|i| we[2][i] as f32 * t.inv_area);
-    let l0: [f32; N] = std::array::from_fn(|i| 1.0 - l1[i] - l2[i]);
-    let z = lerp(&t.z, &l0, &l1, &l2);
-    let inv: [f32; N] = lerp(&t.iw, &l0, &l1, &l2).map(|iw| 1.0 / iw);
-    let (mut fx, mut fy) = ([0.0f32; N], [0.0f32; N]);
-    if let Some(tx) = shade.tex {
-        let u = lerp(&t.u, &l0, &l1, &l2);
-        let v = lerp(&t.v, &l0, &l1, &l2);
-        for (i, (fx, fy)) in fx.iter_mut().zip(fy.iter_mut()).enumerate() {
-            (*fx, *fy) = tx.texel_coords(u[i] * inv[i], v[i] * inv[i]);
+fn small_tri_tiles<const W: usize, const AVX2: bool>(
+    band: &mut Band<'_>,
+    t: &SmallTri,
+    rows: (usize, usize),
+    shade: &PixelShade<'_, '_>,
+) {
+    let tall = (SMALL_LANES / W) as i32;
+    let mut w = t.row;
+    for y in (rows.0..=rows.1).step_by(SMALL_LANES / W) {
+        small_tri_tile::<W, AVX2>(band, t, w, (y, rows.1 - y), shade);
+        for (w, d) in w.iter_mut().zip(t.dy) {
+            *w += d * tall;
         }
     }
+}
+
+/// One tile of a small triangle, `W` pixels wide from `t.x0` and `SMALL_LANES / W` rows down
+/// from `y` (lane `i` is pixel `(i % W, i / W)`; lanes past `t.span` or past the last of the
+/// `rows_left` rows are off): coverage, barycentric weights, depth, `1/w` and the texel
+/// footprints of all [`SMALL_LANES`] pixels at once (vector lanes, branch-free), then colour,
+/// texture and blending for the covered pixels only. Each lane does exactly the arithmetic of
+/// the per-pixel loop of [`raster_tri`] (the edge functions are exact integers however they are
+/// stepped), so the pixels are bit-identical to it; tiny triangles (a dense cloth or mesh far
+/// from the camera covers 2–4 pixels per triangle) spend most of their time on coverage tests
+/// and set-up that this does eight at a time.
+#[inline(always)]
+fn small_tri_tile<const W: usize, const AVX2: bool>(
+    band: &mut Band<'_>,
+    t: &SmallTri,
+    w: [i32; 3],
+    (y, rows_left): (usize, usize),
+    shade: &PixelShade<'_, '_>,
+) {
+    let (col, row) = (TileLanes::<W>::COL, TileLanes::<W>::ROW);
+    #[cfg(target_arch = "x86_64")]
+    let lanes = if AVX2 {
+        // SAFETY: `AVX2` is set only on the path below `raster_band_avx2`, which runs only after
+        // checking that the CPU supports AVX2.
+        unsafe { tile_lanes_avx2::<W>(t, w, rows_left, shade.tex) }
+    } else {
+        tile_lanes::<W>(t, w, rows_left, shade.tex)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let lanes = tile_lanes::<W>(t, w, rows_left, shade.tex);
+    let Some(TileShading { mask, l: [l0, l1, l2], z, inv, foot }) = lanes else { return };
+    let mut mask = mask;
     let [ca, cb, cc] = t.colors;
+    let first = (y - band.y0) * band.width + t.x0;
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        let p = line + t.x0 + i;
+        let p = first + row[i] as usize * band.width + col[i] as usize;
         if !((0.0..=1.0).contains(&z[i]) && (!shade.depth_test || z[i] <= band.depth[p])) {
             continue;
         }
         let mut src = (ca * l0[i] + cb * l1[i] + cc * l2[i]) * inv[i];
-        if let Some(tx) = shade.tex {
-            src *= tx.sample_at(fx[i], fy[i]);
+        if let (Some(tx), Some(f)) = (shade.tex, &foot) {
+            src *= tx.bilinear(f.x[i] as usize, f.y[i] as usize, f.tx[i], f.ty[i]);
         }
         blend_vec4(&mut band.color[p], src, shade.blend);
         if shade.depth_write {
             band.depth[p] = z[i];
         }
     }
+}
+
+/// What [`small_tri_tile`] needs per lane before shading: the covered lanes (bit `i` for lane
+/// `i`), the barycentric weights, depth, `1/w` and, for a textured triangle, the texel footprints.
+struct TileShading {
+    mask: u32,
+    l: [[f32; SMALL_LANES]; 3],
+    z: [f32; SMALL_LANES],
+    inv: [f32; SMALL_LANES],
+    foot: Option<Footprints>,
+}
+
+/// The lanes of a tile of [`small_tri_tile`] whose top-left pixel has edge functions `w`;
+/// `None` when it covers no pixel.
+#[inline(always)]
+fn tile_lanes<const W: usize>(t: &SmallTri, w: [i32; 3], rows_left: usize, tex: Option<&Texels<'_>>) -> Option<TileShading> {
+    const N: usize = SMALL_LANES;
+    let (col, row) = (TileLanes::<W>::COL, TileLanes::<W>::ROW);
+    let mut we = [[0i32; N]; 3];
+    for (e, we) in we.iter_mut().enumerate() {
+        for i in 0..N {
+            we[i] = w[e] + t.dx[e] * col[i] + t.dy[e] * row[i];
+        }
+    }
+    // A pixel is covered when no edge function is negative: when their OR has no sign bit.
+    let covered = (0..N).filter(|&i| (we[0][i] | we[1][i] | we[2][i]) >= 0);
+    let mask = covered.fold(0u32, |m, i| m | 1 << i) & TileLanes::<W>::inside(t.span, rows_left);
+    if mask == 0 {
+        return None;
+    }
+    let (mut l0, mut l1, mut l2, mut z, mut inv) = ([0.0f32; N], [0.0f32; N], [0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        l1[i] = we[1][i] as f32 * t.inv_area;
+        l2[i] = we[2][i] as f32 * t.inv_area;
+        l0[i] = 1.0 - l1[i] - l2[i];
+        z[i] = t.z[0] * l0[i] + t.z[1] * l1[i] + t.z[2] * l2[i];
+        inv[i] = 1.0 / (t.iw[0] * l0[i] + t.iw[1] * l1[i] + t.iw[2] * l2[i]);
+    }
+    let foot = tex.map(|tx| {
+        let (mut u, mut v) = ([0.0f32; N], [0.0f32; N]);
+        for i in 0..N {
+            u[i] = (t.u[0] * l0[i] + t.u[1] * l1[i] + t.u[2] * l2[i]) * inv[i];
+            v[i] = (t.v[0] * l0[i] + t.v[1] * l1[i] + t.v[2] * l2[i]) * inv[i];
+        }
+        tx.footprints(&u, &v)
+    });
+    Some(TileShading { mask, l: [l0, l1, l2], z, inv, foot })
+}
+
+/// [`tile_lanes`] in AVX2 intrinsics, one register per quantity: the compiler left the
+/// portable loops partly scalar (the coverage mask and the texel conversions lane by lane),
+/// and a dense cloth's triangles spend most of their time here. Bit-identical to it: the same
+/// exact integer edge functions, the same separate multiplies and adds in the same order (no
+/// FMA), an exact division, and `max`/`min` operand orders that give `f32::clamp`'s result
+/// for every input, a NaN included (see [`lane_floor`] and [`Texels::texel_coords`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn tile_lanes_avx2<const W: usize>(t: &SmallTri, w: [i32; 3], rows_left: usize, tex: Option<&Texels<'_>>) -> Option<TileShading> {
+    use std::arch::x86_64::*;
+    let (col, row) = (TileLanes::<W>::COL, TileLanes::<W>::ROW);
+    // SAFETY: `[i32; 8]` is 32 bytes, what the unaligned load reads.
+    let (col, row) = unsafe { (_mm256_loadu_si256(col.as_ptr().cast()), _mm256_loadu_si256(row.as_ptr().cast())) };
+    let edge = |e: usize| {
+        let steps = _mm256_add_epi32(
+            _mm256_mullo_epi32(_mm256_set1_epi32(t.dx[e]), col),
+            _mm256_mullo_epi32(_mm256_set1_epi32(t.dy[e]), row),
+        );
+        _mm256_add_epi32(_mm256_set1_epi32(w[e]), steps)
+    };
+    let (w0, w1, w2) = (edge(0), edge(1), edge(2));
+    let signs = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_or_si256(_mm256_or_si256(w0, w1), w2))) as u32;
+    let mask = !signs & 0xff & TileLanes::<W>::inside(t.span, rows_left);
+    if mask == 0 {
+        return None;
+    }
+    let inv_area = _mm256_set1_ps(t.inv_area);
+    let l1 = _mm256_mul_ps(_mm256_cvtepi32_ps(w1), inv_area);
+    let l2 = _mm256_mul_ps(_mm256_cvtepi32_ps(w2), inv_area);
+    let l0 = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(1.0), l1), l2);
+    let lerp = |k: [f32; 3]| {
+        let a = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(k[0]), l0), _mm256_mul_ps(_mm256_set1_ps(k[1]), l1));
+        _mm256_add_ps(a, _mm256_mul_ps(_mm256_set1_ps(k[2]), l2))
+    };
+    let (z, inv) = (lerp(t.z), _mm256_div_ps(_mm256_set1_ps(1.0), lerp(t.iw)));
+    let foot = tex.map(|tx| {
+        let coords = |uv: [f32; 3], size: usize| {
+            let s = _mm256_mul_ps(_mm256_mul_ps(lerp(uv), inv), _mm256_set1_ps(size as f32));
+            let f = _mm256_sub_ps(s, _mm256_set1_ps(0.5));
+            // `clamp(0, size − 1)`: `max(0, f)` and `min(limit, ·)` keep their second operand,
+            // so a NaN passes through as it does `f32::clamp`.
+            let f = _mm256_min_ps(_mm256_set1_ps((size - 1) as f32), _mm256_max_ps(_mm256_setzero_ps(), f));
+            // `lane_floor`: `max(f, 0)` turns a NaN into 0, then the limit, then truncation.
+            let limited = _mm256_min_ps(_mm256_max_ps(f, _mm256_setzero_ps()), _mm256_set1_ps((1u32 << 30) as f32));
+            let x = _mm256_cvttps_epi32(limited);
+            (lanes_i32(x), lanes(_mm256_sub_ps(f, _mm256_cvtepi32_ps(x))))
+        };
+        let ((x, tx_), (y, ty)) = (coords(t.u, tx.width), coords(t.v, tx.height));
+        Footprints { x, y, tx: tx_, ty }
+    });
+    Some(TileShading { mask, l: [lanes(l0), lanes(l1), lanes(l2)], z: lanes(z), inv: lanes(inv), foot })
+}
+
+/// The eight lanes of `v`, in order.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn lanes_i32(v: std::arch::x86_64::__m256i) -> [i32; SMALL_LANES] {
+    // SAFETY: `__m256i` and `[i32; 8]` are both 32 bytes of eight `i32` lanes in order.
+    unsafe { std::mem::transmute::<std::arch::x86_64::__m256i, [i32; SMALL_LANES]>(v) }
+}
+
+/// The pixel of each lane of a tile `W` pixels wide: its column and row in the tile.
+struct TileLanes<const W: usize>;
+
+impl<const W: usize> TileLanes<W> {
+    const COL: [i32; SMALL_LANES] = Self::lanes(true);
+    const ROW: [i32; SMALL_LANES] = Self::lanes(false);
+
+    const fn lanes(col: bool) -> [i32; SMALL_LANES] {
+        let mut a = [0; SMALL_LANES];
+        let mut i = 0;
+        while i < SMALL_LANES {
+            a[i] = if col { i % W } else { i / W } as i32;
+            i += 1;
+        }
+        a
+    }
+
+    /// The lanes of the columns `0..=span` (`span < W`) of the rows `0..=rows_left` of the tile.
+    #[inline(always)]
+    fn inside(span: usize, rows_left: usize) -> u32 {
+        // One row's columns, repeated in every row of the tile.
+        let (one_row, every_row) = ((2u32 << span) - 1, Self::every_row());
+        let rows = (rows_left + 1).min(SMALL_LANES / W);
+        (one_row * every_row) & (u32::MAX >> (32 - rows * W))
+    }
+
+    /// Bit 0 of every row of the tile.
+    const fn every_row() -> u32 {
+        let mut m = 0;
+        let mut r = 0;
+        while r < SMALL_LANES / W {
+            m |= 1 << (r * W);
+            r += 1;
+        }
+        m
+    }
+}
+
+/// `fx as usize` of [`Texels::sample_at`] for a clamped texel coordinate (`0 ≤ fx ≤ width − 1`,
+/// or NaN, which gives 0), in a form that vectorizes: a plain truncating conversion, its
+/// operand kept within `[0, 2^30]` so that it is always defined.
+#[inline(always)]
+fn lane_floor(fx: f32) -> i32 {
+    const LIMIT: f32 = (1u32 << 30) as f32;
+    let f = if fx > 0.0 { fx } else { 0.0 };
+    let f = if f < LIMIT { f } else { LIMIT };
+    // SAFETY: `f` is finite and within `[0, 2^30]`, so it truncates to an `i32` exactly.
+    unsafe { f.to_int_unchecked::<i32>() }
+}
+
+/// Where the bilinear samples of [`SMALL_LANES`] pixels read ([`Texels::footprints`]): the
+/// top-left texel of each and the weights of the texels right of and below it.
+struct Footprints {
+    x: [i32; SMALL_LANES],
+    y: [i32; SMALL_LANES],
+    tx: [f32; SMALL_LANES],
+    ty: [f32; SMALL_LANES],
 }
 
 /// An RGBA texture's samples, checked once per triangle instead of once per pixel.
@@ -1227,11 +1423,33 @@ impl<'a> Texels<'a> {
     /// Bilinear sample at a position from [`Texels::texel_coords`].
     #[inline(always)]
     fn sample_at(&self, fx: f32, fy: f32) -> Vec4 {
-        let (w, h) = (self.width, self.height);
         // Both ≥ 0 after the clamp (a NaN clamps to NaN and casts to 0): truncation is floor.
         let (x0, y0) = (fx as usize, fy as usize);
+        self.bilinear(x0, y0, fx - x0 as f32, fy - y0 as f32)
+    }
+
+    /// [`Texels::sample_at`] of eight positions from [`Texels::texel_coords`] at once, as far
+    /// as it goes without reading texels: in lanes, so the float-to-integer conversions (each a
+    /// dozen scalar instructions, with their saturation checks) vectorize. The same values as
+    /// `sample_at`'s: `max(fx, 0)` is `fx` for the clamped coordinates and 0 for a NaN, which
+    /// `as usize` makes 0 too.
+    #[inline(always)]
+    fn footprints(&self, u: &[f32; SMALL_LANES], v: &[f32; SMALL_LANES]) -> Footprints {
+        let mut f = Footprints { x: [0; SMALL_LANES], y: [0; SMALL_LANES], tx: [0.0; SMALL_LANES], ty: [0.0; SMALL_LANES] };
+        for i in 0..SMALL_LANES {
+            let (fx, fy) = self.texel_coords(u[i], v[i]);
+            (f.x[i], f.y[i]) = (lane_floor(fx), lane_floor(fy));
+            (f.tx[i], f.ty[i]) = (fx - f.x[i] as f32, fy - f.y[i] as f32);
+        }
+        f
+    }
+
+    /// The bilinear blend of texel `(x0, y0)` (inside the texture) and its neighbours right
+    /// and below (clamped to the edge), with weights `tx` and `ty`.
+    #[inline(always)]
+    fn bilinear(&self, x0: usize, y0: usize, tx: f32, ty: f32) -> Vec4 {
+        let (w, h) = (self.width, self.height);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
         let at = |x: usize, y: usize| {
             let i = (y * w + x) * 4;
             Vec4::from_slice(&self.data[i..i + 4])
@@ -1788,7 +2006,12 @@ mod tests {
             for textured in [false, true] {
                 let depth0: Vec<f32> = (0..w * h).map(|_| 0.3 + 0.7 * lcg(&mut seed)).collect();
                 let mut runs = Vec::new();
-                for small in [false, true] {
+                // The per-pixel loop, the tiles in portable code, and in AVX2 where the CPU has it.
+                let avx2 = cfg!(target_arch = "x86_64") && std::arch::is_x86_feature_detected!("avx2");
+                for (small, vector) in [(false, false), (true, false), (true, true)] {
+                    if vector && !avx2 {
+                        continue;
+                    }
                     let (mut color, mut depth) = (vec![[0.1, 0.2, 0.3, 0.4]; w * h], depth0.clone());
                     let mut band = Band { color: &mut color, depth: &mut depth, width: w, y0: 16, y1: 32, has_opaque: true };
                     let mut s = 99u64;
@@ -1809,10 +2032,13 @@ mod tests {
                         };
                         let [a, b, c] = [vert(&mut s), vert(&mut s), vert(&mut s)];
                         let tex = textured.then_some(&texture);
-                        if small {
-                            raster_tri::<true>(&mut band, &a, &b, &c, blend, tex);
+                        if small && vector {
+                            // AVX2 was detected above.
+                            raster_tri::<true, true>(&mut band, &a, &b, &c, blend, tex);
+                        } else if small {
+                            raster_tri::<true, false>(&mut band, &a, &b, &c, blend, tex);
                         } else {
-                            raster_tri::<false>(&mut band, &a, &b, &c, blend, tex);
+                            raster_tri::<false, false>(&mut band, &a, &b, &c, blend, tex);
                             let xs = [a.x, b.x, c.x];
                             let (lo, hi) = (xs.into_iter().min().unwrap_or(0), xs.into_iter().max().unwrap_or(0));
                             small_path += usize::from(floor_sub(hi - SUB / 2) - ceil_sub(lo - SUB / 2) < SMALL_LANES as i64);
@@ -1827,7 +2053,9 @@ mod tests {
                     )
                 };
                 assert!(runs[0].0.iter().any(|p| *p != [0.1, 0.2, 0.3, 0.4]), "{blend:?}: nothing was drawn");
-                assert_eq!(bits(&runs[0]), bits(&runs[1]), "{blend:?}, textured {textured}");
+                for run in &runs[1..] {
+                    assert_eq!(bits(&runs[0]), bits(run), "{blend:?}, textured {textured}");
+                }
             }
         }
         assert!(small_path > 1000, "only {small_path} triangles were narrow enough for the row path");

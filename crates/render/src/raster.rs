@@ -1904,6 +1904,18 @@ mod tests {
         assert_eq!(render_image(&view, &lists, bg), render(&view, &lists, bg).to_image());
     }
 
+    /// Whether this CPU runs the AVX2 paths.
+    fn has_avx2() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx2")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
     /// A small deterministic generator (no dependency for one test).
     fn lcg(state: &mut u64) -> f32 {
         *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -2007,7 +2019,7 @@ mod tests {
                 let depth0: Vec<f32> = (0..w * h).map(|_| 0.3 + 0.7 * lcg(&mut seed)).collect();
                 let mut runs = Vec::new();
                 // The per-pixel loop, the tiles in portable code, and in AVX2 where the CPU has it.
-                let avx2 = cfg!(target_arch = "x86_64") && std::arch::is_x86_feature_detected!("avx2");
+                let avx2 = has_avx2();
                 for (small, vector) in [(false, false), (true, false), (true, true)] {
                     if vector && !avx2 {
                         continue;

@@ -1533,7 +1533,10 @@ impl Framebuffer {
 
 /// Premultiplied pixels to straight-alpha RGBA samples (see [`Framebuffer::to_image`]).
 fn write_straight(color: &[[f32; 4]], out: &mut [f32]) {
-    for (p, o) in color.iter().zip(out.chunks_exact_mut(4)) {
+    let out = &mut out[..4 * color.len()];
+    // SAFETY: `out` holds the four samples of every pixel of `color`.
+    let done = unsafe { straight_vectorized(color, out.as_mut_ptr()) };
+    for (p, o) in color[done..].iter().zip(out[4 * done..].chunks_exact_mut(4)) {
         o.copy_from_slice(&straight(*p));
     }
 }
@@ -1541,11 +1544,65 @@ fn write_straight(color: &[[f32; 4]], out: &mut [f32]) {
 /// [`write_straight`] into samples not yet initialised; every sample of `out` (4 per pixel of
 /// `color`) is written.
 fn write_straight_uninit(color: &[[f32; 4]], out: &mut [MaybeUninit<f32>]) {
-    for (p, o) in color.iter().zip(out.chunks_exact_mut(4)) {
+    let out = &mut out[..4 * color.len()];
+    // SAFETY: `out` holds the four samples of every pixel of `color` (`MaybeUninit<f32>` has
+    // the layout of `f32`), and only initialised values are written through the pointer.
+    let done = unsafe { straight_vectorized(color, out.as_mut_ptr().cast()) };
+    for (p, o) in color[done..].iter().zip(out[4 * done..].chunks_exact_mut(4)) {
         for (slot, v) in o.iter_mut().zip(straight(*p)) {
             slot.write(v);
         }
     }
+}
+
+/// Converts the first pixels of `color` with [`straight_pairs_avx2`] where the CPU has AVX2;
+/// returns how many (the rest are left to [`straight`]).
+///
+/// # Safety
+/// `out` must be valid for writes of `4 · color.len()` samples.
+unsafe fn straight_vectorized(color: &[[f32; 4]], out: *mut f32) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above; `out`'s extent is the caller's.
+        return unsafe { straight_pairs_avx2(color, out) };
+    }
+    let _ = (color, out);
+    0
+}
+
+/// [`straight`] for two pixels per AVX register, branch-free: the same operations as the
+/// scalar form, which are SSE operations through glam (the alpha as `maxps` over the same
+/// shuffles, `minps` against 1, `divps` by it), so bit-identical. Its two branches are one
+/// here: for `a == 1` dividing by `a` changes nothing; `a ≤ 0` is masked to zero. Over a
+/// 1280×720 frame the scalar form took about 15 instructions per pixel (a tenth of the
+/// instructions of a 144-flame cloth frame's drawing). Returns the pixels converted (all but an
+/// odd last one).
+///
+/// # Safety
+/// The CPU must support AVX2, and `out` must be valid for writes of `4 · color.len()` samples.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn straight_pairs_avx2(color: &[[f32; 4]], out: *mut f32) -> usize {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm256_and_ps, _mm256_blend_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
+        _mm256_set1_ps, _mm256_setzero_ps, _mm256_shuffle_ps, _mm256_storeu_ps,
+    };
+    let one = _mm256_set1_ps(1.0);
+    let pairs = color.len() / 2;
+    for (k, pair) in color.chunks_exact(2).enumerate() {
+        // SAFETY: `pair` is two pixels, eight contiguous `f32`s.
+        let p = unsafe { _mm256_loadu_ps(pair.as_ptr().cast()) };
+        // glam's `max_element`: lane 0 of each pixel ends up as the maximum of its four.
+        let m = _mm256_max_ps(p, _mm256_shuffle_ps::<0b00_00_11_10>(p, p));
+        let m = _mm256_max_ps(m, _mm256_shuffle_ps::<0b00_00_00_01>(m, m));
+        // `f32::min(max, 1.0)`: a NaN maximum gives 1, as `minps` keeps its second operand.
+        let a = _mm256_min_ps(_mm256_shuffle_ps::<0>(m, m), one);
+        let rgb = _mm256_min_ps(_mm256_div_ps(p, a), one);
+        let px = _mm256_and_ps(_mm256_blend_ps::<0b1000_1000>(rgb, a), _mm256_cmp_ps::<_CMP_GT_OQ>(a, _mm256_setzero_ps()));
+        // SAFETY: pixels `2k` and `2k + 1` are within `color`, so their eight samples within `out`.
+        unsafe { _mm256_storeu_ps(out.add(8 * k), px) };
+    }
+    2 * pairs
 }
 
 /// One premultiplied pixel as straight alpha.
@@ -2147,6 +2204,31 @@ mod tests {
             (0..32).flat_map(|y| (0..32).map(move |x| (x, y))).filter(|&(x, y)| fb.premultiplied(x, y)[3] > 0.0).count();
         assert!(covered > 0 && covered < 32 * 32, "{covered}");
         assert!(view.project(Vec3::new(0.0, 0.0, 6.0)).is_none());
+    }
+
+    #[test]
+    fn the_vectorized_straight_alpha_conversion_is_bit_identical_to_the_scalar_one() {
+        // Ordinary, saturated, over-bright, transparent, negative, tiny and NaN samples, in every
+        // channel, and an odd count so the scalar remainder runs too.
+        let special = [0.0, -0.0, 1.0, 0.5, 1.5, 1e-30, -0.25, 0.999_999_9, f32::NAN, f32::INFINITY];
+        let mut seed = 3u64;
+        let pick = |s: &mut u64| {
+            let r = lcg(s);
+            if r < 0.4 { special[(lcg(s) * special.len() as f32) as usize % special.len()] } else { 1.2 * lcg(s) }
+        };
+        let color: Vec<[f32; 4]> =
+            (0..4001).map(|_| [pick(&mut seed), pick(&mut seed), pick(&mut seed), pick(&mut seed)]).collect();
+        let mut out = vec![0.0f32; 4 * color.len()];
+        write_straight(&color, &mut out);
+        let mut uninit = vec![MaybeUninit::new(7.0f32); 4 * color.len()];
+        write_straight_uninit(&color, &mut uninit);
+        for (i, p) in color.iter().enumerate() {
+            let want = straight(*p).map(f32::to_bits);
+            assert_eq!(out[4 * i..4 * i + 4].iter().map(|v| v.to_bits()).collect::<Vec<_>>(), want, "pixel {i}: {p:?}");
+            // SAFETY: `write_straight_uninit` wrote every sample (and they started initialised).
+            let got: Vec<u32> = uninit[4 * i..4 * i + 4].iter().map(|v| unsafe { v.assume_init() }.to_bits()).collect();
+            assert_eq!(got, want, "pixel {i}: {p:?}");
+        }
     }
 
     #[test]

@@ -1194,8 +1194,8 @@ fn small_tri_tile<const W: usize, const AVX2: bool>(
     let (col, row) = (TileLanes::<W>::COL, TileLanes::<W>::ROW);
     #[cfg(target_arch = "x86_64")]
     let lanes = if AVX2 {
-        // SAFETY: `AVX2` is set only on the path below `raster_band_avx2`, which runs only after
-        // checking that the CPU supports AVX2.
+        // SAFETY: `AVX2` is set only after checking that the CPU supports AVX2: on the path below
+        // `raster_band_avx2`, and in the test that compares the tiles with the per-pixel loop.
         unsafe { tile_lanes_avx2::<W>(t, w, rows_left, shade.tex) }
     } else {
         tile_lanes::<W>(t, w, rows_left, shade.tex)

@@ -4,7 +4,9 @@
 //! A node's fingerprint hashes its type, whether it is lifted, and the *content* fingerprints of
 //! its inputs. So a changed parameter re-cooks that node and its downstream only, and when a
 //! re-cooked output equals the old one, its consumers see the same input fingerprint and stay
-//! cached (salsa's "backdating"). Every actual cook is appended to a recompute log for tests.
+//! cached (salsa's "backdating"). A file a node reads (a `PathRole::Input` port) is part of its
+//! fingerprint as it is on disk (size and modification time, or a folder's entries), so rewriting
+//! the file re-cooks its readers. Every actual cook is appended to a recompute log for tests.
 
 use std::collections::{HashMap, HashSet, VecDeque};
 use std::hash::{Hash, Hasher};
@@ -15,9 +17,9 @@ use petgraph::stable_graph::NodeIndex;
 use rayon::prelude::*;
 
 use crate::error::NodeError;
-use crate::fingerprint::Fingerprinter;
+use crate::fingerprint::{Fingerprinter, hash_path_on_disk};
 use crate::graph::{Graph, GraphNode, InputSource};
-use crate::node::{Inputs, Node, TimeDep};
+use crate::node::{Inputs, Node, PathRole, TimeDep};
 use crate::value::{Clip, FrameSource, PortType, Value};
 
 /// What a long cook reports while it runs.
@@ -364,6 +366,9 @@ fn gather_inputs(graph: &Graph, gn: &GraphNode, done: &Done) -> Result<(Vec<Valu
             InputSource::Invalid => {
                 return Err(NodeError::port(&port.name, "parameter value was rejected when the graph loaded"));
             }
+        }
+        if let (Some(PathRole::Input), Some(Value::Path(path))) = (port.path_role, values.last()) {
+            hash_path_on_disk(&mut h, path);
         }
     }
     Ok((values, h.finish()))

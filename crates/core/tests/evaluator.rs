@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use pyrograph_core::{
     BuildOptions, CancelToken, Clip, CookCtx, FnNode, Graph, GraphDoc, Inputs, NodeDesc, NodeDoc, NodeError, ParamValue,
-    PortDesc, PortType, Progress, Registry, TimeDep, Value,
+    PathRole, PortDesc, PortType, Progress, Registry, TimeDep, Value,
 };
 
 fn registry() -> Registry {
@@ -40,6 +40,15 @@ fn registry() -> Registry {
             let frames = i.clip("clip")?.materialize(ctx)?;
             let sum = frames.iter().map(|v| if let Value::Float(f) = v { *f } else { 0.0 }).sum();
             Ok(vec![Value::Float(sum)])
+        },
+    ));
+    r.add(FnNode::new(
+        NodeDesc::new("test.file_size", "Test", TimeDep::PerFrame, "The size in bytes of the file it reads.")
+            .input(PortDesc::path("path", PathRole::Input, None, "file to read"))
+            .output("value", PortType::Float, "its size"),
+        |i: &Inputs<'_>, _: &CookCtx| {
+            let bytes = std::fs::read(i.path("path")?).map_err(|e| NodeError::port("path", e.to_string()))?;
+            Ok(vec![Value::Float(bytes.len() as f64)])
         },
     ));
     r.add(FnNode::new(
@@ -90,6 +99,28 @@ fn cold_cook_cooks_the_cone_once() {
     let mut log = ev.take_log();
     log.sort();
     assert_eq!(log, ["add", "mul", "x"], "only the upstream cone of 'mul' cooks");
+}
+
+#[test]
+fn rewriting_a_file_a_node_reads_recooks_the_reader_and_its_downstream() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("data.bin");
+    std::fs::write(&file, [0u8; 3]).unwrap();
+    let mut doc = GraphDoc::new();
+    doc.add_node("read", NodeDoc::new("test.file_size").param("path", ParamValue::String(file.display().to_string())));
+    doc.add_node("add", NodeDoc::new("math.add").param("b", f(1.0)));
+    doc.connect("read.value", "add.a");
+    let g = build(&doc);
+    let mut ev = pyrograph_core::Evaluator::new();
+    assert_eq!(float(&ev.output(&g, "add.value", &CookCtx::new()).unwrap()), 4.0);
+    ev.take_log();
+
+    assert_eq!(float(&ev.output(&g, "add.value", &CookCtx::new()).unwrap()), 4.0);
+    assert!(ev.take_log().is_empty(), "an untouched file is served from the cache");
+
+    std::fs::write(&file, [0u8; 5]).unwrap();
+    assert_eq!(float(&ev.output(&g, "add.value", &CookCtx::new()).unwrap()), 6.0, "not the stale size");
+    assert_eq!(ev.take_log(), ["read", "add"]);
 }
 
 #[test]

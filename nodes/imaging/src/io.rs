@@ -8,12 +8,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
-use std::time::UNIX_EPOCH;
 
 use exr::prelude::{SpecificChannels, Vec2, WritableImage as _, f16};
 use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::fingerprint::{Fingerprinter, hash_metadata};
 use pyrograph_core::{
     Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PathRole, PortDesc, PortType, Registry,
     TimeDep, Value,
@@ -221,9 +220,7 @@ pub fn fingerprint_files(files: &[PathBuf]) -> Result<u64, NodeError> {
     for f in files {
         let meta = std::fs::metadata(f).map_err(|e| NodeError::port("path", format!("{}: {e}", f.display())))?;
         f.hash(&mut h);
-        meta.len().hash(&mut h);
-        let mtime = meta.modified().ok().and_then(|t| t.duration_since(UNIX_EPOCH).ok()).map(|d| d.as_nanos());
-        mtime.hash(&mut h);
+        hash_metadata(&mut h, &meta);
     }
     Ok(h.finish())
 }

@@ -131,7 +131,7 @@ fn render_writes_with_set_and_frames_and_refuses_to_overwrite() {
 fn bad_set_arguments_are_errors_not_panics() {
     let graph = root().join("graphs/demo.ron");
     let graph = graph.to_str().unwrap();
-    for set in ["nobody.width=3", "flame.width=huge", "no-equals-sign"] {
+    for set in ["nobody.width=3", "render.width=huge", "no-equals-sign"] {
         let o = run(&["check", graph]);
         assert!(o.status.success());
         let o = run(&["render", graph, "--set", set, "--out", "/nonexistent-dir-never-written"]);
@@ -168,7 +168,7 @@ fn demo_writes_frames_and_says_where() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("demo frames are in"), "{stdout}");
     let frames = std::fs::read_dir(dir.path().join("pyrograph-out")).unwrap().count();
-    assert_eq!(frames, 48);
+    assert_eq!(frames, 120);
     // A second run replaces the demo's own frames rather than failing.
     assert!(bin().current_dir(dir.path()).output().unwrap().status.success());
 }
@@ -178,5 +178,5 @@ fn info_describes_a_graph() {
     let o = run(&["info", root().join("graphs/demo.ron").to_str().unwrap()]);
     assert!(o.status.success());
     let t = text(&o);
-    assert!(t.contains("flame") && t.contains("Clip<Image>") && t.contains("per frame over a clip"), "{t}");
+    assert!(t.contains("particles.render_fire") && t.contains("Clip<Image>") && t.contains("per frame over a clip"), "{t}");
 }

@@ -103,7 +103,18 @@ fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
 
 #[test]
 fn demo_graph_matches_its_golden_frames() {
-    golden("demo.ron", (0, 24), &["demo_0000.png", "demo_0024.png"]);
+    // The burning cube in full flame: fire spread, char, lit mesh and particle flames.
+    golden("demo.ron", (60, 60), &["demo_0060.png"]);
+}
+
+#[test]
+fn candles_match_their_golden_frame() {
+    golden("candles.ron", (12, 12), &["candles/candles_0012.png"]);
+}
+
+#[test]
+fn mass_spring_flames_match_their_golden_frame() {
+    golden("mass-spring-9.ron", (30, 30), &["mass-spring-9/mass_spring_9_0030.png"]);
 }
 
 #[test]

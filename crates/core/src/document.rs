@@ -2,7 +2,9 @@
 //!
 //! The document is its own set of plain structs, separate from the runtime graph: it keeps node
 //! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
-//! Older shapes load through explicit migration functions ([`migrate_v0`]), never serde aliases.
+//! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`]), never
+//! serde aliases. A document is written in the oldest version that can hold it, so a graph without
+//! groups or comments stays readable by releases that know only version 1.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -14,8 +16,11 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 
-/// The version this build writes.
-pub const CURRENT_VERSION: u32 = 1;
+/// The newest version this build reads and writes (2: canvas groups and comments).
+pub const CURRENT_VERSION: u32 = 2;
+
+/// The version of documents without groups or comments (what older releases read).
+pub const PLAIN_VERSION: u32 = 1;
 
 /// A parameter value as written in a graph file; converted to a typed value against the port.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -145,7 +150,33 @@ impl InterfaceDoc {
     }
 }
 
-/// A graph document, version 1.
+/// A titled, coloured frame around nodes on the canvas (a Houdini network box, a Nuke backdrop).
+/// Its box is computed from its nodes, so it follows them; moving the group moves them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GroupDoc {
+    /// The title shown on the frame's bar.
+    pub title: String,
+    /// `"#rrggbb"`; the editor's default colour when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub color: Option<String>,
+    /// The ids of the nodes inside, in the order they were grouped.
+    #[serde(default)]
+    pub nodes: Vec<String>,
+}
+
+/// A sticky comment on the canvas: free text at a canvas position.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CommentDoc {
+    /// The comment's text (may span lines).
+    pub text: String,
+    /// Canvas position of the comment's top-left corner.
+    pub pos: (f32, f32),
+    /// `"#rrggbb"`; the editor's default colour when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub color: Option<String>,
+}
+
+/// A graph document, version 2 (version 1 plus canvas groups and comments).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GraphDoc {
     /// Always [`CURRENT_VERSION`] after loading.
@@ -161,11 +192,25 @@ pub struct GraphDoc {
     /// Edges as `("from_node.output", "to_node.input")`.
     #[serde(default)]
     pub edges: Vec<(String, String)>,
+    /// Canvas groups (version 2).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupDoc>,
+    /// Canvas comments (version 2).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub comments: Vec<CommentDoc>,
 }
 
 impl Default for GraphDoc {
     fn default() -> Self {
-        GraphDoc { version: CURRENT_VERSION, description: None, interface: None, nodes: NodeList::default(), edges: Vec::new() }
+        GraphDoc {
+            version: CURRENT_VERSION,
+            description: None,
+            interface: None,
+            nodes: NodeList::default(),
+            edges: Vec::new(),
+            groups: Vec::new(),
+            comments: Vec::new(),
+        }
     }
 }
 
@@ -215,7 +260,11 @@ impl GraphDoc {
                 let old: v0::GraphDocV0 = ron_options().from_str(text).map_err(syntax_error)?;
                 Ok(migrate_v0(old))
             }
-            1 => ron_options().from_str(text).map_err(syntax_error),
+            1 => {
+                let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v1(old))
+            }
+            2 => ron_options().from_str(text).map_err(syntax_error),
             v => Err(Diagnostics::one(Diagnostic::new(
                 DiagnosticKind::Version,
                 Location::File,
@@ -235,11 +284,28 @@ impl GraphDoc {
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }
 
-    /// The document as pretty RON.
+    /// The oldest version that holds this document: 1 without groups and comments, else 2.
+    pub fn needed_version(&self) -> u32 {
+        if self.groups.is_empty() && self.comments.is_empty() { PLAIN_VERSION } else { CURRENT_VERSION }
+    }
+
+    /// The document as pretty RON, in the oldest version that holds it ([`GraphDoc::needed_version`]).
     pub fn to_ron(&self) -> String {
         let config = ron::ser::PrettyConfig::new().depth_limit(4).indentor("    ").struct_names(false);
+        let mut doc = std::borrow::Cow::Borrowed(self);
+        if self.version != self.needed_version() {
+            doc.to_mut().version = self.needed_version();
+        }
         // Serializing plain structs, maps and strings cannot fail.
-        ron::ser::to_string_pretty(self, config).unwrap_or_default() + "\n"
+        ron::ser::to_string_pretty(&*doc, config).unwrap_or_default() + "\n"
+    }
+
+    /// Removes node `id` from every group (after the node was deleted); empty groups stay, as
+    /// an artist's empty network box does.
+    pub fn ungroup_node(&mut self, id: &str) {
+        for g in &mut self.groups {
+            g.nodes.retain(|n| n != id);
+        }
     }
 
     /// Writes the document atomically (temp file + rename). Refuses to replace an existing file
@@ -331,7 +397,14 @@ pub fn migrate_v0(old: v0::GraphDocV0) -> GraphDoc {
         })
         .collect();
     let edges = old.links.into_iter().map(|l| (l.from, l.to)).collect();
-    GraphDoc { version: CURRENT_VERSION, description: None, interface: None, nodes: NodeList(nodes), edges }
+    GraphDoc { nodes: NodeList(nodes), edges, ..GraphDoc::default() }
+}
+
+/// Migrates version 1 to version 2: the shape is the same, version 2 only adds the optional
+/// `groups` and `comments`, so the migration is the version number.
+pub fn migrate_v1(mut old: GraphDoc) -> GraphDoc {
+    old.version = CURRENT_VERSION;
+    old
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so readers
@@ -428,7 +501,7 @@ mod tests {
             links: [(from: "c.image", to: "w.clip")],
         )"#;
         let doc = GraphDoc::from_ron(old).unwrap();
-        assert_eq!(doc.version, 1);
+        assert_eq!(doc.version, CURRENT_VERSION);
         assert_eq!(doc.node("c").unwrap().type_name, "imaging.constant_color");
         assert_eq!(doc.node("c").unwrap().params["width"], ParamValue::Int(4));
         assert_eq!(doc.node("c").unwrap().pos, Some((1.0, 2.0)));
@@ -464,5 +537,48 @@ mod tests {
         assert_eq!(split_endpoint("a.b.port"), Some(("a.b", "port")));
         assert_eq!(split_endpoint("nodot"), None);
         assert_eq!(split_endpoint(".x"), None);
+    }
+
+    const ANNOTATED: &str = r##"(
+        version: 2,
+        nodes: {
+            "a": (type: "value.float", pos: (0, 0)),
+            "b": (type: "value.float", pos: (0, 120)),
+        },
+        groups: [(title: "inputs", color: "#3366aa", nodes: ["a", "b"])],
+        comments: [(text: "tune these\nfirst", pos: (-40, -80))],
+    )"##;
+
+    #[test]
+    fn groups_and_comments_round_trip_as_version_2() {
+        let doc = GraphDoc::from_ron(ANNOTATED).unwrap();
+        assert_eq!(doc.groups.len(), 1);
+        assert_eq!(doc.groups[0].nodes, vec!["a".to_string(), "b".to_string()]);
+        assert_eq!(doc.groups[0].color.as_deref(), Some("#3366aa"));
+        assert_eq!(doc.comments[0].text, "tune these\nfirst");
+        let text = doc.to_ron();
+        assert!(text.contains("version: 2"), "{text}");
+        assert_eq!(GraphDoc::from_ron(&text).unwrap(), doc);
+    }
+
+    #[test]
+    fn documents_without_annotations_are_written_as_version_1_and_v1_files_migrate() {
+        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
+        assert_eq!(doc.version, CURRENT_VERSION, "a version 1 file migrates on load");
+        let text = doc.to_ron();
+        assert!(text.contains("version: 1,"), "older readers can still open it: {text}");
+        assert!(!text.contains("groups") && !text.contains("comments"), "{text}");
+        let mut annotated = doc.clone();
+        annotated.comments.push(CommentDoc { text: "x".into(), pos: (1.0, 2.0), color: None });
+        assert!(annotated.to_ron().contains("version: 2,"));
+        annotated.comments.clear();
+        assert!(annotated.to_ron().contains("version: 1,"));
+    }
+
+    #[test]
+    fn ungrouping_a_deleted_node_keeps_the_group() {
+        let mut doc = GraphDoc::from_ron(ANNOTATED).unwrap();
+        doc.ungroup_node("a");
+        assert_eq!(doc.groups[0].nodes, vec!["b".to_string()]);
     }
 }

@@ -92,6 +92,13 @@ pub enum Location {
         /// `"from.port -> to.port"`.
         text: String,
     },
+    /// A group (frame) of the canvas, by its position in the `groups` list and its title.
+    Group {
+        /// 0-based index in the `groups` list.
+        index: usize,
+        /// The group's title.
+        title: String,
+    },
 }
 
 impl fmt::Display for Location {
@@ -102,6 +109,7 @@ impl fmt::Display for Location {
             Location::Node(n) => write!(f, "node '{n}'"),
             Location::Port { node, port } => write!(f, "node '{node}', port '{port}'"),
             Location::Edge { index, text } => write!(f, "edge #{index} ({text})"),
+            Location::Group { index, title } => write!(f, "group #{index} ({title:?})"),
         }
     }
 }

@@ -213,11 +213,53 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
     };
     let fed: HashSet<(NodeIndex, usize)> = interface.iter().flat_map(|i| i.inputs.iter().map(|(_, n, p)| (*n, *p))).collect();
     check_missing_inputs(&g, &fed, &mut diags);
+    check_groups(doc, &known, &mut diags);
 
     if !diags.is_empty() {
         return Err(Diagnostics(diags));
     }
     Ok(Graph { g, ids, order, dir: ctx.dir.clone(), file: None, interface })
+}
+
+/// Groups name nodes that exist, each node in at most one group, and colours parse.
+fn check_groups(doc: &GraphDoc, known: &HashSet<&str>, diags: &mut Vec<Diagnostic>) {
+    let mut owner: HashMap<&str, usize> = HashMap::new();
+    for (i, group) in doc.groups.iter().enumerate() {
+        let loc = Location::Group { index: i, title: group.title.clone() };
+        for n in &group.nodes {
+            if !known.contains(n.as_str()) {
+                diags.push(diag(
+                    DiagnosticKind::MissingNode,
+                    loc.clone(),
+                    format!("group names node '{n}', which is not in the graph"),
+                ));
+            } else if let Some(first) = owner.insert(n, i)
+                && first != i
+            {
+                diags.push(diag(
+                    DiagnosticKind::DuplicateNode,
+                    loc.clone(),
+                    format!("node '{n}' is already in group #{first}; a node belongs to one group"),
+                ));
+            }
+        }
+        if let Some(c) = &group.color
+            && parse_hex_color(c).is_none()
+        {
+            diags.push(diag(DiagnosticKind::WrongKind, loc.clone(), format!("colour \"{c}\" is not of the form \"#rrggbb\"")));
+        }
+    }
+    for (i, c) in doc.comments.iter().enumerate() {
+        if let Some(col) = &c.color
+            && parse_hex_color(col).is_none()
+        {
+            diags.push(diag(
+                DiagnosticKind::WrongKind,
+                Location::File,
+                format!("comment #{i}: colour \"{col}\" is not of the form \"#rrggbb\""),
+            ));
+        }
+    }
 }
 
 fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx, diags: &mut Vec<Diagnostic>) -> Option<Arc<dyn Node>> {

@@ -16,7 +16,7 @@ pub mod node;
 pub mod registry;
 pub mod value;
 
-pub use document::{GraphDoc, NodeDoc, ParamValue};
+pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
 pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progress, ProgressFn};
 pub use graph::{BuildOptions, Graph};

@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use eframe::egui::{self, Color32, Key, Modifiers, RichText};
 
-use crate::canvas::{Action, Canvas, palette_ui};
-use crate::params::{param_widget, raw_widget};
+use crate::annotate::Annotation;
+use crate::canvas::{Action, Canvas};
+use crate::palette::palette_ui;
 use crate::state::{Editor, diagnostic_nodes};
 
 /// Which file dialog is open (a plain path field: no native dialogs needed).
@@ -27,15 +28,18 @@ pub struct EditorApp {
     palette_focus: bool,
     palette_query: String,
     dialog: Option<FileDialog>,
-    texture: Option<(u64, egui::TextureHandle)>,
-    playing: bool,
-    last_advance: Instant,
+    pub(crate) texture: Option<(u64, egui::TextureHandle)>,
+    pub(crate) playing: bool,
+    pub(crate) last_advance: Instant,
     title: String,
     notify_set: bool,
     first_frame: bool,
     show_problems: bool,
     /// Milliseconds of the latest frames' UI pass (tests check the UI stays responsive).
     pub frame_times: Vec<f64>,
+    /// Where to write the state dump (`--state-dump FILE`), for tests that drive a real window.
+    pub state_dump: Option<PathBuf>,
+    last_dump: String,
 }
 
 impl EditorApp {
@@ -56,6 +60,8 @@ impl EditorApp {
             first_frame: true,
             show_problems: true,
             frame_times: Vec::new(),
+            state_dump: None,
+            last_dump: String::new(),
         }
     }
 
@@ -109,9 +115,46 @@ impl EditorApp {
         if self.editor.is_cooking() {
             ctx.request_repaint_after(std::time::Duration::from_millis(50));
         }
+        self.write_state_dump(&ctx);
         self.frame_times.push(start.elapsed().as_secs_f64() * 1000.0);
         if self.frame_times.len() > 1000 {
             self.frame_times.drain(..500);
+        }
+    }
+
+    /// The editor's state as JSON: the selection and where each node is on screen (points from
+    /// the window's top-left). A test driving the real window with synthetic mouse events reads
+    /// it to know where to click and what the click did.
+    pub fn state_json(&self, ctx: &egui::Context) -> serde_json::Value {
+        let nodes: serde_json::Map<String, serde_json::Value> = self
+            .editor
+            .doc()
+            .nodes
+            .0
+            .iter()
+            .filter_map(|(id, _)| {
+                let r = self.canvas.node_screen_rect(id)?;
+                Some((id.clone(), serde_json::json!({"x": r.min.x, "y": r.min.y, "w": r.width(), "h": r.height()})))
+            })
+            .collect();
+        serde_json::json!({
+            "selection": self.editor.selection(),
+            "annotation": self.canvas.annotation.map(|a| format!("{a:?}")),
+            "groups": self.editor.doc().groups.len(),
+            "comments": self.editor.doc().comments.len(),
+            "pixels_per_point": ctx.pixels_per_point(),
+            "nodes": nodes,
+        })
+    }
+
+    fn write_state_dump(&mut self, ctx: &egui::Context) {
+        let Some(path) = &self.state_dump else { return };
+        let text = self.state_json(ctx).to_string();
+        if text != self.last_dump {
+            let tmp = path.with_extension("tmp");
+            if std::fs::write(&tmp, &text).and_then(|()| std::fs::rename(&tmp, path)).is_ok() {
+                self.last_dump = text;
+            }
         }
     }
 
@@ -132,6 +175,12 @@ impl EditorApp {
                 }
                 Action::ToggleParamPins(id) => self.canvas.toggle_param_pins(&id),
                 Action::Preview(id) => self.editor.select(&id),
+                Action::Select(ids) => self.editor.set_selection(ids),
+                Action::SelectAnnotation(a) => self.canvas.annotation = a,
+                Action::MoveComment(i, p) => {
+                    self.editor.move_comment(i, (p.x, p.y));
+                    self.editor.seal();
+                }
             }
         }
     }
@@ -148,9 +197,6 @@ impl EditorApp {
     }
 
     fn after_canvas(&mut self, ctx: &egui::Context) {
-        if let Some(sel) = self.canvas.selection_change(ctx) {
-            self.editor.set_selection(sel);
-        }
         let idle = !ctx.input(|i| i.pointer.any_down());
         if idle {
             let moved = self.canvas.moved_nodes();
@@ -192,30 +238,43 @@ impl EditorApp {
         }
         if dup {
             let sel = self.editor.selection().to_vec();
-            self.editor.duplicate(&sel);
+            let new = self.editor.duplicate(&sel);
+            self.editor.set_selection(new);
         }
         if typing {
             return;
         }
-        let (tab, del, frame, space, esc) = ctx.input_mut(|i| {
+        self.clipboard_events(ctx);
+        let (tab, del, frame, home, space, esc) = ctx.input_mut(|i| {
             (
                 i.consume_key(Modifiers::NONE, Key::Tab),
                 i.consume_key(Modifiers::NONE, Key::Delete) || i.consume_key(Modifiers::NONE, Key::Backspace),
-                i.consume_key(Modifiers::NONE, Key::F) || i.consume_key(Modifiers::NONE, Key::Home),
+                i.consume_key(Modifiers::NONE, Key::F),
+                i.consume_key(Modifiers::NONE, Key::Home),
                 i.consume_key(Modifiers::NONE, Key::Space),
-                i.consume_key(Modifiers::NONE, Key::Escape),
+                // Read, not consumed: a text field that Escape just left reverts on it too.
+                i.key_pressed(Key::Escape),
+            )
+        });
+        let (all, group, comment, map) = ctx.input_mut(|i| {
+            (
+                i.consume_key(cmd, Key::A),
+                i.consume_key(cmd, Key::G),
+                i.consume_key(Modifiers::SHIFT, Key::C),
+                i.consume_key(Modifiers::NONE, Key::M),
             )
         });
         if tab {
             self.open_palette(ctx);
         }
         if del {
-            let sel = self.editor.selection().to_vec();
-            if !sel.is_empty() {
-                self.editor.remove_nodes(&sel);
-            }
+            self.delete_selected();
         }
         if frame {
+            let sel = self.editor.selection().to_vec();
+            self.canvas.frame_nodes(&sel);
+        }
+        if home {
             self.canvas.frame_all();
         }
         if space {
@@ -224,6 +283,81 @@ impl EditorApp {
         if esc {
             self.palette_open = None;
         }
+        if all {
+            let ids = self.editor.doc().nodes.0.iter().map(|(id, _)| id.clone()).collect();
+            self.editor.set_selection(ids);
+        }
+        if group {
+            self.group_selected();
+        }
+        if comment {
+            self.add_comment_at_pointer(ctx);
+        }
+        if map {
+            self.canvas.show_minimap = !self.canvas.show_minimap;
+        }
+    }
+
+    /// Ctrl+C, Ctrl+X and Ctrl+V arrive as clipboard events (the window system reads and
+    /// writes the clipboard); the nodes travel as RON text.
+    fn clipboard_events(&mut self, ctx: &egui::Context) {
+        let events: Vec<egui::Event> = ctx.input(|i| {
+            i.events
+                .iter()
+                .filter(|e| matches!(e, egui::Event::Copy | egui::Event::Cut | egui::Event::Paste(_)))
+                .cloned()
+                .collect()
+        });
+        for e in events {
+            match e {
+                egui::Event::Copy | egui::Event::Cut => {
+                    let sel = self.editor.selection().to_vec();
+                    if let Some(text) = self.editor.copy_text(&sel) {
+                        ctx.copy_text(text);
+                        self.editor.set_status(format!("copied {} node(s)", sel.len()), false);
+                        if e == egui::Event::Cut {
+                            self.editor.remove_nodes(&sel);
+                        }
+                    }
+                }
+                egui::Event::Paste(text) => {
+                    let at = ctx.input(|i| i.pointer.latest_pos()).filter(|p| self.canvas.rect_contains(*p));
+                    let at = at.map(|p| self.canvas.to_graph(p)).unwrap_or_else(|| self.canvas.view_center());
+                    if let Err(e) = self.editor.paste_text(&text, Some((at.x, at.y))) {
+                        self.editor.set_status(e, true);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Deletes the selected nodes, or else the selected group (its nodes stay) or comment.
+    pub fn delete_selected(&mut self) {
+        let sel = self.editor.selection().to_vec();
+        if !sel.is_empty() {
+            self.editor.remove_nodes(&sel);
+        } else if let Some(a) = self.canvas.annotation.take() {
+            self.editor.remove_annotation(a);
+        }
+    }
+
+    /// Groups the selected nodes (Ctrl+G) and selects the new group for naming.
+    pub fn group_selected(&mut self) {
+        let sel = self.editor.selection().to_vec();
+        if let Some(i) = self.editor.group_nodes(&sel, "Group") {
+            self.editor.set_selection(Vec::new());
+            self.canvas.annotation = Some(Annotation::Group(i));
+        }
+    }
+
+    /// Adds a comment under the pointer (Shift+C) and selects it for typing.
+    pub fn add_comment_at_pointer(&mut self, ctx: &egui::Context) {
+        let at = ctx.input(|i| i.pointer.latest_pos()).filter(|p| self.canvas.rect_contains(*p));
+        let at = at.map(|p| self.canvas.to_graph(p)).unwrap_or_else(|| self.canvas.view_center());
+        let i = self.editor.add_comment("Comment", (at.x, at.y));
+        self.editor.set_selection(Vec::new());
+        self.canvas.annotation = Some(Annotation::Comment(i));
     }
 
     /// Opens the node palette at the pointer (Tab).
@@ -323,18 +457,50 @@ impl EditorApp {
                 }
                 ui.separator();
                 let sel = self.editor.selection().to_vec();
+                if ui.add_enabled(!sel.is_empty(), egui::Button::new("Copy  (Ctrl+C)")).clicked() {
+                    if let Some(text) = self.editor.copy_text(&sel) {
+                        ui.ctx().copy_text(text);
+                    }
+                    ui.close();
+                }
                 if ui.add_enabled(!sel.is_empty(), egui::Button::new("Duplicate  (Ctrl+D)")).clicked() {
-                    self.editor.duplicate(&sel);
+                    let new = self.editor.duplicate(&sel);
+                    self.editor.set_selection(new);
                     ui.close();
                 }
-                if ui.add_enabled(!sel.is_empty(), egui::Button::new("Delete  (Del)")).clicked() {
-                    self.editor.remove_nodes(&sel);
+                if ui
+                    .add_enabled(!sel.is_empty() || self.canvas.annotation.is_some(), egui::Button::new("Delete  (Del)"))
+                    .clicked()
+                {
+                    self.delete_selected();
                     ui.close();
                 }
-                if ui.button("Frame all  (F)").clicked() {
+                if ui.button("Select all  (Ctrl+A)").clicked() {
+                    let ids = self.editor.doc().nodes.0.iter().map(|(id, _)| id.clone()).collect();
+                    self.editor.set_selection(ids);
+                    ui.close();
+                }
+                ui.separator();
+                if ui.add_enabled(!sel.is_empty(), egui::Button::new("Group selection  (Ctrl+G)")).clicked() {
+                    self.group_selected();
+                    ui.close();
+                }
+                if ui.button("Add comment  (Shift+C)").clicked() {
+                    let at = self.canvas.view_center();
+                    let i = self.editor.add_comment("Comment", (at.x, at.y));
+                    self.canvas.annotation = Some(Annotation::Comment(i));
+                    ui.close();
+                }
+                ui.separator();
+                if ui.button("Frame selection  (F)").clicked() {
+                    self.canvas.frame_nodes(&sel);
+                    ui.close();
+                }
+                if ui.button("Frame all  (Home)").clicked() {
                     self.canvas.frame_all();
                     ui.close();
                 }
+                ui.checkbox(&mut self.canvas.show_minimap, "Minimap  (M)");
             });
             ui.menu_button("Add", |ui| {
                 ui.set_min_width(320.0);
@@ -356,7 +522,9 @@ impl EditorApp {
                 self.editor.cancel();
             }
             ui.separator();
-            ui.weak("Tab / right-click: add node · F: frame all · Del: delete · Ctrl+D: duplicate");
+            ui.weak(
+                "Tab: add node · click / Shift-click / drag: select · F: frame selection · Ctrl+C/V: copy/paste · Ctrl+G: group",
+            );
         });
     }
 
@@ -400,238 +568,6 @@ impl EditorApp {
                 }
             }
         });
-    }
-
-    fn inspector(&mut self, ui: &mut egui::Ui) {
-        let Some(id) = self.editor.selection().first().cloned() else {
-            ui.weak("Select a node to edit its parameters.");
-            return;
-        };
-        let Some(nd) = self.editor.doc().node(&id).cloned() else { return };
-        ui.horizontal(|ui| {
-            ui.heading(&id);
-            ui.weak(&nd.type_name);
-        });
-        for p in self.editor.node_problems(&id) {
-            ui.colored_label(Color32::from_rgb(255, 120, 120), format!("⚠ {p}"));
-        }
-        let Some(desc) = self.editor.desc(&id).cloned() else {
-            ui.colored_label(Color32::from_rgb(255, 120, 120), "unknown node type: no parameters to show");
-            return;
-        };
-        ui.collapsing("About", |ui| {
-            ui.label(format!("{} · {}", desc.category, desc.time.name()));
-            ui.label(&desc.doc);
-        });
-        let mut pins = self.canvas.param_pins.contains(&id);
-        if ui.checkbox(&mut pins, "Show parameters as pins").changed() {
-            self.canvas.toggle_param_pins(&id);
-        }
-        ui.separator();
-        let mut change = None;
-        let mut reset = None;
-        egui::Grid::new(("params", &id)).num_columns(3).striped(true).spacing([8.0, 4.0]).show(ui, |ui| {
-            for port in &desc.inputs {
-                let label = ui.label(&port.name).on_hover_text(format!("{}: {}\n{}", port.name, port.ty, port.doc));
-                let _ = label;
-                if let Some(src) = self.editor.incoming(&id, &port.name) {
-                    ui.label(RichText::new(format!("from {src}")).italics().color(Color32::from_rgb(140, 190, 250)))
-                        .on_hover_text("driven by a connection");
-                    ui.label("");
-                    ui.end_row();
-                    continue;
-                }
-                if !port.ty.is_parameter() {
-                    let (t, c) = if port.is_required() {
-                        ("not connected (required)", Color32::from_rgb(255, 130, 130))
-                    } else {
-                        ("default", Color32::GRAY)
-                    };
-                    ui.label(RichText::new(t).color(c));
-                    ui.label("");
-                    ui.end_row();
-                    continue;
-                }
-                let set = nd.params.get(&port.name).cloned();
-                let widget_id = egui::Id::new(("param", &id, &port.name));
-                match self.editor.param_value(&id, port) {
-                    Some(value) => {
-                        let r = ui
-                            .scope(|ui| {
-                                let r = param_widget(ui, widget_id, port, &value);
-                                match r {
-                                    Some(v) => Some(v),
-                                    None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
-                                    None => None,
-                                }
-                            })
-                            .inner;
-                        if let Some(v) = r {
-                            change = Some((port.name.clone(), v));
-                        }
-                    }
-                    None => {
-                        let mut s = String::new();
-                        if ui.add(egui::TextEdit::singleline(&mut s).hint_text("required")).changed() {
-                            change = Some((port.name.clone(), pyrograph::core::ParamValue::parse_cli(&s)));
-                        }
-                    }
-                }
-                if set.is_some() {
-                    if ui.small_button("⟲").on_hover_text("reset to default").clicked() {
-                        reset = Some(port.name.clone());
-                    }
-                } else {
-                    ui.label("");
-                }
-                ui.end_row();
-            }
-        });
-        if let Some((name, v)) = change
-            && let Err(e) = self.editor.set_param(&id, &name, v)
-        {
-            self.editor.set_status(e, true);
-        }
-        if let Some(name) = reset {
-            self.editor.reset_param(&id, &name);
-            self.editor.seal();
-        }
-    }
-
-    fn advance_playback(&mut self, ctx: &egui::Context) {
-        if !self.playing {
-            return;
-        }
-        let (len, fps) = match self.editor.preview() {
-            Some(p) => (p.clip_len.unwrap_or(0), if p.fps > 0.0 { p.fps } else { 24.0 }),
-            None => (0, 24.0),
-        };
-        if len == 0 {
-            self.playing = false;
-            return;
-        }
-        let period = 1.0 / fps;
-        if !self.editor.is_cooking() && self.last_advance.elapsed().as_secs_f64() >= period {
-            let frame = self.editor.preview_request().map_or(0, |p| p.frame);
-            self.editor.set_frame((frame + 1) % len);
-            self.last_advance = Instant::now();
-        }
-        ctx.request_repaint_after(std::time::Duration::from_secs_f64(period / 2.0));
-    }
-
-    fn preview_ui(&mut self, ui: &mut egui::Ui) {
-        let Some(req) = self.editor.preview_request().cloned() else {
-            ui.weak("Select a node to preview its output.");
-            return;
-        };
-        let desc = self.editor.desc(&req.node).cloned();
-        ui.horizontal(|ui| {
-            ui.label(RichText::new(format!("Preview: {}", req.node)).strong());
-            if let Some(desc) = &desc
-                && desc.outputs.len() > 1
-            {
-                let mut out = req.output;
-                egui::ComboBox::from_id_salt("preview-output")
-                    .selected_text(desc.outputs.get(out).map_or("?", |p| p.name.as_str()))
-                    .show_ui(ui, |ui| {
-                        for (i, p) in desc.outputs.iter().enumerate() {
-                            ui.selectable_value(&mut out, i, &p.name);
-                        }
-                    });
-                if out != req.output {
-                    self.editor.set_preview_output(out);
-                }
-            }
-        });
-        if self.editor.is_cooking() {
-            let st = self.editor.cook_status();
-            ui.horizontal(|ui| {
-                let (frac, text) = match (st.frames, &st.node) {
-                    (Some((d, t)), Some(n)) if t > 0 => (d as f32 / t as f32, format!("{n}: frame {d}/{t}")),
-                    (_, Some(n)) => ((st.nodes_done as f32 / st.nodes_total.max(1) as f32).min(1.0), format!("cooking {n}")),
-                    _ => (0.0, "cooking…".to_string()),
-                };
-                ui.add(egui::ProgressBar::new(frac).text(text).desired_width(ui.available_width() - 80.0).animate(true));
-                if ui.button("Cancel").clicked() {
-                    self.editor.cancel();
-                }
-            });
-        }
-        let Some(p) = self.editor.preview().cloned() else {
-            ui.weak("waiting for the cook…");
-            return;
-        };
-        if let Some(e) = &p.error {
-            ui.colored_label(Color32::from_rgb(255, 120, 120), e);
-        }
-        if !p.summary.is_empty() {
-            ui.label(RichText::new(&p.summary).monospace());
-        }
-        if let Some(len) = p.clip_len
-            && len > 0
-        {
-            ui.horizontal(|ui| {
-                if ui.button(if self.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
-                    self.playing = !self.playing;
-                    self.last_advance = Instant::now();
-                }
-                let mut frame = req.frame.min(len - 1);
-                let r = ui.add(egui::Slider::new(&mut frame, 0..=len - 1).show_value(false));
-                if r.changed() {
-                    self.playing = false;
-                    self.editor.set_frame(frame);
-                }
-                ui.label(format!("frame {} / {}", frame, len - 1));
-            });
-        }
-        let serial = self.editor.preview_serial();
-        if let Some(img) = &p.image {
-            let stale = self.texture.as_ref().is_none_or(|(s, _)| *s != serial);
-            if stale {
-                let ci = egui::ColorImage::from_rgba_unmultiplied(img.size, &img.rgba);
-                match &mut self.texture {
-                    Some((s, t)) => {
-                        t.set(ci, egui::TextureOptions::LINEAR);
-                        *s = serial;
-                    }
-                    None => self.texture = Some((serial, ui.ctx().load_texture("preview", ci, egui::TextureOptions::LINEAR))),
-                }
-            }
-        }
-        let size = p
-            .image
-            .as_ref()
-            .map(|i| egui::vec2(i.size[0] as f32, i.size[1] as f32))
-            .or_else(|| p.contour_size.map(|s| egui::vec2(s[0] as f32, s[1] as f32)));
-        let Some(size) = size.filter(|s| s.x > 0.0 && s.y > 0.0) else { return };
-        let avail = ui.available_size();
-        let scale = (avail.x / size.x).min(avail.y / size.y).max(0.01);
-        let (rect, resp) = ui.allocate_exact_size(size * scale, egui::Sense::hover());
-        let painter = ui.painter_at(rect);
-        match (&p.image, &self.texture) {
-            (Some(_), Some((_, tex))) => {
-                painter.image(
-                    tex.id(),
-                    rect,
-                    egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
-                    Color32::WHITE,
-                );
-            }
-            _ => {
-                painter.rect_filled(rect, 0.0, Color32::from_gray(20));
-            }
-        }
-        if !p.contours.is_empty() {
-            let cs = p.contour_size.map_or(size, |s| egui::vec2(s[0] as f32, s[1] as f32));
-            let k = egui::vec2(rect.width() / cs.x.max(1.0), rect.height() / cs.y.max(1.0));
-            for c in &p.contours {
-                let pts: Vec<egui::Pos2> = c.iter().map(|q| rect.min + egui::vec2(q[0] * k.x, q[1] * k.y)).collect();
-                if pts.len() > 1 {
-                    painter.add(egui::Shape::closed_line(pts, egui::Stroke::new(1.5, Color32::from_rgb(80, 230, 255))));
-                }
-            }
-        }
-        let _ = resp.on_hover_text(format!("{}×{}", size.x, size.y));
     }
 
     fn dialog_window(&mut self, ctx: &egui::Context) {
@@ -708,18 +644,6 @@ impl EditorApp {
                 });
             });
         ctx.request_repaint_after(std::time::Duration::from_millis(250));
-    }
-}
-
-/// Whether a stored value has the kind the port expects (else the raw editor is offered).
-fn kind_ok(port: &pyrograph::core::PortDesc, v: &pyrograph::core::ParamValue) -> bool {
-    use pyrograph::core::{ParamValue as P, PortType as T};
-    match (&port.ty, v) {
-        (T::Float, P::Float(_) | P::Int(_)) | (T::Int, P::Int(_)) | (T::Bool, P::Bool(_)) => true,
-        (T::String | T::Path | T::Enum, P::String(_)) => true,
-        (T::Color, _) => crate::params::as_color(v).is_some(),
-        (T::Vec2 | T::Vec3, P::List(_)) => true,
-        _ => false,
     }
 }
 

@@ -2,18 +2,27 @@
 //!
 //! The [`Editor`]'s document owns the graph. The snarl is rebuilt incrementally from it whenever
 //! the document changes, and every user gesture on the canvas (connect, disconnect, delete, add
-//! from the palette, move) comes back as an [`Action`] that the app applies through the editor,
-//! where the core type checker decides about connections.
+//! from the palette, move, select) comes back as an [`Action`] that the app applies through the
+//! editor, where the core type checker decides about connections. The selection lives in the
+//! editor; the canvas's own gestures ([`crate::gesture`]) change it, not egui-snarl's.
 
 use std::collections::{HashMap, HashSet};
 
-use eframe::egui::{self, Color32, Pos2, Rect, Ui, emath::TSTransform};
-use egui_snarl::ui::{PinInfo, PinShape, SnarlStyle, SnarlViewer, SnarlWidget};
-use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
-use pyrograph::core::PortType;
+use eframe::egui::{self, Color32, Modifiers, Pos2, Rect, Ui, emath::TSTransform};
+use egui_snarl::ui::{SnarlStyle, SnarlWidget};
+use egui_snarl::{InPinId, NodeId, OutPinId, Snarl};
 use pyrograph::core::document::split_endpoint;
 
+use crate::annotate::Annotation;
+use crate::gesture::{Gesture, Target, after_click, after_rect, on_node_drag};
+use crate::overlay::{AnnotationRects, MINIMAP_SIZE, minimap};
 use crate::state::{Editor, PaletteItem, auto_layout};
+use crate::viewer::{SELECTED, Viewer};
+
+/// The smallest zoom (the view can show 10 times more canvas than at 1:1).
+pub const MIN_SCALE: f32 = 0.1;
+/// The largest zoom.
+pub const MAX_SCALE: f32 = 2.0;
 
 /// A gesture on the canvas, applied after the frame's canvas pass.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,6 +55,12 @@ pub enum Action {
     ToggleParamPins(String),
     /// Preview a node.
     Preview(String),
+    /// Replace the node selection (the last id is the node the inspector shows).
+    Select(Vec<String>),
+    /// Select a group or a comment (or neither).
+    SelectAnnotation(Option<Annotation>),
+    /// A comment was dragged to a canvas position.
+    MoveComment(usize, Pos2),
 }
 
 /// Which description ports a node shows as pins, in pin order.
@@ -73,15 +88,26 @@ pub struct Canvas {
     to_global: TSTransform,
     rect: Rect,
     node_rects: HashMap<String, Rect>,
-    last_selection: Vec<String>,
     /// The search text of the canvas palette.
     pub palette_query: String,
+    gesture: Option<Gesture>,
+    annotation_rects: AnnotationRects,
+    /// The selected group or comment.
+    pub annotation: Option<Annotation>,
+    /// Whether the minimap is shown (M toggles it).
+    pub show_minimap: bool,
+    minimap_rect: Option<Rect>,
 }
 
+/// Where "frame" moves the view.
 #[derive(Clone, Copy, Debug)]
-enum FrameTarget {
+pub(crate) enum FrameTarget {
+    /// Every node, group and comment.
     All,
+    /// A canvas rectangle.
     Rect(Rect),
+    /// Centre on a canvas point, keeping the zoom.
+    Center(Pos2),
 }
 
 impl Default for Canvas {
@@ -111,15 +137,63 @@ impl Canvas {
             to_global: TSTransform::IDENTITY,
             rect: Rect::NOTHING,
             node_rects: HashMap::new(),
-            last_selection: Vec::new(),
             palette_query: String::new(),
+            gesture: None,
+            annotation_rects: AnnotationRects::default(),
+            annotation: None,
+            show_minimap: true,
+            minimap_rect: None,
         }
+    }
+
+    /// Where the minimap is on screen, when shown.
+    pub fn minimap_rect(&self) -> Option<Rect> {
+        self.minimap_rect
+    }
+
+    /// Frames the nodes `ids` (every node when none is given), as F does.
+    pub fn frame_nodes(&mut self, ids: &[String]) {
+        let bb = ids.iter().filter_map(|id| self.node_rects.get(id)).fold(Rect::NOTHING, |a, r| a.union(*r));
+        if bb.is_finite() {
+            self.pending_transform = Some(FrameTarget::Rect(bb.expand(60.0)));
+        } else {
+            self.frame_all();
+        }
+    }
+
+    /// The view's transform from canvas to screen (as of the last frame).
+    pub fn transform(&self) -> TSTransform {
+        self.to_global
+    }
+
+    /// Where node `id` is on screen (as of the last frame).
+    pub fn node_screen_rect(&self, id: &str) -> Option<Rect> {
+        self.node_rects.get(id).map(|r| self.to_global.mul_rect(*r))
+    }
+
+    /// Where group `i`'s title bar and comment `i` are on screen (as of the last frame).
+    pub fn annotation_screen_rect(&self, which: Annotation) -> Option<Rect> {
+        let r = match which {
+            Annotation::Group(i) => self.annotation_rects.group_bar(i)?,
+            Annotation::Comment(i) => *self.annotation_rects.comments.get(i)?,
+        };
+        Some(self.to_global.mul_rect(r))
     }
 
     /// Frames every node on the next frame.
     pub fn frame_all(&mut self) {
         self.pending_transform = Some(FrameTarget::All);
         self.frame_all_frames = 3;
+    }
+
+    /// Whether screen position `p` lies on the canvas.
+    pub fn rect_contains(&self, p: Pos2) -> bool {
+        self.rect.contains(p)
+    }
+
+    /// The visible part of the canvas, in canvas units.
+    pub fn visible(&self) -> Rect {
+        self.to_global.inverse().mul_rect(self.rect)
     }
 
     /// Centres the view on node `id`.
@@ -244,7 +318,13 @@ impl Canvas {
             self.frame_all_frames -= 1;
             self.pending_transform = Some(FrameTarget::All);
         }
+        let ctx = ui.ctx().clone();
         let mut actions = Vec::new();
+        self.begin_gesture(&ctx, editor);
+        let hold = self.gesture.as_ref().is_some_and(Gesture::holds_view).then_some(self.to_global);
+        let comment_at = self.dragged_comment();
+        let before: Vec<(NodeId, Pos2)> = self.snarl.nodes_pos_ids().map(|(id, pos, _)| (id, pos)).collect();
+        let selected: HashSet<String> = editor.selection().iter().cloned().collect();
         let mut viewer = Viewer {
             editor,
             pins: &self.pins,
@@ -254,29 +334,190 @@ impl Canvas {
             to_global: &mut self.to_global,
             node_rects: &mut self.node_rects,
             rect: self.rect,
+            selected: &selected,
+            hold,
+            annotation: self.annotation,
+            comment_at,
+            annotation_rects: &mut self.annotation_rects,
         };
         let style = SnarlStyle {
             collapsible: Some(true),
             centering: Some(true),
-            min_scale: Some(0.1),
-            max_scale: Some(2.0),
+            min_scale: Some(MIN_SCALE),
+            max_scale: Some(MAX_SCALE),
+            // The canvas draws its own selection; egui-snarl's (Shift-based) stays empty.
+            select_fill: Some(Color32::TRANSPARENT),
+            select_stoke: Some(egui::Stroke::NONE),
             ..SnarlStyle::new()
         };
+        // egui-snarl reads Shift and Ctrl for its own selection, which the canvas replaces: it
+        // sees the frame without modifiers (scroll zoom is computed before, so it still works).
+        let mods = ctx.input_mut(|i| std::mem::take(&mut i.modifiers));
         SnarlWidget::new().id(canvas_id()).style(style).show(&mut self.snarl, &mut viewer, ui);
+        ctx.input_mut(|i| i.modifiers = mods);
+        self.follow_node_drag(&before, editor, &mut actions);
+        self.end_gesture(&ctx, editor, &mut actions);
+        self.show_minimap_ui(&ctx, &selected);
         actions
     }
 
-    /// Node ids selected on the canvas, when the selection changed since the last call.
-    pub fn selection_change(&mut self, ctx: &egui::Context) -> Option<Vec<String>> {
-        let sel: Vec<String> = egui_snarl::ui::get_selected_nodes(canvas_id(), ctx)
-            .into_iter()
-            .filter_map(|n| self.snarl.get_node(n).cloned())
-            .collect();
-        if sel != self.last_selection {
-            self.last_selection = sel.clone();
-            Some(sel)
-        } else {
-            None
+    /// Starts a gesture on a primary press that lands on the canvas (not on a window, menu or
+    /// the minimap above it).
+    fn begin_gesture(&mut self, ctx: &egui::Context, editor: &Editor) {
+        // Where the button went down, not where the pointer is now: a real mouse can deliver a
+        // press with the first moves of a drag, or with its release, in one frame.
+        let press = ctx.input(|i| {
+            i.events.iter().find_map(|e| match e {
+                egui::Event::PointerButton { pos, button: egui::PointerButton::Primary, pressed: true, modifiers } => {
+                    Some((*pos, *modifiers | i.modifiers))
+                }
+                _ => None,
+            })
+        });
+        let Some((pos, mods)) = press else { return };
+        if !self.rect.contains(pos) {
+            return;
+        }
+        // Windows, menus and the minimap sit above the canvas (tooltips never take clicks).
+        if ctx.layer_id_at(pos).is_some_and(|l| !matches!(l.order, egui::Order::Background | egui::Order::Tooltip)) {
+            return;
+        }
+        let target = self.hit(editor, pos);
+        self.gesture = Some(Gesture::new(pos, target, mods));
+    }
+
+    /// What a press at screen position `pos` lands on: a node (pins stick out of its frame, so
+    /// the frame counts a little wider), a comment, a group's title bar, or empty canvas.
+    fn hit(&self, editor: &Editor, pos: Pos2) -> Target {
+        let p = self.to_graph(pos);
+        // Later nodes in the document are drawn later, so they win where nodes overlap.
+        for (id, _) in editor.doc().nodes.0.iter().rev() {
+            if self.node_rects.get(id).is_some_and(|r| r.expand2(egui::vec2(12.0, 2.0)).contains(p)) {
+                return Target::Node(id.clone());
+            }
+        }
+        match self.annotation_rects.hit(p) {
+            Some(Annotation::Comment(i)) => Target::Comment(i),
+            Some(Annotation::Group(i)) => Target::GroupBar(i),
+            None => Target::Empty,
+        }
+    }
+
+    /// The comment being dragged and where it is now (canvas units).
+    fn dragged_comment(&self) -> Option<(usize, Pos2)> {
+        let g = self.gesture.as_ref()?;
+        let Target::Comment(i) = g.target else { return None };
+        let start = self.annotation_rects.comments.get(i)?.min;
+        g.dragging.then(|| (i, start + (g.current - g.origin) / self.to_global.scaling))
+    }
+
+    /// egui-snarl moves the one node being dragged; the rest of the selection follows it, and
+    /// dragging an unselected node selects it first.
+    fn follow_node_drag(&mut self, before: &[(NodeId, Pos2)], editor: &Editor, actions: &mut Vec<Action>) {
+        let moved = before.iter().find_map(|&(nid, p)| {
+            let info = self.snarl.get_node_info(nid)?;
+            (info.pos != p).then(|| (info.value.clone(), info.pos - p))
+        });
+        let Some((id, delta)) = moved else { return };
+        let mods = self.gesture.as_ref().map_or(Modifiers::NONE, |g| g.mods);
+        let selection = match self.gesture.as_mut() {
+            Some(g) if !g.selected_on_drag => {
+                g.selected_on_drag = true;
+                let sel = on_node_drag(editor.selection(), &id, mods);
+                if sel != editor.selection() {
+                    actions.push(Action::Select(sel.clone()));
+                }
+                sel
+            }
+            _ => editor.selection().to_vec(),
+        };
+        for other in selection.iter().filter(|s| **s != id) {
+            if let Some(&nid) = self.ids.get(other)
+                && let Some(info) = self.snarl.get_node_info_mut(nid)
+            {
+                info.pos += delta;
+            }
+        }
+    }
+
+    /// Follows the pointer and, on release, turns the gesture into a selection (or a group or
+    /// comment move).
+    fn end_gesture(&mut self, ctx: &egui::Context, editor: &Editor, actions: &mut Vec<Action>) {
+        let Some(g) = self.gesture.as_mut() else { return };
+        let (pos, down) = ctx.input(|i| (i.pointer.interact_pos(), i.pointer.primary_down()));
+        if let Some(p) = pos {
+            g.update(p);
+        }
+        let g = g.clone();
+        if let (Target::GroupBar(i), true) = (&g.target, g.dragging) {
+            // Moving a group moves its nodes (one undo step with the rest of the drag).
+            let delta = (g.current - g.last) / self.to_global.scaling;
+            for id in editor.doc().groups.get(*i).map(|gr| gr.nodes.clone()).unwrap_or_default() {
+                if let Some(&nid) = self.ids.get(&id)
+                    && let Some(info) = self.snarl.get_node_info_mut(nid)
+                {
+                    info.pos += delta;
+                }
+            }
+        }
+        if let Some(r) = g.rect() {
+            let painter = ctx.layer_painter(egui::LayerId::new(egui::Order::Foreground, canvas_id().with("rect")));
+            let painter = painter.with_clip_rect(self.rect);
+            painter.rect_filled(r, 2.0, SELECTED.gamma_multiply(0.12));
+            painter.rect_stroke(r, 2.0, egui::Stroke::new(1.0, SELECTED), egui::StrokeKind::Inside);
+        }
+        if down {
+            if g.dragging {
+                ctx.request_repaint();
+            }
+            return;
+        }
+        let comment_at = self.dragged_comment();
+        self.gesture = None;
+        let current = editor.selection();
+        match (&g.target, g.dragging) {
+            (Target::Node(id), false) => {
+                actions.push(Action::Select(after_click(current, Some(id), g.mods)));
+                actions.push(Action::SelectAnnotation(None));
+            }
+            (Target::Empty, false) => {
+                actions.push(Action::Select(after_click(current, None, g.mods)));
+                actions.push(Action::SelectAnnotation(None));
+            }
+            (Target::Empty, true) if !g.mods.alt => {
+                let r = self.to_global.inverse().mul_rect(Rect::from_two_pos(g.origin, g.current));
+                let hits: Vec<String> = editor
+                    .doc()
+                    .nodes
+                    .0
+                    .iter()
+                    .filter(|(id, _)| self.node_rects.get(id).is_some_and(|n| n.intersects(r)))
+                    .map(|(id, _)| id.clone())
+                    .collect();
+                actions.push(Action::Select(after_rect(current, &hits, g.mods)));
+            }
+            (Target::GroupBar(i), _) => actions.push(Action::SelectAnnotation(Some(Annotation::Group(*i)))),
+            (Target::Comment(i), dragged) => {
+                actions.push(Action::SelectAnnotation(Some(Annotation::Comment(*i))));
+                if dragged && let Some((_, p)) = comment_at {
+                    actions.push(Action::MoveComment(*i, p));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn show_minimap_ui(&mut self, ctx: &egui::Context, selected: &HashSet<String>) {
+        self.minimap_rect = None;
+        if !self.show_minimap || !self.rect.is_finite() || self.rect.width() < 2.0 * MINIMAP_SIZE.x {
+            return;
+        }
+        let nodes: Vec<(Rect, bool)> = self.node_rects.iter().map(|(id, r)| (*r, selected.contains(id))).collect();
+        let at = Rect::from_min_size(self.rect.max - MINIMAP_SIZE - egui::vec2(12.0, 12.0), MINIMAP_SIZE);
+        self.minimap_rect = Some(at);
+        if let Some(p) = minimap(ctx, at, &nodes, self.annotation_rects.bounds(), self.visible()) {
+            self.pending_transform = Some(FrameTarget::Center(p));
+            ctx.request_repaint();
         }
     }
 
@@ -301,279 +542,5 @@ impl Canvas {
             self.param_pins.insert(id.to_string());
         }
         self.pins_changed = true;
-    }
-}
-
-/// A colour per port type, shared by pins and wires.
-pub fn type_color(ty: &PortType) -> Color32 {
-    match ty {
-        PortType::Float => Color32::from_rgb(120, 200, 120),
-        PortType::Int => Color32::from_rgb(80, 170, 170),
-        PortType::Bool => Color32::from_rgb(220, 110, 110),
-        PortType::Color => Color32::from_rgb(235, 200, 80),
-        PortType::Vec2 | PortType::Vec3 => Color32::from_rgb(170, 130, 220),
-        PortType::String | PortType::Path | PortType::Enum => Color32::from_rgb(160, 160, 160),
-        PortType::Image => Color32::from_rgb(240, 140, 60),
-        PortType::Mask => Color32::from_rgb(235, 235, 235),
-        PortType::Contours => Color32::from_rgb(80, 210, 240),
-        PortType::WindField => Color32::from_rgb(120, 160, 250),
-        PortType::Particles => Color32::from_rgb(245, 110, 180),
-        PortType::Basis | PortType::Weights | PortType::FrameList => Color32::from_rgb(200, 180, 140),
-        PortType::ParamSeries | PortType::ArModel | PortType::FlameModel => Color32::from_rgb(230, 150, 200),
-        PortType::Mesh | PortType::SpreadState => Color32::from_rgb(150, 200, 150),
-        PortType::Clip(inner) => type_color(inner),
-        #[allow(unreachable_patterns)]
-        _ => Color32::GRAY,
-    }
-}
-
-/// A header colour per palette category.
-pub fn category_color(category: &str) -> Color32 {
-    let h = category.bytes().fold(2166136261u32, |h, b| (h ^ b as u32).wrapping_mul(16777619));
-    let hue = (h % 360) as f32 / 360.0;
-    let c = egui::ecolor::Hsva::new(hue, 0.55, 0.38, 1.0);
-    Color32::from(c)
-}
-
-fn pin_info(ty: &PortType) -> PinInfo {
-    let shape = if ty.clip_element().is_some() { PinShape::Square } else { PinShape::Circle };
-    PinInfo::default().with_shape(shape).with_fill(type_color(ty)).with_wire_color(type_color(ty))
-}
-
-struct Viewer<'a> {
-    editor: &'a Editor,
-    pins: &'a HashMap<String, NodePins>,
-    actions: &'a mut Vec<Action>,
-    query: &'a mut String,
-    pending: &'a mut Option<FrameTarget>,
-    to_global: &'a mut TSTransform,
-    node_rects: &'a mut HashMap<String, Rect>,
-    rect: Rect,
-}
-
-impl Viewer<'_> {
-    fn in_port(&self, snarl: &Snarl<String>, pin: InPinId) -> Option<(String, String, PortType, String)> {
-        let id = snarl.get_node(pin.node)?;
-        let desc = self.editor.desc(id)?;
-        let idx = *self.pins.get(id)?.inputs.get(pin.input)?;
-        let port = desc.inputs.get(idx)?;
-        Some((id.clone(), port.name.clone(), port.ty.clone(), port.doc.clone()))
-    }
-
-    fn out_port(&self, snarl: &Snarl<String>, pin: OutPinId) -> Option<(String, String, PortType, String)> {
-        let id = snarl.get_node(pin.node)?;
-        let desc = self.editor.desc(id)?;
-        let idx = *self.pins.get(id)?.outputs.get(pin.output)?;
-        let port = desc.outputs.get(idx)?;
-        // After lifting, an output may be a clip: show the type the graph really carries.
-        let ty = self
-            .editor
-            .validation()
-            .graph
-            .as_ref()
-            .and_then(|g| g.index(id).and_then(|i| g.node(i).out_types.get(idx).cloned()))
-            .unwrap_or_else(|| port.ty.clone());
-        Some((id.clone(), port.name.clone(), ty, port.doc.clone()))
-    }
-}
-
-/// The node palette: a search field and the matching node types and presets. Returns the item
-/// the user picked (click, or Enter for the first match).
-pub fn palette_ui(ui: &mut Ui, editor: &Editor, query: &mut String, focus: bool) -> Option<PaletteItem> {
-    let resp =
-        ui.add(egui::TextEdit::singleline(query).hint_text("search nodes (name, category, doc)…").id_salt("palette-search"));
-    if focus {
-        resp.request_focus();
-    }
-    let items = editor.palette(query);
-    let enter = resp.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-    let mut picked = None;
-    if enter {
-        picked = items.first().cloned();
-    }
-    egui::ScrollArea::vertical().max_height(320.0).show(ui, |ui| {
-        let mut last_cat = String::new();
-        for item in items.iter().take(60) {
-            if item.category != last_cat {
-                last_cat = item.category.clone();
-                ui.label(egui::RichText::new(&item.category).small().color(category_color(&item.category).gamma_multiply(2.0)));
-            }
-            let label = match &item.preset {
-                Some(p) => format!("preset {}", p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()),
-                None => item.type_name.clone(),
-            };
-            if ui.selectable_label(false, label).on_hover_text(&item.summary).clicked() {
-                picked = Some(item.clone());
-            }
-        }
-        if items.is_empty() {
-            ui.weak("no match");
-        }
-    });
-    picked
-}
-
-impl SnarlViewer<String> for Viewer<'_> {
-    fn title(&mut self, node: &String) -> String {
-        node.clone()
-    }
-
-    fn header_frame(
-        &mut self,
-        default: egui::Frame,
-        node: NodeId,
-        _inputs: &[InPin],
-        _outputs: &[OutPin],
-        snarl: &Snarl<String>,
-    ) -> egui::Frame {
-        let cat = snarl.get_node(node).and_then(|id| self.editor.desc(id)).map(|d| d.category.clone()).unwrap_or_default();
-        default.fill(category_color(&cat))
-    }
-
-    fn show_header(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
-        let Some(id) = snarl.get_node(node).cloned() else { return };
-        let type_name = self.editor.doc().node(&id).map(|n| n.type_name.clone()).unwrap_or_default();
-        let problems = self.editor.node_problems(&id);
-        ui.horizontal(|ui| {
-            if !problems.is_empty() {
-                ui.label(egui::RichText::new("⚠").color(Color32::from_rgb(255, 80, 80)).strong())
-                    .on_hover_text(problems.join("\n"));
-            }
-            ui.label(egui::RichText::new(&id).strong().color(Color32::WHITE)).on_hover_text(
-                self.editor.desc(&id).map(|d| format!("{type_name}\n{}", d.doc)).unwrap_or_else(|| type_name.clone()),
-            );
-            ui.label(egui::RichText::new(type_name.rsplit('.').next().unwrap_or("")).small().color(Color32::from_gray(200)));
-        });
-    }
-
-    fn inputs(&mut self, node: &String) -> usize {
-        self.pins.get(node).map_or(0, |p| p.inputs.len())
-    }
-
-    fn outputs(&mut self, node: &String) -> usize {
-        self.pins.get(node).map_or(0, |p| p.outputs.len())
-    }
-
-    #[allow(refining_impl_trait)]
-    fn show_input(&mut self, pin: &InPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
-        let Some((_, name, ty, doc)) = self.in_port(snarl, pin.id) else { return PinInfo::default() };
-        let text = egui::RichText::new(&name).small();
-        let text = if ty.is_parameter() { text.italics() } else { text };
-        ui.label(text).on_hover_text(format!("{name}: {ty}\n{doc}"));
-        pin_info(&ty)
-    }
-
-    #[allow(refining_impl_trait)]
-    fn show_output(&mut self, pin: &OutPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
-        let Some((_, name, ty, doc)) = self.out_port(snarl, pin.id) else { return PinInfo::default() };
-        ui.label(egui::RichText::new(&name).small()).on_hover_text(format!("{name}: {ty}\n{doc}"));
-        pin_info(&ty)
-    }
-
-    fn connect(&mut self, from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
-        if let (Some(a), Some(b)) = (self.out_port(snarl, from.id), self.in_port(snarl, to.id)) {
-            self.actions.push(Action::Connect { from: (a.0, a.1), to: (b.0, b.1) });
-        }
-    }
-
-    fn disconnect(&mut self, from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
-        if let (Some(a), Some(b)) = (self.out_port(snarl, from.id), self.in_port(snarl, to.id)) {
-            self.actions.push(Action::Disconnect { from: format!("{}.{}", a.0, a.1), to: format!("{}.{}", b.0, b.1) });
-        }
-    }
-
-    fn drop_outputs(&mut self, pin: &OutPin, snarl: &mut Snarl<String>) {
-        if let Some(a) = self.out_port(snarl, pin.id) {
-            self.actions.push(Action::DropOutput(a.0, a.1));
-        }
-    }
-
-    fn drop_inputs(&mut self, pin: &InPin, snarl: &mut Snarl<String>) {
-        if let Some(b) = self.in_port(snarl, pin.id) {
-            self.actions.push(Action::DropInput(b.0, b.1));
-        }
-    }
-
-    fn has_graph_menu(&mut self, _pos: Pos2, _snarl: &mut Snarl<String>) -> bool {
-        true
-    }
-
-    fn show_graph_menu(&mut self, pos: Pos2, ui: &mut Ui, _snarl: &mut Snarl<String>) {
-        ui.set_min_width(320.0);
-        ui.label(egui::RichText::new("Add node").strong());
-        if let Some(item) = palette_ui(ui, self.editor, self.query, true) {
-            self.actions.push(Action::Add(item, pos));
-            self.query.clear();
-            ui.close();
-        }
-    }
-
-    fn has_node_menu(&mut self, _node: &String) -> bool {
-        true
-    }
-
-    fn show_node_menu(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
-        let Some(id) = snarl.get_node(node).cloned() else { return };
-        ui.label(egui::RichText::new(&id).strong());
-        if ui.button("Preview").clicked() {
-            self.actions.push(Action::Preview(id.clone()));
-            ui.close();
-        }
-        if ui.button("Duplicate").clicked() {
-            self.actions.push(Action::Duplicate(vec![id.clone()]));
-            ui.close();
-        }
-        if ui.button("Show/hide parameter pins").clicked() {
-            self.actions.push(Action::ToggleParamPins(id.clone()));
-            ui.close();
-        }
-        if ui.button("Delete").clicked() {
-            self.actions.push(Action::Remove(vec![id]));
-            ui.close();
-        }
-    }
-
-    fn has_on_hover_popup(&mut self, node: &String) -> bool {
-        !self.editor.node_problems(node).is_empty()
-    }
-
-    fn show_on_hover_popup(&mut self, node: NodeId, _i: &[InPin], _o: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
-        if let Some(id) = snarl.get_node(node) {
-            for p in self.editor.node_problems(id) {
-                ui.colored_label(Color32::from_rgb(255, 120, 120), p);
-            }
-        }
-    }
-
-    fn final_node_rect(&mut self, node: NodeId, rect: Rect, _ui: &mut Ui, snarl: &mut Snarl<String>) {
-        if let Some(id) = snarl.get_node(node) {
-            self.node_rects.insert(id.clone(), rect);
-        }
-    }
-
-    fn current_transform(&mut self, to_global: &mut TSTransform, snarl: &mut Snarl<String>) {
-        if let Some(target) = self.pending.take() {
-            let bb = match target {
-                FrameTarget::Rect(r) => r,
-                FrameTarget::All => {
-                    let mut bb = Rect::NOTHING;
-                    for (nid, info) in snarl.nodes_ids_data() {
-                        let _ = nid;
-                        let r = self
-                            .node_rects
-                            .get(&info.value)
-                            .copied()
-                            .unwrap_or_else(|| Rect::from_min_size(info.pos, egui::vec2(200.0, 120.0)));
-                        bb = bb.union(r);
-                    }
-                    bb.expand(60.0)
-                }
-            };
-            if bb.is_finite() && bb.width() > 0.0 && bb.height() > 0.0 && self.rect.is_finite() {
-                let s = (self.rect.width() / bb.width()).min(self.rect.height() / bb.height()).clamp(0.1, 1.5);
-                *to_global = TSTransform::new(self.rect.center().to_vec2() - bb.center().to_vec2() * s, s);
-            }
-        }
-        *self.to_global = *to_global;
     }
 }

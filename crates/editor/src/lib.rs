@@ -12,12 +12,20 @@
 //! Tests drive [`state::Editor`] directly and the UI headlessly with egui_kittest.
 #![deny(missing_docs)]
 
+pub mod annotate;
 pub mod app;
 pub mod canvas;
+pub mod clipboard;
 pub mod cook;
+pub mod gesture;
 pub mod history;
+pub mod layout;
+pub mod overlay;
+pub mod palette;
+mod panels;
 pub mod params;
 pub mod state;
+pub mod viewer;
 
 pub use app::EditorApp;
 pub use state::Editor;

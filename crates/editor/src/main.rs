@@ -14,13 +14,17 @@ fn recent_file() -> Option<PathBuf> {
 fn main() {
     let mut graph = None;
     let mut select = None;
+    let mut dump = None;
     let mut args = std::env::args_os().skip(1);
     while let Some(a) = args.next() {
         if a == "--help" || a == "-h" {
-            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE]");
+            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE] [--state-dump FILE.json]");
+            println!("  --state-dump  keep FILE.json current with the selection and node positions (for tests)");
             return;
         } else if a == "--select" {
             select = args.next().map(|s| s.to_string_lossy().into_owned());
+        } else if a == "--state-dump" {
+            dump = args.next().map(PathBuf::from);
         } else {
             graph = Some(PathBuf::from(a));
         }
@@ -40,6 +44,7 @@ fn main() {
         editor.select(id);
     }
     let mut app = EditorApp::new(editor);
+    app.state_dump = dump;
     app.canvas.frame_all();
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default().with_inner_size([1600.0, 1000.0]).with_title("pyrograph editor"),

@@ -108,9 +108,7 @@ pub fn param_widget(ui: &mut egui::Ui, id: egui::Id, port: &PortDesc, value: &Pa
         }
         PortType::String | PortType::Path => {
             let ParamValue::String(cur) = value else { return None };
-            let mut s = cur.clone();
-            let r = ui.add(egui::TextEdit::singleline(&mut s).desired_width(f32::INFINITY));
-            (r.changed() && s != *cur).then_some(ParamValue::String(s))
+            buffered_text(ui, id, cur, false).map(ParamValue::String)
         }
         _ => None,
     }
@@ -122,4 +120,26 @@ pub fn raw_widget(ui: &mut egui::Ui, value: &ParamValue) -> Option<ParamValue> {
     let mut s = cur.clone();
     let r = ui.add(egui::TextEdit::singleline(&mut s).text_color(egui::Color32::LIGHT_RED));
     (r.changed() && s != cur).then(|| ParamValue::parse_cli(&s))
+}
+
+/// A text field that edits a copy: Enter (or Tab, or clicking elsewhere) commits it, Escape
+/// reverts it, so typing a path does not re-cook on every key. `multiline` fields take Enter
+/// as a new line and commit when they lose focus. Returns the committed text when it differs.
+pub fn buffered_text(ui: &mut egui::Ui, id: egui::Id, current: &str, multiline: bool) -> Option<String> {
+    let buf_id = id.with("edit-buffer");
+    let mut buf = ui.data(|d| d.get_temp::<String>(buf_id)).unwrap_or_else(|| current.to_string());
+    let edit = if multiline { egui::TextEdit::multiline(&mut buf).desired_rows(4) } else { egui::TextEdit::singleline(&mut buf) };
+    // Escape takes the focus away before the frame is drawn; drop the copy then, so the frame
+    // that sees the focus lost finds nothing to commit.
+    let escaped = ui.input(|i| i.key_pressed(egui::Key::Escape));
+    let r = ui.add(edit.id(id).desired_width(f32::INFINITY));
+    if r.has_focus() && !escaped {
+        ui.data_mut(|d| d.insert_temp(buf_id, buf));
+        return None;
+    }
+    let edited = ui.data_mut(|d| d.remove_temp::<String>(buf_id));
+    if escaped || !r.lost_focus() {
+        return None;
+    }
+    edited.filter(|b| b != current)
 }

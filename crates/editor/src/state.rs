@@ -18,6 +18,8 @@ use pyrograph::core::{
 
 use crate::cook::{CookOutcome, CookRequest, CookStatus, Cooker, Notify, Preview, PreviewRequest};
 use crate::history::History;
+pub use crate::layout::auto_layout;
+use crate::layout::relative_path;
 
 /// A message for the status bar.
 #[derive(Clone, Debug)]
@@ -376,6 +378,9 @@ impl Editor {
     pub fn remove_nodes(&mut self, ids: &[String]) {
         let set: HashSet<&str> = ids.iter().map(String::as_str).collect();
         self.edit(None, |d| {
+            for id in &set {
+                d.ungroup_node(id);
+            }
             d.nodes.0.retain(|(id, _)| !set.contains(id.as_str()));
             d.edges.retain(|(a, b)| {
                 let na = split_endpoint(a).map(|x| x.0);
@@ -533,20 +538,25 @@ impl Editor {
 
     // ----- selection and preview -----
 
-    /// Sets the selection; the preview follows the first selected node.
+    /// Sets the selection; the inspector and preview follow the current node, the last one.
     pub fn set_selection(&mut self, ids: Vec<String>) {
         if ids == self.selection {
             return;
         }
         self.selection = ids;
-        if let Some(first) = self.selection.first().cloned()
-            && self.preview_req.as_ref().is_none_or(|p| p.node != first)
+        if let Some(current) = self.current().map(str::to_string)
+            && self.preview_req.as_ref().is_none_or(|p| p.node != current)
         {
-            self.preview_req = Some(PreviewRequest { node: first, output: 0, frame: self.current_frame() });
+            self.preview_req = Some(PreviewRequest { node: current, output: 0, frame: self.current_frame() });
             if self.auto_cook {
                 self.request_preview();
             }
         }
+    }
+
+    /// The current node: the one clicked last, whose parameters the inspector shows.
+    pub fn current(&self) -> Option<&str> {
+        self.selection.last().map(String::as_str)
     }
 
     /// Selects one node.
@@ -704,84 +714,6 @@ impl Editor {
         out
     }
 
-    // ----- palette -----
-
-    /// Node types and presets matching `query` (every word must appear in the type name,
-    /// category or doc), best matches first.
-    pub fn palette(&self, query: &str) -> Vec<PaletteItem> {
-        let words: Vec<String> = query.split_whitespace().map(str::to_lowercase).collect();
-        let mut items: Vec<(u32, PaletteItem)> = Vec::new();
-        let score = |name: &str, category: &str, doc: &str| -> Option<u32> {
-            let (name, category, doc) = (name.to_lowercase(), category.to_lowercase(), doc.to_lowercase());
-            let mut s = 0;
-            for w in &words {
-                if name.contains(w.as_str()) {
-                    s += if name.rsplit('.').next().is_some_and(|n| n.starts_with(w.as_str())) { 0 } else { 1 };
-                } else if category.contains(w.as_str()) {
-                    s += 2;
-                } else if doc.contains(w.as_str()) {
-                    s += 4;
-                } else {
-                    return None;
-                }
-            }
-            Some(s)
-        };
-        for desc in self.registry.descs() {
-            if desc.type_name == INCLUDE_TYPE {
-                continue;
-            }
-            if let Some(s) = score(&desc.type_name, &desc.category, &desc.doc) {
-                items.push((
-                    s,
-                    PaletteItem {
-                        type_name: desc.type_name.clone(),
-                        category: desc.category.clone(),
-                        summary: desc.summary().to_string(),
-                        preset: None,
-                    },
-                ));
-            }
-        }
-        for file in self.presets() {
-            let name = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            let summary = GraphDoc::load(&file).ok().and_then(|d| d.description).unwrap_or_default();
-            if let Some(s) = score(&name, "Preset", &summary) {
-                items.push((
-                    s,
-                    PaletteItem {
-                        type_name: INCLUDE_TYPE.into(),
-                        category: "Preset".into(),
-                        summary: format!("{name}: {summary}"),
-                        preset: Some(file),
-                    },
-                ));
-            }
-        }
-        items.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.category.cmp(&b.1.category)).then(a.1.type_name.cmp(&b.1.type_name)));
-        items.into_iter().map(|(_, i)| i).collect()
-    }
-
-    /// Preset files (`*.ron` with an interface) in the preset folders.
-    pub fn presets(&self) -> Vec<PathBuf> {
-        let mut seen = HashSet::new();
-        let mut out = Vec::new();
-        for dir in &self.preset_dirs {
-            let Ok(entries) = std::fs::read_dir(dir) else { continue };
-            let mut files: Vec<PathBuf> =
-                entries.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "ron")).collect();
-            files.sort();
-            for f in files {
-                let key = std::fs::canonicalize(&f).unwrap_or_else(|_| f.clone());
-                let name = f.file_name().map(|n| n.to_os_string());
-                if seen.insert(key) && seen.insert(PathBuf::from(name.unwrap_or_default())) {
-                    out.push(f);
-                }
-            }
-        }
-        out
-    }
-
     // ----- files -----
 
     /// Opens a graph file. A file that does not parse leaves an empty document and reports why;
@@ -902,46 +834,6 @@ pub fn diagnostic_nodes(d: &Diagnostic) -> Vec<String> {
         Location::Edge { text, .. } => {
             text.split(" -> ").filter_map(|e| split_endpoint(e.trim()).map(|(n, _)| n.to_string())).collect()
         }
-        Location::File | Location::Text { .. } => Vec::new(),
+        Location::File | Location::Text { .. } | Location::Group { .. } => Vec::new(),
     }
-}
-
-/// `file` relative to `base` when it lies inside it, else absolute.
-fn relative_path(file: &Path, base: &Path) -> String {
-    let file_abs = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
-    let base_abs = std::fs::canonicalize(base).unwrap_or_else(|_| base.to_path_buf());
-    match file_abs.strip_prefix(&base_abs) {
-        Ok(rel) => rel.display().to_string(),
-        Err(_) => file_abs.display().to_string(),
-    }
-}
-
-/// Positions for nodes that have none: columns by depth along the edges.
-pub fn auto_layout(doc: &GraphDoc) -> HashMap<String, (f32, f32)> {
-    let mut depth: HashMap<&str, usize> = doc.nodes.0.iter().map(|(id, _)| (id.as_str(), 0)).collect();
-    // Longest-path depth by relaxation (bounded, so cycles in a broken file cannot loop forever).
-    for _ in 0..doc.nodes.0.len().min(64) {
-        let mut changed = false;
-        for (a, b) in &doc.edges {
-            if let (Some((na, _)), Some((nb, _))) = (split_endpoint(a), split_endpoint(b))
-                && let (Some(&da), Some(&db)) = (depth.get(na), depth.get(nb))
-                && db < da + 1
-            {
-                depth.insert(nb, da + 1);
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    let mut rows: HashMap<usize, usize> = HashMap::new();
-    let mut out = HashMap::new();
-    for (id, _) in &doc.nodes.0 {
-        let d = depth.get(id.as_str()).copied().unwrap_or(0);
-        let r = rows.entry(d).or_insert(0);
-        out.insert(id.clone(), (40.0 + d as f32 * 280.0, 40.0 + *r as f32 * 180.0));
-        *r += 1;
-    }
-    out
 }

@@ -1,0 +1,162 @@
+//! The editor in a real X11 window: Xvfb for a screen, xdotool for a mouse and keyboard, and
+//! the editor's `--state-dump` to read what the clicks did. This is the path a user's hand
+//! takes (window system events through winit), which the headless tests cannot cover.
+//!
+//! Uses the binary in `PYROGRAPH_EDITOR_BIN` when set (CI points it at the release build), else
+//! the one cargo built for this test.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+/// Kills the child processes however the test ends.
+struct Kill(Vec<Child>);
+
+impl Drop for Kill {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn xdotool(display: &str, args: &[&str]) {
+    let st = Command::new("xdotool").args(args).env("DISPLAY", display).status().expect("xdotool runs");
+    assert!(st.success(), "xdotool {args:?} failed");
+}
+
+fn read_dump(path: &Path) -> Option<Value> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
+}
+
+/// Waits until the dump satisfies `ok`; returns the last dump read.
+fn wait_for(path: &Path, what: &str, ok: impl Fn(&Value) -> bool) -> Value {
+    let start = Instant::now();
+    loop {
+        if let Some(v) = read_dump(path)
+            && ok(&v)
+        {
+            return v;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            panic!("timed out waiting for {what}; last state: {:?}", read_dump(path));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+fn center(dump: &Value, id: &str) -> (i64, i64) {
+    let n = &dump["nodes"][id];
+    let f = |k: &str| n[k].as_f64().unwrap_or_else(|| panic!("node {id} has no {k} in {dump}"));
+    ((f("x") + f("w") / 2.0) as i64, (f("y") + f("h") / 2.0) as i64)
+}
+
+fn selection(dump: &Value) -> Vec<String> {
+    dump["selection"].as_array().map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect()).unwrap_or_default()
+}
+
+#[test]
+#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
+fn a_click_in_a_real_window_selects_the_node() {
+    let display_num = (90..140).find(|n| !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()).expect("a free display");
+    let display = format!(":{display_num}");
+    let xvfb = Command::new("Xvfb")
+        .args([display.as_str(), "-screen", "0", "1600x1000x24", "-nolisten", "tcp"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("Xvfb starts (apt-get install xvfb)");
+    let mut procs = Kill(vec![xvfb]);
+    let socket = PathBuf::from(format!("/tmp/.X11-unix/X{display_num}"));
+    let start = Instant::now();
+    while !socket.exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "Xvfb did not come up on {display}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let dump = dir.path().join("state.json");
+    let bin = std::env::var_os("PYROGRAPH_EDITOR_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_pyrograph-editor")));
+    let editor = Command::new(&bin)
+        .arg(repo().join("graphs/burning-cube.ron"))
+        .arg("--state-dump")
+        .arg(&dump)
+        .env("DISPLAY", &display)
+        .env("XDG_CONFIG_HOME", dir.path())
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap_or_else(|e| panic!("cannot start {}: {e}", bin.display()));
+    procs.0.push(editor);
+
+    // The first frames lay the graph out and frame it; wait until every node has a place on
+    // screen that holds still.
+    let mut first = wait_for(&dump, "the nodes on screen", |v| v["nodes"].as_object().is_some_and(|n| n.len() == 6));
+    loop {
+        std::thread::sleep(Duration::from_millis(700));
+        let again = wait_for(&dump, "the nodes on screen", |_| true);
+        if again["nodes"] == first["nodes"] {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(90), "the layout never settled");
+        first = again;
+    }
+    assert!(selection(&first).is_empty());
+
+    // A slow press and release on a node's body selects it.
+    let (x, y) = center(&first, "spread");
+    let (xs, ys) = (x.to_string(), y.to_string());
+    xdotool(&display, &["mousemove", &xs, &ys]);
+    xdotool(&display, &["mousedown", "1"]);
+    std::thread::sleep(Duration::from_millis(300));
+    xdotool(&display, &["mouseup", "1"]);
+    let v = wait_for(&dump, "spread selected", |v| selection(v) == ["spread"]);
+
+    // Shift-click adds a second node. Keys go to the focused window: with no window manager
+    // on the Xvfb screen, focus it by hand.
+    let out = Command::new("xdotool").args(["search", "--name", "pyrograph"]).env("DISPLAY", &display).output().unwrap();
+    let window = String::from_utf8_lossy(&out.stdout).lines().next().map(str::to_string).expect("the editor's window");
+    xdotool(&display, &["windowfocus", "--sync", &window]);
+    std::thread::sleep(Duration::from_millis(500));
+    let (x, y) = center(&v, "render");
+    xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
+    for step in [&["keydown", "shift"][..], &["click", "1"], &["keyup", "shift"]] {
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&display, step);
+    }
+    let v = wait_for(&dump, "render added", |v| selection(v) == ["spread", "render"]);
+
+    // A rectangle dragged on empty canvas around `cube` and `wind` selects exactly those.
+    let n = |id: &str, k: &str| v["nodes"][id][k].as_f64().unwrap();
+    let (x0, y0) = (n("cube", "x") - 20.0, n("cube", "y") - 20.0);
+    let (x1, y1) = (n("wind", "x") + n("wind", "w") + 10.0, n("wind", "y") + n("wind", "h") + 10.0);
+    xdotool(&display, &["mousemove", &(x0 as i64).to_string(), &(y0 as i64).to_string()]);
+    xdotool(&display, &["mousedown", "1"]);
+    for k in 1..=8 {
+        let t = k as f64 / 8.0;
+        let (x, y) = (x0 + (x1 - x0) * t, y0 + (y1 - y0) * t);
+        xdotool(&display, &["mousemove", &(x as i64).to_string(), &(y as i64).to_string()]);
+        std::thread::sleep(Duration::from_millis(30));
+    }
+    xdotool(&display, &["mouseup", "1"]);
+    let v = wait_for(&dump, "the rectangle's nodes selected", |v| {
+        let mut s = selection(v);
+        s.sort();
+        s == ["cube", "wind"]
+    });
+    // The nodes did not move: it was a rectangle, not a drag of the view or of a node.
+    assert_eq!(
+        (&v["nodes"]["cube"]["x"], &v["nodes"]["cube"]["y"]),
+        (&first["nodes"]["cube"]["x"], &first["nodes"]["cube"]["y"])
+    );
+}

@@ -82,3 +82,29 @@ fn a_rejected_parameter_is_reported_once_not_also_as_missing() {
     let found = problems(r#"(version: 1, nodes: {"v": (type: "value.int", params: {"value": "x"})})"#);
     assert_eq!(found.len(), 1, "{found:?}");
 }
+
+#[test]
+fn groups_name_existing_nodes_once_with_colours_that_parse() {
+    let found = problems(
+        r##"(version: 2,
+        nodes: {"a": (type: "value.float"), "b": (type: "value.float")},
+        groups: [
+            (title: "one", color: "#112233", nodes: ["a", "ghost"]),
+            (title: "two", color: "blue", nodes: ["a", "b"]),
+        ],
+        comments: [(text: "x", pos: (0, 0), color: "#12")],
+    )"##,
+    );
+    let at = |i: usize, t: &str| Location::Group { index: i, title: t.into() };
+    assert!(
+        found.iter().any(|f| f.0 == DiagnosticKind::MissingNode && f.1 == at(0, "one") && f.2.contains("ghost")),
+        "{found:#?}"
+    );
+    assert!(
+        found.iter().any(|f| f.0 == DiagnosticKind::DuplicateNode && f.1 == at(1, "two") && f.2.contains("'a'")),
+        "{found:#?}"
+    );
+    assert!(found.iter().any(|f| f.0 == DiagnosticKind::WrongKind && f.1 == at(1, "two")), "{found:#?}");
+    assert!(found.iter().any(|f| f.0 == DiagnosticKind::WrongKind && f.2.contains("comment #0")), "{found:#?}");
+    assert_eq!(found.len(), 4, "{found:#?}");
+}

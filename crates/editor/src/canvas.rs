@@ -11,11 +11,12 @@ use std::collections::{HashMap, HashSet};
 use eframe::egui::{self, Color32, Modifiers, Pos2, Rect, Ui, emath::TSTransform};
 use egui_snarl::ui::{SnarlStyle, SnarlWidget};
 use egui_snarl::{InPinId, NodeId, OutPinId, Snarl};
+use pyrograph::core::GraphDoc;
 use pyrograph::core::document::split_endpoint;
 
 use crate::annotate::Annotation;
 use crate::gesture::{Gesture, Target, after_click, after_rect, on_node_drag};
-use crate::overlay::{AnnotationRects, MINIMAP_SIZE, minimap};
+use crate::overlay::{AnnotationRects, MINIMAP_SIZE, annotation_colors, minimap};
 use crate::state::{Editor, PaletteItem, auto_layout};
 use crate::viewer::{SELECTED, Viewer};
 
@@ -357,7 +358,7 @@ impl Canvas {
         ctx.input_mut(|i| i.modifiers = mods);
         self.follow_node_drag(&before, editor, &mut actions);
         self.end_gesture(&ctx, editor, &mut actions);
-        self.show_minimap_ui(&ctx, &selected);
+        self.show_minimap_ui(&ctx, &selected, editor.doc());
         actions
     }
 
@@ -507,7 +508,7 @@ impl Canvas {
         }
     }
 
-    fn show_minimap_ui(&mut self, ctx: &egui::Context, selected: &HashSet<String>) {
+    fn show_minimap_ui(&mut self, ctx: &egui::Context, selected: &HashSet<String>, doc: &GraphDoc) {
         self.minimap_rect = None;
         if !self.show_minimap || !self.rect.is_finite() || self.rect.width() < 2.0 * MINIMAP_SIZE.x {
             return;
@@ -515,7 +516,13 @@ impl Canvas {
         let nodes: Vec<(Rect, bool)> = self.node_rects.iter().map(|(id, r)| (*r, selected.contains(id))).collect();
         let at = Rect::from_min_size(self.rect.max - MINIMAP_SIZE - egui::vec2(12.0, 12.0), MINIMAP_SIZE);
         self.minimap_rect = Some(at);
-        if let Some(p) = minimap(ctx, at, &nodes, self.annotation_rects.bounds(), self.visible()) {
+        let (group_colors, comment_colors) = annotation_colors(doc);
+        let rects = &self.annotation_rects;
+        let boxes: Vec<(Rect, Color32)> = (rects.groups.iter().zip(group_colors))
+            .filter_map(|(r, c)| r.map(|r| (r, c)))
+            .chain(rects.comments.iter().copied().zip(comment_colors))
+            .collect();
+        if let Some(p) = minimap(ctx, at, &nodes, &boxes, self.visible()) {
             self.pending_transform = Some(FrameTarget::Center(p));
             ctx.request_repaint();
         }

@@ -45,3 +45,21 @@ pub fn auto_layout(doc: &GraphDoc) -> HashMap<String, (f32, f32)> {
     }
     out
 }
+
+/// A generated graph of `n` nodes for stress tests and benchmarks of the canvas: chains of
+/// `value.float → math.add → math.multiply` laid out on a grid, every node positioned, every
+/// chain wired, so a large graph looks like a large hand-made one.
+pub fn generated_graph(n: usize) -> GraphDoc {
+    let mut doc = GraphDoc::new();
+    let kinds = ["value.float", "math.add", "math.multiply"];
+    let per_row = 12;
+    for i in 0..n {
+        let mut nd = pyrograph::core::NodeDoc::new(kinds[i % 3]);
+        nd.pos = Some(((i % per_row) as f32 * 260.0, (i / per_row) as f32 * 170.0));
+        doc.add_node(&format!("n{i}"), nd);
+        if i % 3 != 0 {
+            doc.connect(&format!("n{}.value", i - 1), &format!("n{i}.a"));
+        }
+    }
+    doc
+}

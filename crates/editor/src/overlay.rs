@@ -106,11 +106,27 @@ pub fn paint_annotations(
     out
 }
 
-/// The minimap: every node (selected ones highlighted) and the visible part of the canvas, in
-/// a box at `screen_rect`. Returns the canvas position to centre the view on while the user
-/// clicks or drags in it.
-pub fn minimap(ctx: &egui::Context, screen_rect: Rect, nodes: &[(Rect, bool)], extra: Rect, view: Rect) -> Option<Pos2> {
-    let content = nodes.iter().fold(extra, |a, (r, _)| a.union(*r));
+/// The colours groups and comments are drawn in, in document order.
+pub fn annotation_colors(doc: &GraphDoc) -> (Vec<Color32>, Vec<Color32>) {
+    (
+        doc.groups.iter().map(|g| color_of(g.color.as_deref(), GROUP_COLOR)).collect(),
+        doc.comments.iter().map(|c| color_of(c.color.as_deref(), COMMENT_COLOR)).collect(),
+    )
+}
+
+/// The minimap: groups and comments as boxes in their colours (`boxes`, canvas rects), every
+/// node (selected ones highlighted) and the visible part of the canvas, in a box at
+/// `screen_rect`. Returns the canvas position to centre the view on while the user clicks or
+/// drags in it.
+pub fn minimap(
+    ctx: &egui::Context,
+    screen_rect: Rect,
+    nodes: &[(Rect, bool)],
+    boxes: &[(Rect, Color32)],
+    view: Rect,
+) -> Option<Pos2> {
+    let content = nodes.iter().fold(Rect::NOTHING, |a, (r, _)| a.union(*r));
+    let content = boxes.iter().fold(content, |a, (r, _)| a.union(*r));
     if !content.is_finite() {
         return None;
     }
@@ -127,6 +143,10 @@ pub fn minimap(ctx: &egui::Context, screen_rect: Rect, nodes: &[(Rect, bool)], e
             let painter = ui.painter_at(rect);
             painter.rect_filled(rect, 6.0, Color32::from_black_alpha(190));
             painter.rect_stroke(rect, 6.0, Stroke::new(1.0, Color32::from_gray(90)), egui::StrokeKind::Inside);
+            for (r, c) in boxes {
+                let m = Rect::from_min_max(to_map(r.min), to_map(r.max));
+                painter.rect_filled(m, 2.0, c.gamma_multiply(0.45));
+            }
             for (r, sel) in nodes {
                 let m = Rect::from_min_max(to_map(r.min), to_map(r.max));
                 let c = if *sel { Color32::from_rgb(255, 200, 80) } else { Color32::from_gray(150) };

@@ -95,6 +95,11 @@ fn clicking_selects_plain_shift_and_rectangle() {
     // Shift-click again removes it.
     click(&mut h, b.center(), Modifiers::SHIFT, 0);
     assert_eq!(selection(&h), ["a"]);
+    // Ctrl-click toggles the same way.
+    click(&mut h, b.center(), Modifiers::COMMAND, 0);
+    assert_eq!(selection(&h), ["a", "b"]);
+    click(&mut h, b.center(), Modifiers::COMMAND, 0);
+    assert_eq!(selection(&h), ["a"]);
 
     // A slow press and release still selects.
     let c = rect(&h, "c");
@@ -131,6 +136,16 @@ fn clicking_selects_plain_shift_and_rectangle() {
     h.key_press_modifiers(Modifiers::COMMAND, egui::Key::A);
     h.run_steps(2);
     assert_eq!(selection(&h), ["a", "b", "add", "c"]);
+
+    // Ctrl+D duplicates the selection with its internal wire and selects the copies.
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::D);
+    h.run_steps(2);
+    let doc = h.state().editor.doc().clone();
+    assert_eq!(doc.nodes.0.len(), 8);
+    let copies = selection(&h);
+    assert_eq!(copies.len(), 4);
+    assert!(copies.iter().all(|id| !["a", "b", "add", "c"].contains(&id.as_str())), "{copies:?}");
+    assert_eq!(doc.edges.len(), 2, "the copy of a keeps its wire to the copy of add: {:?}", doc.edges);
 }
 
 #[test]

@@ -46,6 +46,10 @@ enum Command {
         /// Replace existing output files.
         #[arg(long)]
         overwrite: bool,
+        /// Memory for cached frames, in MiB, shared by every clip of the graph (least recently
+        /// used frames are dropped and recomputed when needed again).
+        #[arg(long, value_name = "MIB", default_value_t = pyrograph::core::frame_cache::DEFAULT_BUDGET >> 20)]
+        cache_mb: usize,
         /// Print a JSON report instead of text.
         #[arg(long)]
         json: bool,
@@ -128,7 +132,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
-        Some(Command::Render { graph, frames, out, set, nodes, overwrite, json }) => {
+        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, json }) => {
+            pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
             let opts = RenderOpts { frames, out, set, nodes, overwrite, json };
             render(&registry, &graph, &opts)
         }
@@ -190,7 +195,7 @@ fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
     }
     let multi = MultiProgress::new();
     let bars: Mutex<HashMap<Arc<str>, ProgressBar>> = Mutex::new(HashMap::new());
-    let style = ProgressStyle::with_template("{prefix:>16} [{bar:32}] {pos}/{len} frames {per_sec} eta {eta}")
+    let style = ProgressStyle::with_template("{prefix:>16} [{bar:32}] {pos}/{len} frames {per_sec} eta {eta} {msg}")
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .progress_chars("=> ");
     Some(Arc::new(move |p: &Progress| {
@@ -203,6 +208,9 @@ fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
             b
         });
         bar.set_position((*done as u64).max(bar.position()));
+        if let Some(rss) = memory_kib("VmRSS") {
+            bar.set_message(format!("{} MiB", rss >> 10));
+        }
         if done == total {
             bar.finish();
         }
@@ -249,7 +257,18 @@ fn report(
             })
             .collect();
         let errs: Vec<_> = errors.iter().map(|(n, e)| json!({"node": n, "error": e.to_string()})).collect();
-        println!("{}", json!({"ok": errors.is_empty(), "seconds": elapsed.as_secs_f64(), "targets": nodes, "errors": errs}));
+        let cache = pyrograph::core::FrameCache::global().stats();
+        println!(
+            "{}",
+            json!({
+                "ok": errors.is_empty(),
+                "seconds": elapsed.as_secs_f64(),
+                "peak_rss_mib": memory_kib("VmHWM").map(|k| k >> 10),
+                "frame_cache": cache,
+                "targets": nodes,
+                "errors": errs,
+            })
+        );
     } else {
         for t in targets {
             if let Some(Ok(values)) = result.node(t) {
@@ -260,10 +279,18 @@ fn report(
             eprintln!("error: {}", explain(node, e));
         }
         if errors.is_empty() {
-            println!("cooked in {:.2} s", elapsed.as_secs_f64());
+            let peak = memory_kib("VmHWM").map(|k| format!(", peak memory {} MiB", k >> 10)).unwrap_or_default();
+            println!("cooked in {:.2} s{peak}", elapsed.as_secs_f64());
         }
     }
     if errors.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
+}
+
+/// A memory figure of this process from /proc/self/status (`VmRSS` now, `VmHWM` its peak), in
+/// KiB; `None` where there is no procfs.
+fn memory_kib(field: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    status.lines().find_map(|l| l.strip_prefix(field)?.strip_prefix(':')?.trim().strip_suffix("kB")?.trim().parse().ok())
 }
 
 fn explain(node: &str, e: &NodeError) -> String {

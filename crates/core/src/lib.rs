@@ -4,10 +4,12 @@
 #![deny(missing_docs)]
 
 pub mod builtin;
+pub mod clip;
 pub mod document;
 pub mod error;
 pub mod eval;
 pub mod fingerprint;
+pub mod frame_cache;
 pub mod graph;
 pub mod include;
 pub mod learned;
@@ -19,6 +21,7 @@ pub mod value;
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
 pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progress, ProgressFn};
+pub use frame_cache::{CacheStats, FrameCache};
 pub use graph::{BuildOptions, Graph};
 pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
 pub use registry::Registry;

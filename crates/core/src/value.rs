@@ -1,15 +1,11 @@
 //! Port types and the values that flow along edges: scalars, images, masks and lazy clips.
 
-use std::collections::{HashMap, VecDeque};
 use std::fmt;
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
-use rayon::prelude::*;
-
-use crate::error::NodeError;
-use crate::eval::CookCtx;
+pub use crate::clip::{Clip, FrameSource};
 use crate::fingerprint::{Fingerprinter, hash_f32s};
 pub use crate::learned::{ArModel, FlameModel, ParamSeries};
 pub use crate::mesh::{CharMark, FlameRoot, Mesh, NO_NEIGHBOR, SpreadState};
@@ -507,171 +503,6 @@ pub struct FrameList {
     pub items: Vec<FrameItem>,
 }
 
-/// Produces the frames of a [`Clip`] on demand.
-pub trait FrameSource: Send + Sync {
-    /// Number of frames.
-    fn len(&self) -> usize;
-    /// Whether the clip has no frames.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    /// Computes frame `index` (`index < len()`); results are cached by the clip.
-    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError>;
-}
-
-/// Default cap on the bytes one clip keeps cached; older frames are recomputed when evicted.
-pub const FRAME_CACHE_BUDGET: usize = 512 << 20;
-
-/// A bounded first-in-first-out cache of computed frames.
-struct FrameCache {
-    inner: Mutex<CacheInner>,
-}
-
-#[derive(Default)]
-struct CacheInner {
-    frames: HashMap<usize, Value>,
-    order: VecDeque<usize>,
-    bytes: usize,
-}
-
-impl FrameCache {
-    fn new() -> Self {
-        FrameCache { inner: Mutex::new(CacheInner::default()) }
-    }
-
-    fn get(&self, index: usize) -> Option<Value> {
-        self.inner.lock().ok()?.frames.get(&index).cloned()
-    }
-
-    fn put(&self, index: usize, value: &Value) {
-        let Ok(mut inner) = self.inner.lock() else { return };
-        if inner.frames.contains_key(&index) {
-            return;
-        }
-        inner.bytes += value.byte_size();
-        inner.frames.insert(index, value.clone());
-        inner.order.push_back(index);
-        while inner.bytes > FRAME_CACHE_BUDGET && inner.order.len() > 1 {
-            let Some(old) = inner.order.pop_front() else { break };
-            if let Some(v) = inner.frames.remove(&old) {
-                inner.bytes -= v.byte_size();
-            }
-        }
-    }
-}
-
-/// A lazy, random-access sequence of per-frame values; each frame is computed on demand and cached.
-#[derive(Clone)]
-pub struct Clip {
-    element: PortType,
-    fps: f64,
-    fingerprint: u64,
-    source: Arc<dyn FrameSource>,
-    cache: Arc<FrameCache>,
-}
-
-impl fmt::Debug for Clip {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "Clip<{}>({} frames @ {} fps)", self.element, self.len(), self.fps)
-    }
-}
-
-/// A clip whose frames are already in memory.
-struct VecSource(Vec<Value>);
-
-impl FrameSource for VecSource {
-    fn len(&self) -> usize {
-        self.0.len()
-    }
-    fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(self.0[index].clone())
-    }
-}
-
-impl Clip {
-    /// A lazy clip. `fingerprint` must change whenever the frames could.
-    pub fn new(element: PortType, fps: f64, fingerprint: u64, source: Arc<dyn FrameSource>) -> Self {
-        Clip { element, fps, fingerprint, source, cache: Arc::new(FrameCache::new()) }
-    }
-
-    /// A clip of frames already computed; its fingerprint is the hash of their content.
-    pub fn from_frames(element: PortType, fps: f64, frames: Vec<Value>) -> Self {
-        let mut h = Fingerprinter::new();
-        frames.iter().for_each(|f| h.write_u64(f.fingerprint()));
-        Clip::new(element, fps, h.finish(), Arc::new(VecSource(frames)))
-    }
-
-    /// The per-frame type.
-    pub fn element(&self) -> &PortType {
-        &self.element
-    }
-
-    /// Frames per second (metadata for writers and players).
-    pub fn fps(&self) -> f64 {
-        self.fps
-    }
-
-    /// Number of frames.
-    pub fn len(&self) -> usize {
-        self.source.len()
-    }
-
-    /// Whether there are no frames.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Identity of the clip's content.
-    pub fn fingerprint(&self) -> u64 {
-        self.fingerprint
-    }
-
-    /// Frame `index`, computed on first use and cached.
-    pub fn get(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
-        if index >= self.len() {
-            return Err(NodeError::msg(format!("frame {index} is past the end of a {}-frame clip", self.len())));
-        }
-        if let Some(v) = self.cache.get(index) {
-            return Ok(v);
-        }
-        ctx.check_cancel()?;
-        let v = self.source.frame(index, ctx).map_err(|e| match e {
-            NodeError::Message(_) | NodeError::Port { .. } => NodeError::Frame { frame: index, source: Box::new(e) },
-            other => other,
-        })?;
-        self.cache.put(index, &v);
-        Ok(v)
-    }
-
-    /// Frame `index` as an image (the clip must be a `Clip<Image>`).
-    pub fn image(&self, index: usize, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
-        match self.get(index, ctx)? {
-            Value::Image(img) => Ok(img),
-            other => Err(NodeError::msg(format!("frame {index}: expected an Image, got {}", other.type_name()))),
-        }
-    }
-
-    /// All frames in `range`, computed in parallel; reports per-frame progress through `ctx`.
-    pub fn materialize_range(&self, range: std::ops::Range<usize>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-        let total = range.len();
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        range
-            .into_par_iter()
-            .map(|i| {
-                let v = self.get(i, ctx)?;
-                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                ctx.frame_progress(n, total);
-                Ok(v)
-            })
-            .collect()
-    }
-
-    /// Every frame, in parallel.
-    pub fn materialize(&self, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-        self.materialize_range(0..self.len(), ctx)
-    }
-}
-
 /// A value on a port.
 #[derive(Clone, Debug)]
 pub enum Value {
@@ -835,7 +666,7 @@ impl Value {
             Value::FlameModel(v) => v.hash_into(h),
             Value::Mesh(v) => v.hash_into(h),
             Value::SpreadState(v) => v.hash_into(h),
-            Value::Clip(c) => c.fingerprint.hash(h),
+            Value::Clip(c) => c.fingerprint().hash(h),
         }
     }
 
@@ -933,7 +764,7 @@ mod tests {
     fn clip_rejects_out_of_range_frames_and_materializes_in_order() {
         let frames = (0..5).map(Value::Int).collect();
         let clip = Clip::from_frames(PortType::Int, 24.0, frames);
-        let ctx = CookCtx::default();
+        let ctx = crate::eval::CookCtx::default();
         assert!(clip.get(5, &ctx).is_err());
         let all = clip.materialize(&ctx).unwrap();
         let ints: Vec<i64> = all.iter().map(|v| if let Value::Int(i) = v { *i } else { -1 }).collect();

@@ -501,6 +501,8 @@ impl EditorApp {
                     ui.close();
                 }
                 ui.checkbox(&mut self.canvas.show_minimap, "Minimap  (M)");
+                ui.separator();
+                frame_cache_ui(ui);
             });
             ui.menu_button("Add", |ui| {
                 ui.set_min_width(320.0);
@@ -651,4 +653,19 @@ impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         EditorApp::ui(self, ui);
     }
+}
+
+/// The frame-cache preference: the budget every clip's cached frames share, and what it holds.
+fn frame_cache_ui(ui: &mut egui::Ui) {
+    let cache = pyrograph::core::FrameCache::global();
+    let stats = cache.stats();
+    let mut mib = stats.budget >> 20;
+    ui.horizontal(|ui| {
+        ui.label("Frame cache");
+        let drag = egui::DragValue::new(&mut mib).range(16..=1 << 20).suffix(" MiB").speed(16.0);
+        if ui.add(drag).on_hover_text("Memory for cooked frames of every clip; older frames are recomputed").changed() {
+            cache.set_budget(mib << 20);
+        }
+    });
+    ui.weak(format!("holds {} frames, {} MiB; {} hits, {} misses", stats.frames, stats.bytes >> 20, stats.hits, stats.misses));
 }

@@ -15,20 +15,33 @@ fn main() {
     let mut graph = None;
     let mut select = None;
     let mut dump = None;
+    // Scrubbing back and forth re-uses cooked frames: interactive work gets a larger frame cache
+    // than a batch render (which streams), unless --cache-mb says otherwise.
+    let mut cache_mb: usize = 1024;
     let mut args = std::env::args_os().skip(1);
     while let Some(a) = args.next() {
         if a == "--help" || a == "-h" {
-            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE] [--state-dump FILE.json]");
+            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE] [--state-dump FILE.json] [--cache-mb MIB]");
+            println!("  --cache-mb    memory for cooked frames shared by every clip (default 1024; View menu)");
             println!("  --state-dump  keep FILE.json current with the selection and node positions (for tests)");
             return;
         } else if a == "--select" {
             select = args.next().map(|s| s.to_string_lossy().into_owned());
+        } else if a == "--cache-mb" {
+            match args.next().and_then(|v| v.to_str().and_then(|v| v.parse().ok())) {
+                Some(mb) => cache_mb = mb,
+                None => {
+                    eprintln!("pyrograph-editor: --cache-mb needs a whole number of MiB");
+                    std::process::exit(2);
+                }
+            }
         } else if a == "--state-dump" {
             dump = args.next().map(PathBuf::from);
         } else {
             graph = Some(PathBuf::from(a));
         }
     }
+    pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
     let mut editor = Editor::with_default_registry();
     if let Some(f) = recent_file() {
         editor.use_recent_file(f);

@@ -40,9 +40,13 @@ pub fn from_gray32f(buf: Gray32FImage) -> Image {
 
 /// 8-bit gray (0..1 → 0..255, clamped and rounded).
 pub fn to_gray8(img: &Image) -> GrayImage {
-    let g = to_gray32f(img);
-    let (w, h) = g.dimensions();
-    GrayImage::from_fn(w, h, |x, y| Luma([unit_to_u8(g.get_pixel(x, y)[0])]))
+    let (w, h) = img.size();
+    // The same luma as `to_gray32f`, without the intermediate f32 buffer.
+    let data = match img.channels() {
+        Channels::Gray => img.data().iter().map(|&v| unit_to_u8(v)).collect(),
+        Channels::Rgba => img.data().chunks_exact(4).map(|p| unit_to_u8(0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2])).collect(),
+    };
+    GrayImage::from_raw(w, h, data).unwrap_or_else(|| GrayImage::new(w, h))
 }
 
 /// A mask as an imageproc-style gray image (0 / 255).

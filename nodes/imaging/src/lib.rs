@@ -13,6 +13,7 @@ pub mod preprocess;
 pub mod procedural;
 pub mod sheet;
 pub mod smoke;
+pub mod video;
 
 use pyrograph_core::Registry;
 

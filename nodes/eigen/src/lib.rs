@@ -9,6 +9,7 @@
 pub mod database;
 pub mod motion;
 pub mod pca;
+pub mod pca_blocks;
 pub mod transition;
 pub mod view;
 

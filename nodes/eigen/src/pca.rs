@@ -39,7 +39,7 @@ pub struct Database {
 /// largest is rounding noise, i.e. singular values under 1e-3 of the largest.
 pub const RELATIVE_EIGENVALUE_FLOOR: f64 = 1e-6;
 
-fn par() -> Par {
+pub(crate) fn par() -> Par {
     Par::rayon(0)
 }
 
@@ -147,6 +147,34 @@ pub fn train(
     let gram = Mat::<f64>::from_fn(m, m, |i, j| f64::from(gram32[(i.max(j), i.min(j))]));
     drop(gram32);
 
+    let dec = decompose(&gram, max_components)?;
+    drop(gram);
+
+    // Eq. 17: eigenfire_l = Σ_n V_ln Φ_n, normalised (eq. 14).
+    let mut eigenvectors = vec![0.0_f32; n * dec.e];
+    if dec.e > 0 {
+        lift(MatMut::from_column_major_slice_mut(&mut eigenvectors, n, dec.e), a, dec.v_scaled.as_ref());
+    }
+    release_in_background(frames);
+    finish(width, height, mean, eigenvectors, &dec, sources)
+}
+
+/// The kept eigenpairs of the Gram matrix `L` (eq. 16).
+pub(crate) struct Decomposition {
+    /// Eigenfires kept, `E`.
+    pub e: usize,
+    /// Eigenvalues μ_l of `L`, descending.
+    pub mus: Vec<f64>,
+    /// `V_E Λ^{-1/2}` (`M × E`), the lift's right factor (eq. 17).
+    pub v_scaled: Mat<f32>,
+    /// `V_E`, eigenvector `l` at `[l·M..(l+1)·M]`.
+    pub v_kept: Vec<f64>,
+}
+
+/// Eigen-decomposes the Gram matrix (its lower triangle is read), keeps every meaningful
+/// eigenpair (or the first `max_components`), in descending order with a deterministic sign.
+pub(crate) fn decompose(gram: &Mat<f64>, max_components: usize) -> Result<Decomposition, String> {
+    let m = gram.nrows();
     let eig = gram.self_adjoint_eigen(Side::Lower).map_err(|e| format!("eigen decomposition failed: {e:?}"))?;
     let s = eig.S().column_vector();
     let v = eig.U();
@@ -182,12 +210,21 @@ pub fn train(
         mus.push(mu);
     }
 
-    // Eq. 17: eigenfire_l = Σ_n V_ln Φ_n, normalised (eq. 14).
-    let mut eigenvectors = vec![0.0_f32; n * e];
-    if e > 0 {
-        lift(MatMut::from_column_major_slice_mut(&mut eigenvectors, n, e), a, v_scaled.as_ref());
-    }
-    release_in_background(frames);
+    Ok(Decomposition { e, mus, v_scaled, v_kept })
+}
+
+/// Normalises the lifted eigenfires (eq. 14) and forms the training weights
+/// `ω_l(n) = u_lᵀ Φ_n = √μ_l v_l(n)` (eq. 18).
+pub(crate) fn finish(
+    width: u32,
+    height: u32,
+    mean: Vec<f32>,
+    mut eigenvectors: Vec<f32>,
+    dec: &Decomposition,
+    sources: Vec<FrameRef>,
+) -> Result<Database, String> {
+    let n = width as usize * height as usize;
+    let (m, e, mus, v_kept) = (sources.len(), dec.e, &dec.mus, &dec.v_kept);
     eigenvectors.par_chunks_mut(n).for_each(|u| {
         let norm = sum_of_squares(u).sqrt();
         if norm > 0.0 {
@@ -340,7 +377,9 @@ fn eigenfires_desc() -> NodeDesc {
          The mean image Ψ (eq. 12) and the eigenfires come from the M×M Gram matrix (eq. 16–17), never the \
          N×N covariance; they are sorted by eigenvalue, at most M − 1 are meaningful (fewer if frames repeat), \
          and max_components caps how many are kept. The weights output is every training frame projected \
-         (eq. 18). Pixel values are 0..1, so weights and distances are 1/255 of the thesis' numbers.",
+         (eq. 18). Pixel values are 0..1, so weights and distances are 1/255 of the thesis' numbers. A \
+         database over 4 GiB of frames trains out of core: the frames are read from the clips in blocks of \
+         512 MiB, two blocks in memory at a time (set max_components: the eigenfires themselves stay in memory).",
     )
     .input(PortDesc::new("clip1", PortType::clip_of(PortType::Image), "First training clip (gray frames)."))
     .input(optional_clip_port("clip2", "Optional second training clip, same frame size."))
@@ -361,6 +400,11 @@ fn cook_eigenfires(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeErro
     let n = size.0 as usize * size.1 as usize;
     let m: usize = clips.iter().map(|(_, c)| c.len()).sum();
     let total = n.checked_mul(m).ok_or_else(|| NodeError::msg("database too large"))?;
+    let max_components = i.usize("max_components")?;
+    if total.saturating_mul(4) > OUT_OF_CORE_BYTES {
+        let block = (BLOCK_BYTES / (n * 4)).max(1);
+        return train_from_clips(&clips, size, max_components, block, ctx);
+    }
     let mut data = vec![0.0_f32; total];
     let mut sources = Vec::with_capacity(m);
     let mut offset = 0;
@@ -371,7 +415,45 @@ fn cook_eigenfires(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeErro
         offset += len;
     }
     ctx.check_cancel()?;
-    let db = train(size.0, size.1, data, sources, i.usize("max_components")?).map_err(|m| NodeError::port("clip1", m))?;
+    let db = train(size.0, size.1, data, sources, max_components).map_err(|m| NodeError::port("clip1", m))?;
+    Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
+}
+
+/// Databases larger than this many bytes of f32 frames train out of core (two blocks in memory).
+const OUT_OF_CORE_BYTES: usize = 4 << 30;
+
+/// Bytes of frames per block of the out-of-core training.
+const BLOCK_BYTES: usize = 512 << 20;
+
+/// [`crate::pca_blocks::train_blocks`] over the frames of the training clips, read block by block.
+fn train_from_clips(
+    clips: &[(&str, &Clip)],
+    size: (u32, u32),
+    max_components: usize,
+    block: usize,
+    ctx: &CookCtx,
+) -> Result<Vec<Value>, NodeError> {
+    let n = size.0 as usize * size.1 as usize;
+    let mut starts = Vec::with_capacity(clips.len());
+    let mut sources = Vec::new();
+    for (k, (_, clip)) in clips.iter().enumerate() {
+        starts.push(sources.len());
+        sources.extend((0..clip.len()).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
+    }
+    let read = |r: std::ops::Range<usize>, out: &mut [f32]| -> Result<(), String> {
+        ctx.check_cancel().map_err(|e| e.to_string())?;
+        out.par_chunks_mut(n).enumerate().try_for_each(|(j, dst)| {
+            let g = r.start + j;
+            let k = starts.partition_point(|&s| s <= g) - 1;
+            let (port, clip) = clips[k];
+            let img = clip.image(g - starts[k], ctx).map_err(|e| format!("{port}: {e}"))?;
+            check_frame(&img, size, g - starts[k], port).map_err(|e| e.to_string())?;
+            dst.copy_from_slice(img.data());
+            Ok(())
+        })
+    };
+    let db = crate::pca_blocks::train_blocks(size.0, size.1, sources, max_components, block, &read)
+        .map_err(|m| NodeError::port("clip1", m))?;
     Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
 }
 
@@ -476,6 +558,41 @@ pub(crate) mod tests {
 
     pub fn sources(m: usize) -> Vec<FrameRef> {
         (0..m).map(|i| FrameRef { clip: 0, index: i as u32 }).collect()
+    }
+
+    #[test]
+    fn out_of_core_training_from_clips_matches_the_in_memory_cook() {
+        let (w, h) = (6u32, 5u32);
+        let n = (w * h) as usize;
+        let frames = random_frames(w, h, 23, 4);
+        let img = |f: usize| {
+            Value::Image(Arc::new(Image::from_vec(w, h, Channels::Gray, frames[f * n..(f + 1) * n].to_vec()).unwrap()))
+        };
+        let clip1 = Clip::from_frames(PortType::Image, 24.0, (0..15).map(img).collect());
+        let empty = Clip::from_frames(PortType::Image, 24.0, Vec::new());
+        let clip3 = Clip::from_frames(PortType::Image, 24.0, (15..23).map(img).collect());
+        let clips = [("clip1", &clip1), ("clip2", &empty), ("clip3", &clip3)];
+        let ctx = CookCtx::new();
+        let out = train_from_clips(&clips, (w, h), 0, 4, &ctx).unwrap();
+        let Value::Basis(b) = &out[0] else { panic!("a basis") };
+        let whole = train(w, h, frames.clone(), sources(23), 0).unwrap();
+        assert_eq!(b.components(), whole.basis.components());
+        assert_eq!(b.sources[15], FrameRef { clip: 2, index: 0 }, "frames keep their clip and index");
+        for k in 0..b.components() {
+            let cos: f64 = b
+                .eigenvector(k)
+                .unwrap()
+                .iter()
+                .zip(whole.basis.eigenvector(k).unwrap())
+                .map(|(x, y)| f64::from(*x) * f64::from(*y))
+                .sum();
+            assert!(cos > 1.0 - 5e-7, "eigenfire {k}: cos {cos}");
+        }
+        // A frame of the wrong size is reported with its clip and index.
+        let odd =
+            Clip::from_frames(PortType::Image, 24.0, vec![img(0), Value::Image(Arc::new(Image::new(2, 2, Channels::Gray)))]);
+        let err = train_from_clips(&[("clip1", &odd)], (w, h), 0, 1, &ctx).unwrap_err().to_string();
+        assert!(err.contains("frame 1 is 2x2"), "{err}");
     }
 
     #[test]

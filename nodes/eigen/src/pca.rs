@@ -101,14 +101,7 @@ pub fn train(
     sources: Vec<FrameRef>,
     max_components: usize,
 ) -> Result<Database, String> {
-    let n = width as usize * height as usize;
-    let m = sources.len();
-    if n == 0 {
-        return Err("the frames are empty (0 pixels)".into());
-    }
-    if m < 2 {
-        return Err(format!("PCA needs at least 2 frames, got {m}"));
-    }
+    let (n, m) = database_shape(width, height, &sources)?;
     if frames.len() != n * m {
         return Err(format!("frame data holds {} samples, expected {m} frames of {n}", frames.len()));
     }
@@ -157,6 +150,19 @@ pub fn train(
     }
     release_in_background(frames);
     finish(width, height, mean, eigenvectors, &dec, sources)
+}
+
+/// Pixels per frame `N` and frames `M` of a database, checked: frames not empty, `M ≥ 2`.
+pub(crate) fn database_shape(width: u32, height: u32, sources: &[FrameRef]) -> Result<(usize, usize), String> {
+    let n = width as usize * height as usize;
+    let m = sources.len();
+    if n == 0 {
+        return Err("the frames are empty (0 pixels)".into());
+    }
+    if m < 2 {
+        return Err(format!("PCA needs at least 2 frames, got {m}"));
+    }
+    Ok((n, m))
 }
 
 /// The kept eigenpairs of the Gram matrix `L` (eq. 16).

@@ -16,7 +16,7 @@ use faer::{Accum, Mat, MatMut, MatRef};
 use pyrograph_core::FrameRef;
 use rayon::prelude::*;
 
-use crate::pca::{Database, decompose, finish, par};
+use crate::pca::{Database, database_shape, decompose, finish, par};
 
 /// Fills the buffer with frames `range` of the database, one `N`-sample gray frame after another.
 pub type ReadFrames<'a> = dyn Fn(Range<usize>, &mut [f32]) -> Result<(), String> + Sync + 'a;
@@ -32,14 +32,7 @@ pub fn train_blocks(
     block: usize,
     read: &ReadFrames<'_>,
 ) -> Result<Database, String> {
-    let n = width as usize * height as usize;
-    let m = sources.len();
-    if n == 0 {
-        return Err("the frames are empty (0 pixels)".into());
-    }
-    if m < 2 {
-        return Err(format!("PCA needs at least 2 frames, got {m}"));
-    }
+    let (n, m) = database_shape(width, height, &sources)?;
     let block = block.clamp(1, m);
     let blocks: Vec<Range<usize>> = (0..m).step_by(block).map(|s| s..(s + block).min(m)).collect();
     let mut here = vec![0.0_f32; block * n];

@@ -50,6 +50,10 @@ enum Command {
         /// used frames are dropped and recomputed when needed again).
         #[arg(long, value_name = "MIB", default_value_t = pyrograph::core::frame_cache::DEFAULT_BUDGET >> 20)]
         cache_mb: usize,
+        /// Folder for scratch files of out-of-core work (Eigenfires training on databases larger
+        /// than its memory_mb); the system's temp folder (TMPDIR) when not given.
+        #[arg(long, value_name = "DIR")]
+        cache_dir: Option<PathBuf>,
         /// Print a JSON report instead of text.
         #[arg(long)]
         json: bool,
@@ -132,9 +136,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
-        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, json }) => {
+        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, cache_dir, json }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
-            let opts = RenderOpts { frames, out, set, nodes, overwrite, json };
+            let opts = RenderOpts { frames, out, set, nodes, overwrite, cache_dir, json };
             render(&registry, &graph, &opts)
         }
         Some(Command::Check { graph, json }) => check(&registry, &graph, json),
@@ -166,6 +170,7 @@ struct RenderOpts {
     set: Vec<String>,
     nodes: Vec<String>,
     overwrite: bool,
+    cache_dir: Option<PathBuf>,
     json: bool,
 }
 
@@ -227,7 +232,13 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
         o.nodes.clone()
     };
     let target_refs: Vec<&str> = targets.iter().map(String::as_str).collect();
-    let mut ctx = CookCtx::new().with_settings(CookSettings { frames: o.frames, overwrite: o.overwrite });
+    if let Some(dir) = &o.cache_dir
+        && !dir.is_dir()
+    {
+        return Err(Failure(format!("error: --cache-dir {}: not a folder", dir.display())));
+    }
+    let settings = CookSettings { frames: o.frames, overwrite: o.overwrite, cache_dir: o.cache_dir.clone() };
+    let mut ctx = CookCtx::new().with_settings(settings);
     if let Some(p) = progress_bars(!o.json) {
         ctx = ctx.with_progress(p);
     }

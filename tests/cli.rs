@@ -128,6 +128,27 @@ fn render_writes_with_set_and_frames_and_refuses_to_overwrite() {
 }
 
 #[test]
+fn a_cache_dir_that_is_not_a_folder_is_an_error_before_anything_cooks() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = root().join("graphs/flame-cards.ron");
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    for cache in [dir.path().join("missing"), file] {
+        let o = run(&[
+            "render",
+            graph.to_str().unwrap(),
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--cache-dir",
+            cache.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(text(&o).contains("--cache-dir") && text(&o).contains("not a folder"), "{}", text(&o));
+    }
+    assert!(!dir.path().join("flame-cards").exists(), "nothing was written");
+}
+
+#[test]
 fn bad_set_arguments_are_errors_not_panics() {
     let graph = root().join("graphs/demo.ron");
     let graph = graph.to_str().unwrap();

@@ -82,7 +82,7 @@ fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
     let (_, g) = Graph::load(&path, &pyrograph::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
     let sinks: Vec<String> = g.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
-    let ctx = CookCtx::new().with_settings(CookSettings { frames: Some(frames), overwrite: false });
+    let ctx = CookCtx::new().with_settings(CookSettings { frames: Some(frames), overwrite: false, cache_dir: None });
     let res = Evaluator::new().cook(&g, &targets, &ctx).unwrap();
     assert!(res.is_ok(), "{:?}", res.root_errors());
     let golden_dir = root().join("tests/golden");

@@ -18,6 +18,7 @@ use rayon::prelude::*;
 
 use crate::error::NodeError;
 use crate::fingerprint::{Fingerprinter, hash_path_on_disk};
+use crate::frame_cache::FrameCache;
 use crate::graph::{Graph, GraphNode, InputSource};
 use crate::node::{Inputs, Node, PathRole, TimeDep};
 use crate::value::{Clip, FrameSource, PortType, Value};
@@ -81,6 +82,9 @@ pub struct CookSettings {
     pub frames: Option<(usize, usize)>,
     /// Replace existing files even where a writer's `overwrite` parameter is off.
     pub overwrite: bool,
+    /// Folder for scratch files of out-of-core work (`--cache-dir`); the system's temp folder
+    /// when `None`.
+    pub cache_dir: Option<std::path::PathBuf>,
 }
 
 /// Context of a cook: cancellation, progress, render settings and the node being cooked.
@@ -277,6 +281,8 @@ impl Evaluator {
         }
         let live: HashSet<&str> = graph.topo_order().iter().map(|i| &*graph.node(*i).id).collect();
         self.cache.retain(|k, _| live.contains(&**k));
+        // The cook has let go of the frames it was using: bring the shared cache back to budget.
+        FrameCache::global().trim();
         let results = results.into_iter().map(|(idx, (r, _))| (graph.node(idx).id.clone(), r)).collect();
         Ok(CookResult { results })
     }

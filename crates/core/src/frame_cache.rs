@@ -5,13 +5,16 @@
 //! budget of frames, not ten. Eviction is least-recently-used and skips frames a cook still holds
 //! (their `Arc` is shared outside the cache): evicting those would free nothing and make the next
 //! reader recompute a frame that is in memory anyway. An evicted frame is recomputed by its clip's
-//! source on the next request, bit-identically (sources are deterministic).
+//! source on the next request, bit-identically (sources are deterministic). Frames of 8-bit content
+//! (decoded files and videos) are held at one byte a sample and widened on the way out
+//! ([`crate::compact`]), so a budget holds four times as many of them.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard};
 
 use lru::LruCache;
 
+use crate::compact::Bytes8;
 use crate::value::Value;
 
 /// Default budget: enough for eight 1080p RGBA float frames (or 64 gray 8-bit-sized ones), small
@@ -40,8 +43,46 @@ pub struct CacheStats {
 
 type Key = (u64, usize);
 
+/// A cached frame: as computed, or an 8-bit image in bytes.
+enum Entry {
+    Value(Value),
+    Bytes(Arc<Bytes8>),
+}
+
+impl Entry {
+    fn new(value: &Value) -> Entry {
+        match value {
+            Value::Image(img) => Bytes8::pack(img).map_or_else(|| Entry::Value(value.clone()), |b| Entry::Bytes(Arc::new(b))),
+            other => Entry::Value(other.clone()),
+        }
+    }
+
+    fn value(&self) -> Value {
+        match self {
+            Entry::Value(v) => v.clone(),
+            Entry::Bytes(b) => Value::Image(Arc::new(b.unpack())),
+        }
+    }
+
+    fn byte_size(&self) -> usize {
+        match self {
+            Entry::Value(v) => v.byte_size(),
+            Entry::Bytes(b) => b.byte_size(),
+        }
+    }
+
+    /// Whether a cook holds this very frame. A packed frame is never shared: each reader gets
+    /// its own widened copy, and evicting the bytes frees them.
+    fn in_use(&self) -> bool {
+        match self {
+            Entry::Value(v) => in_use(v),
+            Entry::Bytes(_) => false,
+        }
+    }
+}
+
 struct Inner {
-    frames: LruCache<Key, Value>,
+    frames: LruCache<Key, Entry>,
     stats: CacheStats,
 }
 
@@ -83,6 +124,13 @@ impl FrameCache {
         evict(&mut inner);
     }
 
+    /// Evicts down to the budget now. Frames that cooks held when they were cached may keep the
+    /// cache over its budget until the next frame is cached; the evaluator trims once a cook is
+    /// over and has let go of them.
+    pub fn trim(&self) {
+        evict(&mut self.lock());
+    }
+
     /// Counters and sizes.
     pub fn stats(&self) -> CacheStats {
         let inner = self.lock();
@@ -103,10 +151,21 @@ impl FrameCache {
     /// Frame `index` of clip `clip`, counting a hit or a miss.
     pub(crate) fn get(&self, clip: u64, index: usize) -> Option<Value> {
         let mut inner = self.lock();
-        match inner.frames.get(&(clip, index)).cloned() {
-            Some(v) => {
+        let entry = match inner.frames.get(&(clip, index)) {
+            Some(Entry::Value(v)) => Some(Entry::Value(v.clone())),
+            Some(Entry::Bytes(b)) => Some(Entry::Bytes(Arc::clone(b))),
+            None => None,
+        };
+        match entry {
+            Some(Entry::Value(v)) => {
                 inner.stats.hits += 1;
                 Some(v)
+            }
+            Some(bytes) => {
+                inner.stats.hits += 1;
+                // Widen outside the lock: other threads need not wait for it.
+                drop(inner);
+                Some(bytes.value())
             }
             None => {
                 inner.stats.misses += 1;
@@ -118,12 +177,14 @@ impl FrameCache {
     /// Keeps a computed frame, then evicts the least recently used frames not in use until the
     /// budget holds. A frame larger than the whole budget is not kept.
     pub(crate) fn put(&self, clip: u64, index: usize, value: &Value) {
-        let size = value.byte_size();
+        // Packed before the lock is taken: it reads the whole frame.
+        let entry = Entry::new(value);
+        let size = entry.byte_size();
         let mut inner = self.lock();
         if size > inner.stats.budget || inner.frames.contains(&(clip, index)) {
             return;
         }
-        inner.frames.put((clip, index), value.clone());
+        inner.frames.put((clip, index), entry);
         inner.stats.bytes += size;
         inner.stats.peak_bytes = inner.stats.peak_bytes.max(inner.stats.bytes);
         evict(&mut inner);
@@ -154,7 +215,7 @@ fn evict(inner: &mut Inner) {
             if over == 0 {
                 break;
             }
-            if !in_use(v) {
+            if !v.in_use() {
                 over = over.saturating_sub(v.byte_size());
                 out.push(*k);
             }
@@ -299,6 +360,90 @@ mod tests {
         assert_eq!(cache.stats().frames, 4, "the clip still has a handle");
         drop(clip);
         assert_eq!((cache.stats().frames, cache.stats().bytes), (0, 0));
+    }
+
+    /// 8×8 RGBA frames of 8-bit levels, as a decoder makes them (1 KiB as f32, 256 bytes packed).
+    struct Decoded(Mutex<Vec<usize>>);
+
+    impl FrameSource for Decoded {
+        fn len(&self) -> usize {
+            8
+        }
+        fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
+            self.0.lock().unwrap().push(index);
+            let data = (0..256).map(|p| ((p * 31 + index * 17) % 256) as f32 / 255.0).collect();
+            Ok(Value::Image(Arc::new(Image::from_vec(8, 8, Channels::Rgba, data).unwrap())))
+        }
+    }
+
+    #[test]
+    fn eight_bit_frames_are_held_in_bytes_and_come_back_bit_identical() {
+        let source = Arc::new(Decoded(Mutex::new(Vec::new())));
+        // Four frames fit at a byte a sample; at four bytes a sample only one would.
+        let cache = Arc::new(FrameCache::new(4 * 256));
+        let decoded = Clip::with_cache(PortType::Image, 24.0, 3, source.clone(), cache.clone());
+        let ctx = CookCtx::new();
+        let first: Vec<Vec<u32>> =
+            (0..4).map(|i| decoded.image(i, &ctx).unwrap().data().iter().map(|v| v.to_bits()).collect()).collect();
+        assert_eq!((cache.stats().frames, cache.stats().bytes), (4, 4 * 256));
+        source.0.lock().unwrap().clear();
+        for (i, bits) in first.iter().enumerate() {
+            let again = decoded.image(i, &ctx).unwrap();
+            assert_eq!(again.channels(), Channels::Rgba);
+            assert!(again.data().iter().map(|v| v.to_bits()).eq(bits.iter().copied()), "frame {i} bit-identical");
+        }
+        assert!(source.0.lock().unwrap().is_empty(), "all four answered from the cache");
+        // A frame that is not 8-bit content keeps its f32 size.
+        let (logged, _, small) = clip(8);
+        logged.image(0, &ctx).unwrap();
+        assert_eq!(small.stats().bytes, 256);
+    }
+
+    /// The frames of `Logged`; cancels `token` the first time frame `at` is computed (a user
+    /// pressing Cancel while a writer streams the clip).
+    struct CancelAt {
+        at: usize,
+        token: crate::eval::CancelToken,
+        fired: std::sync::atomic::AtomicBool,
+    }
+
+    impl FrameSource for CancelAt {
+        fn len(&self) -> usize {
+            16
+        }
+        fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+            if index == self.at && !self.fired.swap(true, Ordering::Relaxed) {
+                self.token.cancel();
+            }
+            Logged(Mutex::new(Vec::new())).frame(index, ctx)
+        }
+    }
+
+    #[test]
+    fn a_cancelled_streaming_cook_leaves_the_cache_consistent() {
+        let token = crate::eval::CancelToken::new();
+        let cache = Arc::new(FrameCache::new(4 * 256));
+        let source = Arc::new(CancelAt { at: 5, token: token.clone(), fired: Default::default() });
+        let streamed = Clip::with_cache(PortType::Image, 24.0, 11, source, cache.clone());
+        let ctx = CookCtx::new().with_cancel(token.clone());
+        // Pulled in parallel, as a writer does; the cook stops part-way.
+        let err = streamed.materialize(&ctx).unwrap_err();
+        assert!(err.is_cancelled(), "{err}");
+        // The frames in flight were kept though the budget was reached (they were in use); the
+        // accounting holds, and once the cook has let go of them, a trim brings it under budget.
+        let stats = cache.stats();
+        assert!(stats.frames >= 1 && stats.bytes == stats.frames * 256, "{stats:?}");
+        cache.trim();
+        let stats = cache.stats();
+        assert!(stats.bytes == stats.frames * 256 && stats.bytes <= stats.budget, "{stats:?}");
+        // The next cook finds what was kept and computes the rest: every frame as a fresh clip's.
+        token.reset();
+        let (fresh, _, _) = clip(16);
+        for i in 0..16 {
+            assert_eq!(streamed.image(i, &ctx).unwrap().data(), fresh.image(i, &ctx).unwrap().data(), "frame {i}");
+        }
+        let stats = cache.stats();
+        assert!(stats.bytes == stats.frames * 256 && stats.bytes <= stats.budget, "{stats:?}");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 pub mod builtin;
 pub mod clip;
+mod compact;
 pub mod document;
 pub mod error;
 pub mod eval;

@@ -2,7 +2,7 @@
 //! the editor's `--state-dump` to read what the clicks did. This is the path a user's hand
 //! takes (window system events through winit), which the headless tests cannot cover.
 //!
-//! Uses the binary in `PYROGRAPH_EDITOR_BIN` when set (CI points it at the release build), else
+//! Uses the binary in `PYROGRAPH_EDITOR_BIN` when set (a release build, say), else
 //! the one cargo built for this test.
 
 use std::path::{Path, PathBuf};

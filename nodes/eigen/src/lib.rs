@@ -7,6 +7,7 @@
 #![deny(missing_docs)]
 
 pub mod database;
+pub mod frame_store;
 pub mod motion;
 pub mod pca;
 pub mod pca_blocks;

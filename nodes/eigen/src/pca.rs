@@ -384,13 +384,22 @@ fn eigenfires_desc() -> NodeDesc {
          N×N covariance; they are sorted by eigenvalue, at most M − 1 are meaningful (fewer if frames repeat), \
          and max_components caps how many are kept. The weights output is every training frame projected \
          (eq. 18). Pixel values are 0..1, so weights and distances are 1/255 of the thesis' numbers. A \
-         database over 4 GiB of frames trains out of core: the frames are read from the clips in blocks of \
-         512 MiB, two blocks in memory at a time (set max_components: the eigenfires themselves stay in memory).",
+         database of more f32 frames than memory_mb trains out of core: the frames are read from the clips once, kept \
+         in a scratch file in the cache folder (`--cache-dir`, else the system's temp folder; read from the clips \
+         again when it has no room) and read back in blocks of at most 512 MiB and half of memory_mb, two blocks in \
+         memory at a time. The eigenfires equal the in-memory ones up to rounding (set max_components: the \
+         eigenfires themselves stay in memory).",
     )
     .input(PortDesc::new("clip1", PortType::clip_of(PortType::Image), "First training clip (gray frames)."))
     .input(optional_clip_port("clip2", "Optional second training clip, same frame size."))
     .input(optional_clip_port("clip3", "Optional third training clip, same frame size."))
     .input(PortDesc::int("max_components", 0, (0, 1_000_000), "Keep at most this many eigenfires; 0 = all meaningful (M − 1)."))
+    .input(PortDesc::int(
+        "memory_mb",
+        DEFAULT_MEMORY_MB,
+        (1, 1 << 30),
+        "MiB of f32 frames held for training: a larger database trains out of core, block by block.",
+    ))
     .output("basis", PortType::Basis, "Mean image, eigenfires and eigenvalues.")
     .output("weights", PortType::Weights, "Weights of every training frame (frames × components).")
 }
@@ -407,8 +416,10 @@ fn cook_eigenfires(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeErro
     let m: usize = clips.iter().map(|(_, c)| c.len()).sum();
     let total = n.checked_mul(m).ok_or_else(|| NodeError::msg("database too large"))?;
     let max_components = i.usize("max_components")?;
-    if total.saturating_mul(4) > OUT_OF_CORE_BYTES {
-        let block = (BLOCK_BYTES / (n * 4)).max(1);
+    let memory = i.usize("memory_mb")?.saturating_mul(1 << 20);
+    if total.saturating_mul(4) > memory {
+        // Two blocks in memory: at most half the budget each, and no more than BLOCK_BYTES.
+        let block = (BLOCK_BYTES.min(memory / 2) / (n * 4)).max(1);
         return train_from_clips(&clips, size, max_components, block, ctx);
     }
     let mut data = vec![0.0_f32; total];
@@ -425,8 +436,8 @@ fn cook_eigenfires(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeErro
     Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
 }
 
-/// Databases larger than this many bytes of f32 frames train out of core (two blocks in memory).
-const OUT_OF_CORE_BYTES: usize = 4 << 30;
+/// Default of `memory_mb`: databases of more f32 frames than this train out of core.
+const DEFAULT_MEMORY_MB: i64 = 4096;
 
 /// Bytes of frames per block of the out-of-core training.
 const BLOCK_BYTES: usize = 512 << 20;
@@ -458,7 +469,10 @@ fn train_from_clips(
             Ok(())
         })
     };
-    let db = crate::pca_blocks::train_blocks(size.0, size.1, sources, max_components, block, &read)
+    let scratch = ctx.settings().cache_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let progress = |done: usize, total: usize| ctx.frame_progress(done, total);
+    let source = crate::pca_blocks::BlockSource { read: &read, scratch: Some(&scratch), progress: &progress };
+    let db = crate::pca_blocks::train_blocks(size.0, size.1, sources, max_components, block, &source)
         .map_err(|m| NodeError::port("clip1", m))?;
     Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
 }

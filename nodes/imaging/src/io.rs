@@ -445,6 +445,8 @@ pub fn encode_image(img: &Image, format: OutputFormat) -> Result<Vec<u8>, NodeEr
     }
 }
 
+// `write_to` encodes with image's default PNG settings, the png crate's `Compression::Fast` with
+// adaptive filters: a writer's cost stays near the decoder's (benches/stream/run.sh, BENCHMARKS.md).
 fn encode_png(img: &Image, sixteen_bit: bool) -> Result<Vec<u8>, NodeError> {
     let (w, h) = img.size();
     let dynamic = match (img.channels(), sixteen_bit) {

@@ -50,6 +50,10 @@ enum Command {
         /// used frames are dropped and recomputed when needed again).
         #[arg(long, value_name = "MIB", default_value_t = pyrograph::core::frame_cache::DEFAULT_BUDGET >> 20)]
         cache_mb: usize,
+        /// Hold cached frames of 8-bit content at one byte a sample (four times as many in the
+        /// budget, for graphs that revisit frames; costs a pass over each frame cached).
+        #[arg(long)]
+        compact_cache: bool,
         /// Folder for scratch files of out-of-core work (Eigenfires training on databases larger
         /// than its memory_mb); the system's temp folder (TMPDIR) when not given.
         #[arg(long, value_name = "DIR")]
@@ -136,8 +140,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
-        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, cache_dir, json }) => {
+        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, compact_cache, cache_dir, json }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
+            pyrograph::core::FrameCache::global().set_compact(compact_cache);
             let opts = RenderOpts { frames, out, set, nodes, overwrite, cache_dir, json };
             render(&registry, &graph, &opts)
         }

@@ -5,9 +5,10 @@
 //! budget of frames, not ten. Eviction is least-recently-used and skips frames a cook still holds
 //! (their `Arc` is shared outside the cache): evicting those would free nothing and make the next
 //! reader recompute a frame that is in memory anyway. An evicted frame is recomputed by its clip's
-//! source on the next request, bit-identically (sources are deterministic). Frames of 8-bit content
-//! (decoded files and videos) are held at one byte a sample and widened on the way out
-//! ([`crate::compact`]), so a budget holds four times as many of them.
+//! source on the next request, bit-identically (sources are deterministic). With
+//! [`FrameCache::set_compact`], frames of 8-bit content (decoded files and videos) are held at one
+//! byte a sample and widened on the way out ([`crate::compact`]), so a budget holds four times as
+//! many of them.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard};
@@ -50,9 +51,11 @@ enum Entry {
 }
 
 impl Entry {
-    fn new(value: &Value) -> Entry {
+    fn new(value: &Value, compact: bool) -> Entry {
         match value {
-            Value::Image(img) => Bytes8::pack(img).map_or_else(|| Entry::Value(value.clone()), |b| Entry::Bytes(Arc::new(b))),
+            Value::Image(img) if compact => {
+                Bytes8::pack(img).map_or_else(|| Entry::Value(value.clone()), |b| Entry::Bytes(Arc::new(b)))
+            }
             other => Entry::Value(other.clone()),
         }
     }
@@ -84,6 +87,8 @@ impl Entry {
 struct Inner {
     frames: LruCache<Key, Entry>,
     stats: CacheStats,
+    /// Whether 8-bit frames are packed into bytes when cached.
+    compact: bool,
 }
 
 /// A least-recently-used store of clip frames under one byte budget.
@@ -103,7 +108,16 @@ impl FrameCache {
     /// An empty cache holding at most `budget` bytes of frames (frames in use may exceed it).
     pub fn new(budget: usize) -> Self {
         let stats = CacheStats { budget, ..CacheStats::default() };
-        FrameCache { inner: Mutex::new(Inner { frames: LruCache::unbounded(), stats }) }
+        FrameCache { inner: Mutex::new(Inner { frames: LruCache::unbounded(), stats, compact: false }) }
+    }
+
+    /// Holds frames of 8-bit content at one byte a sample (four times as many in a budget), at
+    /// the cost of a pass over every frame cached and a widening on every hit. Worth it where
+    /// frames are revisited (the editor's previews and scrubber); a render that streams each frame
+    /// through once spent a quarter to a third more wall time on it (1080p video to PNGs), so it is
+    /// off unless asked for (`render --compact-cache`).
+    pub fn set_compact(&self, compact: bool) {
+        self.lock().compact = compact;
     }
 
     /// The cache every clip uses unless it was given its own.
@@ -178,7 +192,8 @@ impl FrameCache {
     /// budget holds. A frame larger than the whole budget is not kept.
     pub(crate) fn put(&self, clip: u64, index: usize, value: &Value) {
         // Packed before the lock is taken: it reads the whole frame.
-        let entry = Entry::new(value);
+        let compact = self.lock().compact;
+        let entry = Entry::new(value, compact);
         let size = entry.byte_size();
         let mut inner = self.lock();
         if size > inner.stats.budget || inner.frames.contains(&(clip, index)) {
@@ -381,6 +396,7 @@ mod tests {
         let source = Arc::new(Decoded(Mutex::new(Vec::new())));
         // Four frames fit at a byte a sample; at four bytes a sample only one would.
         let cache = Arc::new(FrameCache::new(4 * 256));
+        cache.set_compact(true);
         let decoded = Clip::with_cache(PortType::Image, 24.0, 3, source.clone(), cache.clone());
         let ctx = CookCtx::new();
         let first: Vec<Vec<u32>> =
@@ -395,8 +411,14 @@ mod tests {
         assert!(source.0.lock().unwrap().is_empty(), "all four answered from the cache");
         // A frame that is not 8-bit content keeps its f32 size.
         let (logged, _, small) = clip(8);
+        small.set_compact(true);
         logged.image(0, &ctx).unwrap();
         assert_eq!(small.stats().bytes, 256);
+        // Without compaction an 8-bit frame keeps its f32 size too.
+        let plain = Arc::new(FrameCache::new(4 * 1024));
+        let wide = Clip::with_cache(PortType::Image, 24.0, 4, Arc::new(Decoded(Mutex::new(Vec::new()))), plain.clone());
+        wide.image(0, &ctx).unwrap();
+        assert_eq!(plain.stats().bytes, 1024);
     }
 
     /// The frames of `Logged`; cancels `token` the first time frame `at` is computed (a user

@@ -61,6 +61,9 @@ fn main() -> Result<(), String> {
     );
     std::fs::write(&graph, text).map_err(|e| e.to_string())?;
 
+    // The editor's own cache settings (main.rs): 1 GiB, 8-bit frames held in bytes.
+    pyrograph::core::FrameCache::global().set_budget(1 << 30);
+    pyrograph::core::FrameCache::global().set_compact(true);
     let mut ed = Editor::with_default_registry();
     ed.open(&graph)?;
     let start = Instant::now();

@@ -42,6 +42,8 @@ fn main() {
         }
     }
     pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
+    // Previews revisit frames: hold 8-bit ones at a byte a sample.
+    pyrograph::core::FrameCache::global().set_compact(true);
     let mut editor = Editor::with_default_registry();
     if let Some(f) = recent_file() {
         editor.use_recent_file(f);

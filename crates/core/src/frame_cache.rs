@@ -10,7 +10,7 @@
 //! byte a sample and widened on the way out ([`crate::compact`]), so a budget holds four times as
 //! many of them.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard};
 
 use lru::LruCache;
@@ -87,13 +87,13 @@ impl Entry {
 struct Inner {
     frames: LruCache<Key, Entry>,
     stats: CacheStats,
-    /// Whether 8-bit frames are packed into bytes when cached.
-    compact: bool,
 }
 
 /// A least-recently-used store of clip frames under one byte budget.
 pub struct FrameCache {
     inner: Mutex<Inner>,
+    /// Whether 8-bit frames are packed into bytes when cached (read on every put, outside the lock).
+    compact: AtomicBool,
 }
 
 static GLOBAL: LazyLock<Arc<FrameCache>> = LazyLock::new(|| Arc::new(FrameCache::new(DEFAULT_BUDGET)));
@@ -108,7 +108,7 @@ impl FrameCache {
     /// An empty cache holding at most `budget` bytes of frames (frames in use may exceed it).
     pub fn new(budget: usize) -> Self {
         let stats = CacheStats { budget, ..CacheStats::default() };
-        FrameCache { inner: Mutex::new(Inner { frames: LruCache::unbounded(), stats, compact: false }) }
+        FrameCache { inner: Mutex::new(Inner { frames: LruCache::unbounded(), stats }), compact: AtomicBool::new(false) }
     }
 
     /// Holds frames of 8-bit content at one byte a sample (four times as many in a budget), at
@@ -117,7 +117,7 @@ impl FrameCache {
     /// through once spent a quarter to a third more wall time on it (1080p video to PNGs), so it is
     /// off unless asked for (`render --compact-cache`).
     pub fn set_compact(&self, compact: bool) {
-        self.lock().compact = compact;
+        self.compact.store(compact, Ordering::Relaxed);
     }
 
     /// The cache every clip uses unless it was given its own.
@@ -192,8 +192,7 @@ impl FrameCache {
     /// budget holds. A frame larger than the whole budget is not kept.
     pub(crate) fn put(&self, clip: u64, index: usize, value: &Value) {
         // Packed before the lock is taken: it reads the whole frame.
-        let compact = self.lock().compact;
-        let entry = Entry::new(value, compact);
+        let entry = Entry::new(value, self.compact.load(Ordering::Relaxed));
         let size = entry.byte_size();
         let mut inner = self.lock();
         if size > inner.stats.budget || inner.frames.contains(&(clip, index)) {

@@ -4,52 +4,107 @@
 use crate::error::NodeError;
 use crate::eval::CookCtx;
 use crate::include::{IncludePlaceholder, include_desc};
-use crate::node::{FnNode, Inputs, NodeDesc, PortDesc, TimeDep};
+use crate::params::Cook;
 use crate::registry::Registry;
-use crate::value::{PortType, Value};
 
 /// Adds the built-in node types.
 pub fn register(r: &mut Registry) {
     r.add(std::sync::Arc::new(IncludePlaceholder(include_desc())));
-    r.add(FnNode::new(float_desc(), cook_float));
-    r.add(FnNode::new(int_desc(), cook_int));
-    r.add(FnNode::new(binary_desc("math.add", "Adds two floats (a + b)."), cook_add));
-    r.add(FnNode::new(binary_desc("math.multiply", "Multiplies two floats (a × b)."), cook_multiply));
+    r.add(FloatValue::node());
+    r.add(IntValue::node());
+    r.add(Add::node());
+    r.add(Multiply::node());
 }
 
+/// Bound of the value and math nodes' numbers: wide, but finite so sliders have ends.
 const BIG: f64 = 1e12;
 
-fn float_desc() -> NodeDesc {
-    NodeDesc::new("value.float", "Value", TimeDep::Source, "A float constant that can drive any Float parameter.")
-        .input(PortDesc::float("value", 0.0, (-BIG, BIG), "The value."))
-        .output("value", PortType::Float, "The value.")
+crate::node! {
+    /// A float constant that can drive any Float parameter.
+    #[node("value.float", "Value", Source)]
+    pub struct FloatValue {
+        /// The value.
+        #[range(-BIG, BIG)]
+        value: f64 = 0.0,
+    }
+    pub struct FloatValueOut {
+        /// The value.
+        value: f64,
+    }
 }
 
-fn cook_float(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Float(i.float("value")?)])
+impl Cook for FloatValue {
+    fn cook(self, _: &CookCtx) -> Result<FloatValueOut, NodeError> {
+        Ok(FloatValueOut { value: self.value })
+    }
 }
 
-fn int_desc() -> NodeDesc {
-    NodeDesc::new("value.int", "Value", TimeDep::Source, "An integer constant that can drive any Int parameter.")
-        .input(PortDesc::int("value", 0, (-(1 << 40), 1 << 40), "The value."))
-        .output("value", PortType::Int, "The value.")
+crate::node! {
+    /// An integer constant that can drive any Int parameter.
+    #[node("value.int", "Value", Source)]
+    pub struct IntValue {
+        /// The value.
+        #[range(-(1i64 << 40), 1i64 << 40)]
+        value: i64 = 0,
+    }
+    pub struct IntValueOut {
+        /// The value.
+        value: i64,
+    }
 }
 
-fn cook_int(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Int(i.int("value")?)])
+impl Cook for IntValue {
+    fn cook(self, _: &CookCtx) -> Result<IntValueOut, NodeError> {
+        Ok(IntValueOut { value: self.value })
+    }
 }
 
-fn binary_desc(name: &str, doc: &str) -> NodeDesc {
-    NodeDesc::new(name, "Math", TimeDep::PerFrame, doc)
-        .input(PortDesc::float("a", 0.0, (-BIG, BIG), "First operand."))
-        .input(PortDesc::float("b", 0.0, (-BIG, BIG), "Second operand."))
-        .output("value", PortType::Float, "The result.")
+crate::ports! {
+    /// The two operands of a binary math node.
+    pub struct Operands {
+        /// First operand.
+        #[range(-BIG, BIG)]
+        a: f64 = 0.0,
+        /// Second operand.
+        #[range(-BIG, BIG)]
+        b: f64 = 0.0,
+    }
 }
 
-fn cook_add(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Float(i.float("a")? + i.float("b")?)])
+crate::node! {
+    /// Adds two floats (a + b).
+    #[node("math.add", "Math", PerFrame)]
+    pub struct Add {
+        /// The operands.
+        operands: Operands,
+    }
+    pub struct AddOut {
+        /// The result.
+        value: f64,
+    }
 }
 
-fn cook_multiply(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Float(i.float("a")? * i.float("b")?)])
+impl Cook for Add {
+    fn cook(self, _: &CookCtx) -> Result<AddOut, NodeError> {
+        Ok(AddOut { value: self.operands.a + self.operands.b })
+    }
+}
+
+crate::node! {
+    /// Multiplies two floats (a × b).
+    #[node("math.multiply", "Math", PerFrame)]
+    pub struct Multiply {
+        /// The operands.
+        operands: Operands,
+    }
+    pub struct MultiplyOut {
+        /// The result.
+        value: f64,
+    }
+}
+
+impl Cook for Multiply {
+    fn cook(self, _: &CookCtx) -> Result<MultiplyOut, NodeError> {
+        Ok(MultiplyOut { value: self.operands.a * self.operands.b })
+    }
 }

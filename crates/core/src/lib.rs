@@ -16,6 +16,7 @@ pub mod include;
 pub mod learned;
 pub mod mesh;
 pub mod node;
+pub mod params;
 pub mod registry;
 pub mod value;
 
@@ -25,6 +26,7 @@ pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progre
 pub use frame_cache::{CacheStats, FrameCache};
 pub use graph::{BuildOptions, Graph};
 pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
+pub use params::{ClipOf, Cook, InputPath, OutputPath};
 pub use registry::Registry;
 pub use value::{
     ArModel, Basis, Channels, CharMark, Clip, ClothState, Contour, Contours, FlameModel, FlameRoot, FrameItem, FrameList,

@@ -1,0 +1,686 @@
+//! Typed node declarations: one [`node!`](crate::node) declaration gives a node's port
+//! descriptions (name, type, default, range, doc) *and* a typed reader, so a cook reads
+//! `p.turbulence: f32`, never a port by a string. Shared port groups ([`ports!`](crate::ports))
+//! are declared once and flattened into every node that uses them; enumerations
+//! ([`choice!`](crate::choice)) carry their option names.
+//!
+//! Written with `macro_rules!` rather than a proc-macro crate: the declarations are plain
+//! field lists, and a proc-macro would add `syn`/`quote` to every build for no expressive gain.
+
+use std::marker::PhantomData;
+use std::ops::Deref;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::NodeError;
+use crate::eval::CookCtx;
+use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc};
+use crate::value::{
+    ArModel, Basis, Clip, ClothState, Contours, FlameModel, FrameList, Image, Mask, Mesh, ParamSeries, Particles, PortType,
+    SpreadState, Value, Weights, WindField,
+};
+
+/// A type that one port carries: how it is described and how it converts to and from a [`Value`].
+pub trait Port: Sized {
+    /// The port's type.
+    fn port_type() -> PortType;
+    /// The value, for a default or an output.
+    fn into_value(self) -> Value;
+    /// Converts a port's value; the error text is wrapped with the port's name by the caller.
+    fn from_value(v: &Value) -> Result<Self, String>;
+    /// Option names, for enumerations.
+    fn options() -> Vec<String> {
+        Vec::new()
+    }
+    /// How a path resolves, for paths.
+    fn path_role() -> Option<PathRole> {
+        None
+    }
+}
+
+/// Something a declared field contributes: one port (every [`Port`]) or a group of them
+/// ([`ports!`](crate::ports) structs, or a hand-written impl for ports numbered at run time).
+pub trait Field: Sized {
+    /// Appends this field's port descriptions. `name` and `doc` are the field's; `default` and
+    /// `range` its `= value` and `#[range(lo, hi)]`.
+    fn describe(name: &str, doc: &str, default: Option<Self>, range: Option<(f64, f64)>, out: &mut Vec<PortDesc>);
+    /// Reads the field from a cook's inputs.
+    fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError>;
+}
+
+impl<T: Port> Field for T {
+    fn describe(name: &str, doc: &str, default: Option<Self>, range: Option<(f64, f64)>, out: &mut Vec<PortDesc>) {
+        out.push(PortDesc {
+            default: default.map(Port::into_value),
+            range,
+            options: T::options(),
+            path_role: T::path_role(),
+            ..PortDesc::new(port_name(name), T::port_type(), doc)
+        });
+    }
+
+    fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> {
+        let name = port_name(name);
+        T::from_value(inputs.get(name)?).map_err(|e| NodeError::port(name, e))
+    }
+}
+
+/// The port name of a field: `r#type` is the port `type`.
+pub fn port_name(field: &str) -> &str {
+    field.strip_prefix("r#").unwrap_or(field)
+}
+
+/// A node's declared inputs and outputs; implemented by [`node!`](crate::node).
+pub trait Declared: Sized + Send + Sync + 'static {
+    /// The outputs struct, in port order.
+    type Outputs: OutputSet;
+    /// The static description.
+    fn desc() -> NodeDesc;
+    /// Reads every input of a cook.
+    fn read(inputs: &Inputs<'_>) -> Result<Self, NodeError>;
+}
+
+/// A node's outputs as port values, in declaration order; implemented by [`node!`](crate::node).
+pub trait OutputSet {
+    /// The values, in port order.
+    fn into_values(self) -> Vec<Value>;
+}
+
+/// What a declared node computes: the one function a node author writes beside its declaration.
+pub trait Cook: Declared {
+    /// Computes the outputs from the typed inputs.
+    fn cook(self, ctx: &CookCtx) -> Result<Self::Outputs, NodeError>;
+
+    /// The node, ready for [`crate::Registry::add`].
+    fn node() -> Arc<dyn Node> {
+        Arc::new(Typed::<Self> { desc: Self::desc(), marker: PhantomData })
+    }
+}
+
+struct Typed<T> {
+    desc: NodeDesc,
+    marker: PhantomData<fn() -> T>,
+}
+
+impl<T: Cook> Node for Typed<T> {
+    fn desc(&self) -> &NodeDesc {
+        &self.desc
+    }
+    fn cook(&self, inputs: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        Ok(T::read(inputs)?.cook(ctx)?.into_values())
+    }
+}
+
+/// Joins doc-comment lines (`/// text` arrives as `" text"`): lines of a paragraph with spaces,
+/// paragraphs with a blank line, so the first line is the summary.
+pub fn doc_text(lines: &[&str]) -> String {
+    let mut out = String::new();
+    let mut blank = false;
+    for line in lines {
+        let line = line.strip_prefix(' ').unwrap_or(line).trim_end();
+        if line.is_empty() {
+            blank = !out.is_empty();
+            continue;
+        }
+        if blank {
+            out.push_str("\n\n");
+            blank = false;
+        } else if !out.is_empty() {
+            out.push(' ');
+        }
+        out.push_str(line);
+    }
+    out
+}
+
+fn wrong(wanted: &str, got: &Value) -> String {
+    format!("needs {wanted}, got {}", got.type_name())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scalars
+// ---------------------------------------------------------------------------------------------
+
+impl Port for f64 {
+    fn port_type() -> PortType {
+        PortType::Float
+    }
+    fn into_value(self) -> Value {
+        Value::Float(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Float(x) => Ok(*x),
+            // An Int on a Float port is widened, as graph files write `2` for `2.0`.
+            Value::Int(x) => Ok(*x as f64),
+            other => Err(wrong("Float", other)),
+        }
+    }
+}
+
+impl Port for f32 {
+    fn port_type() -> PortType {
+        PortType::Float
+    }
+    fn into_value(self) -> Value {
+        Value::Float(f64::from(self))
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        // Ports store f64; the nodes that declare f32 compute in f32, so rounding here is the intent.
+        f64::from_value(v).map(|x| x as f32)
+    }
+}
+
+impl Port for i64 {
+    fn port_type() -> PortType {
+        PortType::Int
+    }
+    fn into_value(self) -> Value {
+        Value::Int(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Int(x) => Ok(*x),
+            other => Err(wrong("Int", other)),
+        }
+    }
+}
+
+macro_rules! int_port {
+    ($($t:ty),*) => {$(
+        impl Port for $t {
+            fn port_type() -> PortType {
+                PortType::Int
+            }
+            fn into_value(self) -> Value {
+                Value::Int(i64::try_from(self).unwrap_or(i64::MAX))
+            }
+            fn from_value(v: &Value) -> Result<Self, String> {
+                let x = i64::from_value(v)?;
+                <$t>::try_from(x).map_err(|_| {
+                    format!("{x} is outside {}..={}", <$t>::MIN, <$t>::MAX)
+                })
+            }
+        }
+    )*};
+}
+int_port!(i32, u8, u16, u32, u64, usize);
+
+impl Port for bool {
+    fn port_type() -> PortType {
+        PortType::Bool
+    }
+    fn into_value(self) -> Value {
+        Value::Bool(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Bool(x) => Ok(*x),
+            other => Err(wrong("Bool", other)),
+        }
+    }
+}
+
+/// A Color port: linear RGBA.
+impl Port for [f32; 4] {
+    fn port_type() -> PortType {
+        PortType::Color
+    }
+    fn into_value(self) -> Value {
+        Value::Color(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Color(x) => Ok(*x),
+            other => Err(wrong("Color", other)),
+        }
+    }
+}
+
+impl Port for [f64; 2] {
+    fn port_type() -> PortType {
+        PortType::Vec2
+    }
+    fn into_value(self) -> Value {
+        Value::Vec2(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Vec2(x) => Ok(*x),
+            other => Err(wrong("Vec2", other)),
+        }
+    }
+}
+
+impl Port for [f64; 3] {
+    fn port_type() -> PortType {
+        PortType::Vec3
+    }
+    fn into_value(self) -> Value {
+        Value::Vec3(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Vec3(x) => Ok(*x),
+            other => Err(wrong("Vec3", other)),
+        }
+    }
+}
+
+impl Port for [f32; 3] {
+    fn port_type() -> PortType {
+        PortType::Vec3
+    }
+    fn into_value(self) -> Value {
+        Value::Vec3(self.map(f64::from))
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        // As for f32: the nodes that declare [f32; 3] compute in f32.
+        <[f64; 3]>::from_value(v).map(|x| x.map(|c| c as f32))
+    }
+}
+
+impl Port for String {
+    fn port_type() -> PortType {
+        PortType::String
+    }
+    fn into_value(self) -> Value {
+        Value::String(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::String(x) => Ok(x.clone()),
+            other => Err(wrong("String", other)),
+        }
+    }
+}
+
+macro_rules! path_port {
+    ($(#[$doc:meta])* $name:ident, $role:ident) => {
+        $(#[$doc])*
+        #[derive(Clone, Debug, PartialEq, Eq)]
+        pub struct $name(pub PathBuf);
+
+        impl Deref for $name {
+            type Target = Path;
+            fn deref(&self) -> &Path {
+                &self.0
+            }
+        }
+
+        impl From<&str> for $name {
+            fn from(s: &str) -> Self {
+                $name(PathBuf::from(s))
+            }
+        }
+
+        impl Port for $name {
+            fn port_type() -> PortType {
+                PortType::Path
+            }
+            fn into_value(self) -> Value {
+                Value::Path(self.0)
+            }
+            fn from_value(v: &Value) -> Result<Self, String> {
+                match v {
+                    Value::Path(x) => Ok($name(x.clone())),
+                    other => Err(wrong("Path", other)),
+                }
+            }
+            fn path_role() -> Option<PathRole> {
+                Some(PathRole::$role)
+            }
+        }
+    };
+}
+path_port!(
+    /// A path read by the node; resolved against the graph file's folder by the loader.
+    InputPath,
+    Input
+);
+path_port!(
+    /// A path the node writes; resolved against the render's output folder by the loader.
+    OutputPath,
+    Output
+);
+
+macro_rules! shared_port {
+    ($($t:ident),* $(,)?) => {$(
+        impl Port for Arc<$t> {
+            fn port_type() -> PortType {
+                PortType::$t
+            }
+            fn into_value(self) -> Value {
+                Value::$t(self)
+            }
+            fn from_value(v: &Value) -> Result<Self, String> {
+                match v {
+                    Value::$t(x) => Ok(Arc::clone(x)),
+                    other => Err(wrong(stringify!($t), other)),
+                }
+            }
+        }
+    )*};
+}
+shared_port!(
+    Image,
+    Mask,
+    Contours,
+    WindField,
+    Particles,
+    ClothState,
+    Basis,
+    Weights,
+    FrameList,
+    ParamSeries,
+    ArModel,
+    FlameModel,
+    Mesh,
+    SpreadState
+);
+
+/// A clip whose frames are `T`s: the port type `Clip<T>`.
+pub struct ClipOf<T> {
+    clip: Clip,
+    marker: PhantomData<fn() -> T>,
+}
+
+impl<T> ClipOf<T> {
+    /// Wraps a clip (its element type is checked by the graph, not here).
+    pub fn new(clip: Clip) -> Self {
+        ClipOf { clip, marker: PhantomData }
+    }
+
+    /// The clip.
+    pub fn into_inner(self) -> Clip {
+        self.clip
+    }
+}
+
+impl<T> Clone for ClipOf<T> {
+    fn clone(&self) -> Self {
+        ClipOf::new(self.clip.clone())
+    }
+}
+
+impl<T> std::fmt::Debug for ClipOf<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.clip.fmt(f)
+    }
+}
+
+impl<T> Deref for ClipOf<T> {
+    type Target = Clip;
+    fn deref(&self) -> &Clip {
+        &self.clip
+    }
+}
+
+impl<T: Port> Port for ClipOf<T> {
+    fn port_type() -> PortType {
+        PortType::clip_of(T::port_type())
+    }
+    fn into_value(self) -> Value {
+        Value::Clip(self.clip)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Clip(x) => Ok(ClipOf::new(x.clone())),
+            other => Err(wrong("Clip", other)),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Declaration macros
+// ---------------------------------------------------------------------------------------------
+
+/// `Some(x)` for a present token, `None` for none: the `= default` and `#[range]` of a field.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __opt {
+    () => {
+        None
+    };
+    ($e:expr) => {
+        Some($e)
+    };
+}
+
+/// The port name of a declared field, checked at compile time: `port!(Crop, width)` is
+/// `"width"`, and fails to build if `Crop` has no field `width`. For errors that name a port
+/// (`NodeError::port(port!(Crop, width), ..)`) without restating its name as a string.
+#[macro_export]
+macro_rules! port {
+    ($owner:ty, $field:ident) => {{
+        let _ = |p: &$owner| {
+            let _ = &p.$field;
+        };
+        $crate::params::port_name(stringify!($field))
+    }};
+}
+
+/// Declares a node: a struct of its inputs (each field one port, or a [`ports!`](crate::ports)
+/// group flattened in), a struct of its outputs, and from them its [`NodeDesc`] and typed
+/// reader. The author then writes `impl Cook for Name { fn cook(self, ctx) -> Result<NameOut, _> }`
+/// and registers `Name::node()`.
+///
+/// A field without `= default` is a required input; `#[range(lo, hi)]` bounds a number.
+///
+/// ```
+/// use std::sync::Arc;
+/// use pyrograph_core::params::Cook;
+/// use pyrograph_core::{CookCtx, Image, NodeError};
+///
+/// pyrograph_core::node! {
+///     /// Multiplies every sample by a gain.
+///     #[node("example.gain", "Examples", PerFrame)]
+///     pub struct Gain {
+///         /// The image.
+///         image: Arc<Image>,
+///         /// The factor.
+///         #[range(0.0, 8.0)]
+///         gain: f32 = 1.0,
+///     }
+///     pub struct GainOut {
+///         /// The brighter image.
+///         image: Arc<Image>,
+///     }
+/// }
+///
+/// impl Cook for Gain {
+///     fn cook(self, _: &CookCtx) -> Result<GainOut, NodeError> {
+///         let mut img = (*self.image).clone();
+///         img.data_mut().iter_mut().for_each(|v| *v *= self.gain);
+///         Ok(GainOut { image: Arc::new(img) })
+///     }
+/// }
+///
+/// let desc = Gain::node().desc().clone();
+/// assert_eq!(desc.inputs[1].name, "gain");
+/// assert_eq!(desc.inputs[1].range, Some((0.0, 8.0)));
+/// ```
+#[macro_export]
+macro_rules! node {
+    (
+        $(#[doc = $doc:literal])*
+        #[node($type_name:literal, $category:literal, $time:ident)]
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty $(= $fdef:expr)?
+            ),* $(,)?
+        }
+        $ovis:vis struct $out:ident {
+            $(
+                $(#[doc = $odoc:literal])*
+                $ofield:ident : $oty:ty
+            ),* $(,)?
+        }
+    ) => {
+        $(#[doc = $doc])*
+        #[derive(Clone, Debug)]
+        $vis struct $name {
+            $( $(#[doc = $fdoc])* pub $field: $fty, )*
+        }
+
+        #[doc = concat!("The outputs of [`", stringify!($name), "`], in port order.")]
+        $ovis struct $out {
+            $( $(#[doc = $odoc])* pub $ofield: $oty, )*
+        }
+
+        impl $crate::params::Declared for $name {
+            type Outputs = $out;
+
+            fn desc() -> $crate::NodeDesc {
+                let mut desc = $crate::NodeDesc::new(
+                    $type_name,
+                    $category,
+                    $crate::TimeDep::$time,
+                    &$crate::params::doc_text(&[$($doc),*]),
+                );
+                $(
+                    <$fty as $crate::params::Field>::describe(
+                        stringify!($field),
+                        &$crate::params::doc_text(&[$($fdoc),*]),
+                        $crate::__opt!($($fdef)?),
+                        $crate::__opt!($((($lo) as f64, ($hi) as f64))?),
+                        &mut desc.inputs,
+                    );
+                )*
+                $(
+                    desc.outputs.push($crate::PortDesc::new(
+                        $crate::params::port_name(stringify!($ofield)),
+                        <$oty as $crate::params::Port>::port_type(),
+                        &$crate::params::doc_text(&[$($odoc),*]),
+                    ));
+                )*
+                desc
+            }
+
+            fn read(inputs: &$crate::Inputs<'_>) -> Result<Self, $crate::NodeError> {
+                Ok($name {
+                    $( $field: <$fty as $crate::params::Field>::read(inputs, stringify!($field))?, )*
+                })
+            }
+        }
+
+        impl $crate::params::OutputSet for $out {
+            fn into_values(self) -> Vec<$crate::Value> {
+                vec![$( $crate::params::Port::into_value(self.$ofield) ),*]
+            }
+        }
+    };
+}
+
+/// Declares a group of ports shared by several nodes (a camera, a colour ramp): a struct whose
+/// fields are ports, flattened into any [`node!`](crate::node) that has a field of its type.
+/// Field syntax is that of `node!`.
+#[macro_export]
+macro_rules! ports {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty $(= $fdef:expr)?
+            ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug)]
+        $vis struct $name {
+            $( $(#[doc = $fdoc])* pub $field: $fty, )*
+        }
+
+        impl $crate::params::Field for $name {
+            fn describe(
+                _: &str,
+                _: &str,
+                _: Option<Self>,
+                _: Option<(f64, f64)>,
+                out: &mut Vec<$crate::PortDesc>,
+            ) {
+                $(
+                    <$fty as $crate::params::Field>::describe(
+                        stringify!($field),
+                        &$crate::params::doc_text(&[$($fdoc),*]),
+                        $crate::__opt!($($fdef)?),
+                        $crate::__opt!($((($lo) as f64, ($hi) as f64))?),
+                        out,
+                    );
+                )*
+            }
+
+            fn read(inputs: &$crate::Inputs<'_>, _: &str) -> Result<Self, $crate::NodeError> {
+                Ok($name {
+                    $( $field: <$fty as $crate::params::Field>::read(inputs, stringify!($field))?, )*
+                })
+            }
+        }
+    };
+}
+
+/// Declares an enumeration carried by an Enum port: each variant with its option name.
+/// Gives `NAMES`, `name()`, `parse()` and the [`Port`] impl.
+#[macro_export]
+macro_rules! choice {
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident {
+            $( $(#[doc = $vdoc:literal])* $variant:ident = $text:literal ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        $vis enum $name {
+            $( $(#[doc = $vdoc])* $variant, )+
+        }
+
+        impl $name {
+            /// Every option's name, in order.
+            pub const NAMES: &'static [&'static str] = &[$($text),+];
+
+            /// The option's name.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $( $name::$variant => $text, )+
+                }
+            }
+
+            /// The option named `text`.
+            pub fn parse(text: &str) -> Option<Self> {
+                match text {
+                    $( $text => Some($name::$variant), )+
+                    _ => None,
+                }
+            }
+        }
+
+        impl $crate::params::Port for $name {
+            fn port_type() -> $crate::PortType {
+                $crate::PortType::Enum
+            }
+            fn into_value(self) -> $crate::Value {
+                $crate::Value::Enum(self.name().to_string())
+            }
+            fn from_value(v: &$crate::Value) -> Result<Self, String> {
+                match v {
+                    $crate::Value::Enum(text) => $name::parse(text).ok_or_else(|| {
+                        format!("unknown option '{text}' ({})", Self::NAMES.join(", "))
+                    }),
+                    other => Err(format!("needs Enum, got {}", other.type_name())),
+                }
+            }
+            fn options() -> Vec<String> {
+                Self::NAMES.iter().map(|s| s.to_string()).collect()
+            }
+        }
+    };
+}
+
+#[cfg(test)]
+#[path = "params_tests.rs"]
+mod tests;

@@ -133,6 +133,12 @@ pub fn doc_text(lines: &[&str]) -> String {
     out
 }
 
+/// The f64 an f32 was written as: `0.1f32` is `0.1`, not `0.10000000149011612`, so defaults
+/// print as declared; converting back to f32 gives the same f32.
+fn f32_to_f64_shortest(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
 fn wrong(wanted: &str, got: &Value) -> String {
     format!("needs {wanted}, got {}", got.type_name())
 }
@@ -163,7 +169,7 @@ impl Port for f32 {
         PortType::Float
     }
     fn into_value(self) -> Value {
-        Value::Float(f64::from(self))
+        Value::Float(f32_to_f64_shortest(self))
     }
     fn from_value(v: &Value) -> Result<Self, String> {
         // Ports store f64; the nodes that declare f32 compute in f32, so rounding here is the intent.
@@ -272,7 +278,7 @@ impl Port for [f32; 3] {
         PortType::Vec3
     }
     fn into_value(self) -> Value {
-        Value::Vec3(self.map(f64::from))
+        Value::Vec3(self.map(f32_to_f64_shortest))
     }
     fn from_value(v: &Value) -> Result<Self, String> {
         // As for f32: the nodes that declare [f32; 3] compute in f32.

@@ -125,6 +125,15 @@ fn an_int_on_a_float_port_widens() {
 }
 
 #[test]
+fn f32_defaults_print_as_written() {
+    assert!(matches!(0.1f32.into_value(), Value::Float(v) if v == 0.1));
+    assert!(matches!([0.3f32, 1.0, -2.5].into_value(), Value::Vec3(v) if v == [0.3, 1.0, -2.5]));
+    for x in [0.1f32, 1e-7, 3.4e38, -0.0, 123.456] {
+        assert_eq!(f32::from_value(&x.into_value()), Ok(x));
+    }
+}
+
+#[test]
 fn doc_text_joins_lines_and_keeps_paragraphs() {
     assert_eq!(doc_text(&[" a", " b", "", "", " c  "]), "a b\n\nc");
     assert_eq!(doc_text(&[]), "");

@@ -35,6 +35,11 @@ impl Registry {
         assert!(previous.is_none(), "node type '{name}' registered twice");
     }
 
+    /// Adds a node declared with [`crate::node!`]: `registry.declare::<levels::Levels>()`.
+    pub fn declare<T: crate::params::Cook>(&mut self) {
+        self.add(T::node());
+    }
+
     /// The node type named `type_name`.
     pub fn get(&self, type_name: &str) -> Option<&Arc<dyn Node>> {
         self.nodes.get(type_name)

@@ -8,6 +8,7 @@ pub mod color;
 pub mod convert;
 pub mod flipbook;
 pub mod io;
+pub mod levels;
 pub mod masks;
 pub mod preprocess;
 pub mod procedural;
@@ -29,4 +30,5 @@ pub fn register(registry: &mut Registry) {
     bloom::register(registry);
     smoke::register(registry);
     flipbook::register(registry);
+    registry.declare::<levels::Levels>();
 }

@@ -1,0 +1,201 @@
+//! Cooks every registered node type with its defaults and the smallest real inputs it needs,
+//! so a port read that its declaration does not have ("no such input"), a wrong type or a
+//! default a node cannot cook shows up here rather than in an artist's graph.
+
+use std::path::{Path, PathBuf};
+
+use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, PortType, Registry};
+
+/// Frames of the shared test flame: the transition nodes' default motions reach frame 149.
+const FLAME_FRAMES: i64 = 150;
+
+fn int(v: i64) -> ParamValue {
+    ParamValue::Int(v)
+}
+
+fn text(v: &str) -> ParamValue {
+    ParamValue::String(v.to_string())
+}
+
+fn path(p: &Path) -> ParamValue {
+    text(&p.to_string_lossy())
+}
+
+/// Adds the nodes that make a value of type `ty` (once each) and returns their endpoint.
+/// Every producer is a registered node with the smallest parameters that still give data
+/// its consumers accept (a flame large enough to find, masks that select it).
+fn supply(doc: &mut GraphDoc, ty: &PortType, files: &Files) -> Option<String> {
+    let mut add = |id: &str, node: NodeDoc| {
+        if doc.node(id).is_none() {
+            doc.add_node(id, node);
+        }
+    };
+    let flame = || {
+        NodeDoc::new("imaging.turbulence_flame")
+            .param("width", int(48))
+            .param("height", int(64))
+            .param("frames", int(FLAME_FRAMES))
+    };
+    let endpoint = match ty.to_string().as_str() {
+        "Image" | "Clip<Image>" => {
+            add("s_flame", flame());
+            "s_flame.clip"
+        }
+        "Mask" => {
+            add("s_flame", flame());
+            add(
+                "s_mask",
+                NodeDoc::new("imaging.hsv_mask")
+                    .param("layer1_enabled", ParamValue::Bool(false))
+                    .param("layer2_enabled", ParamValue::Bool(true))
+                    .param("layer3_enabled", ParamValue::Bool(true)),
+            );
+            doc.connect("s_flame.clip", "s_mask.image");
+            "s_mask.mask"
+        }
+        "Contours" => {
+            let mask = supply(doc, &PortType::Mask, files)?;
+            if doc.node("s_contours").is_none() {
+                doc.add_node("s_contours", NodeDoc::new("imaging.contours"));
+                doc.connect(&mask, "s_contours.mask");
+            }
+            "s_contours.contours"
+        }
+        "Basis" | "Weights" => {
+            add("s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
+            if ty.to_string() == "Basis" { "s_db.basis" } else { "s_db.weights" }
+        }
+        "FrameList" => {
+            add("s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
+            add("s_motion", NodeDoc::new("eigen.motion_list"));
+            doc.connect("s_db.weights", "s_motion.weights");
+            "s_motion.frames"
+        }
+        "FlameModel" | "ParamSeries" | "ArModel" => {
+            add("s_flame", flame());
+            add("s_fit", NodeDoc::new("flame_model.fit"));
+            doc.connect("s_flame.clip", "s_fit.clip");
+            match ty.to_string().as_str() {
+                "FlameModel" => "s_fit.model",
+                "ParamSeries" => "s_fit.params",
+                _ => {
+                    add("s_learn", NodeDoc::new("flame_model.arp_learn"));
+                    doc.connect("s_fit.params", "s_learn.params");
+                    "s_learn.model"
+                }
+            }
+        }
+        "Particles" => {
+            add("s_roots", NodeDoc::new("particles.roots"));
+            "s_roots.roots"
+        }
+        "Mesh" => {
+            add("s_mesh", NodeDoc::new("particles.mesh_load"));
+            "s_mesh.mesh"
+        }
+        "SpreadState" => {
+            add("s_mesh", NodeDoc::new("particles.mesh_load"));
+            add("s_spread", NodeDoc::new("particles.fire_spread").param("frames", int(12)));
+            doc.connect("s_mesh.mesh", "s_spread.mesh");
+            "s_spread.spread"
+        }
+        "ClothState" => {
+            add("s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
+            "s_cloth.cloth"
+        }
+        "Path" => return None,
+        _ => return None,
+    };
+    Some(endpoint.to_string())
+}
+
+/// Files the loader nodes read, made by the nodes that write them.
+struct Files {
+    _dir: tempfile::TempDir,
+    image: PathBuf,
+    sequence: PathBuf,
+    database: PathBuf,
+    include: PathBuf,
+}
+
+fn cook(registry: &Registry, doc: &GraphDoc, out: &Path, target: &str) -> Result<(), String> {
+    let options = BuildOptions { output_dir: Some(out.to_path_buf()) };
+    let graph = Graph::build(doc, registry, out, &options).map_err(|d| format!("does not build: {d}"))?;
+    let result = Evaluator::new().cook(&graph, &[target], &CookCtx::new()).map_err(|e| e.to_string())?;
+    match result.node(target) {
+        Some(Ok(_)) => Ok(()),
+        Some(Err(e)) => Err(e.to_string()),
+        None => Err("was not cooked".to_string()),
+    }
+}
+
+fn make_files(registry: &Registry) -> Files {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let mut doc = GraphDoc::new();
+    doc.add_node(
+        "flame",
+        NodeDoc::new("imaging.turbulence_flame")
+            .param("width", int(48))
+            .param("height", int(64))
+            .param("frames", int(FLAME_FRAMES)),
+    );
+    doc.add_node("gray", NodeDoc::new("imaging.to_gray"));
+    doc.add_node("write", NodeDoc::new("imaging.write_sequence").param("pattern", path(&frames.join("f_####.png"))));
+    doc.add_node("train", NodeDoc::new("eigen.eigenfires"));
+    doc.add_node("save", NodeDoc::new("eigen.save_database").param("path", path(&dir.path().join("db"))));
+    doc.connect("flame.clip", "gray.image").connect("flame.clip", "write.clip");
+    doc.connect("gray.image", "train.clip1");
+    doc.connect("train.basis", "save.basis").connect("train.weights", "save.weights");
+    for target in ["write", "save"] {
+        cook(registry, &doc, dir.path(), target).unwrap_or_else(|e| panic!("making the test files: {target}: {e}"));
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    Files {
+        image: frames.join("f_0000.png"),
+        sequence: frames,
+        database: dir.path().join("db"),
+        include: root.join("graphs/candles.ron"),
+        _dir: dir,
+    }
+}
+
+#[test]
+fn every_registered_node_cooks_with_its_defaults() {
+    let registry = pyrograph::registry();
+    let files = make_files(&registry);
+    let mut failures = Vec::new();
+    let mut cooked = 0;
+    let descs: Vec<_> = registry.descs().cloned().collect();
+    for desc in descs {
+        let name = desc.type_name.as_str();
+        let mut doc = GraphDoc::new();
+        doc.add_node("n", NodeDoc::new(name));
+        for port in desc.inputs.iter().filter(|p| p.is_required()) {
+            let element = port.ty.clip_element().unwrap_or(&port.ty).clone();
+            if element == PortType::Path {
+                let file = match name {
+                    "imaging.load_image" => &files.image,
+                    "imaging.load_sequence" => &files.sequence,
+                    "eigen.load_database" => &files.database,
+                    "graph.include" => &files.include,
+                    _ => panic!("{name}.{}: no test file for this required path; add one to make_files", port.name),
+                };
+                doc.node_mut("n").unwrap().params.insert(port.name.clone(), path(file));
+                continue;
+            }
+            let Some(from) = supply(&mut doc, &element, &files) else {
+                panic!("{name}.{}: no producer of {} in supply(); add one", port.name, port.ty);
+            };
+            doc.connect(&from, &format!("n.{}", port.name));
+        }
+        let out = tempfile::tempdir().unwrap();
+        match cook(&registry, &doc, out.path(), "n") {
+            Ok(()) => cooked += 1,
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} node types failed:\n{}", failures.len(), cooked + failures.len(), failures.join("\n"));
+    assert!(cooked >= 70, "only {cooked} node types registered");
+}

@@ -1,0 +1,87 @@
+//! A port's name is written once, in its `node!`/`ports!` declaration. A string literal equal
+//! to a port name anywhere else in a node crate's code is a port read or an error message that
+//! would silently go stale when the port is renamed (use the typed field, or `port!(Node, field)`).
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// Source files of the node crates and the core, without test modules and test files.
+fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if path.is_dir() {
+            if name != "tests" {
+                sources(&path, out);
+            }
+        } else if name.ends_with(".rs") && name != "tests.rs" && !name.ends_with("_tests.rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The simple string literals (`"snake_case"`) of a line of code, except option names of a
+/// `choice!` variant (`Cloth = "cloth"`), which name options, not ports.
+fn literals(line: &str) -> Vec<&str> {
+    let code = line.trim_start();
+    if code.starts_with("//") {
+        return Vec::new();
+    }
+    let choice_variant = code
+        .split_once(" = \"")
+        .is_some_and(|(lhs, _)| lhs.chars().next().is_some_and(|c| c.is_ascii_uppercase()) && !lhs.contains(' '));
+    if choice_variant {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(start) = rest.find('"') {
+        let after = &rest[start + 1..];
+        let Some(end) = after.find('"') else { break };
+        let lit = &after[..end];
+        if !lit.is_empty() && lit.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') {
+            out.push(lit);
+        }
+        rest = &after[end + 1..];
+    }
+    out
+}
+
+#[test]
+fn no_port_name_is_a_string_literal_outside_its_declaration() {
+    let registry = pyrograph::registry();
+    let ports: BTreeSet<String> =
+        registry.descs().flat_map(|d| d.inputs.iter().chain(&d.outputs).map(|p| p.name.clone())).collect();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["crates/core/src", "crates/render/src", "nodes"] {
+        sources(&root.join(dir), &mut files);
+    }
+    files.retain(|f| !f.components().any(|c| c.as_os_str() == "benches" || c.as_os_str() == "examples"));
+    assert!(files.len() > 50, "found only {} source files", files.len());
+    let mut hits = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            // A test module runs to the end of its file in this code base.
+            if line.trim_start().starts_with("#[cfg(test)]") && text.lines().nth(n + 1).is_some_and(|l| l.contains("mod ")) {
+                break;
+            }
+            for lit in literals(line) {
+                if ports.contains(lit) {
+                    let rel = file.strip_prefix(&root).unwrap_or(file).display();
+                    hits.push(format!("{rel}:{}: \"{lit}\"", n + 1));
+                }
+            }
+        }
+    }
+    assert!(hits.is_empty(), "{} port names written as strings outside their declarations:\n{}", hits.len(), hits.join("\n"));
+}
+
+#[test]
+fn the_scan_finds_a_string_port_read() {
+    assert_eq!(literals(r#"    let x = i.float("turbulence")? as f32;"#), ["turbulence"]);
+    assert_eq!(literals(r#"        Cloth = "cloth","#), Vec::<&str>::new());
+    assert_eq!(literals(r#"    // i.float("turbulence")"#), Vec::<&str>::new());
+    assert_eq!(literals(r#"NodeError::port("a", "b c")"#), ["a"]);
+}

@@ -177,13 +177,13 @@ fn raster_band_avx2(avx2: Avx2, lists: &[DrawList], view: &View, bi: usize, band
     raster_band_generic(avx2, lists, view, bi, band)
 }
 
-/// `envelope` (see the `fan` module) in AVX2 with four running minima merged at the end. Written with intrinsics
-/// because a single chain of `vminps` waits out its latency (4 cycles on recent Intel cores)
-/// at every edge, and the compiler, given the independent chains in plain Rust, split them
-/// across mismatched registers and branched on the merge (measured 13 % slower than one
-/// chain); this form was 5 % faster at 1,000 flames. Bit-identical to the portable loop: the
-/// same separate multiply and add per lane (no FMA), and the minimum of non-NaN values does
-/// not depend on the order (`vminps(v, m)` keeps `m` when `v` is NaN, as `lane_min` does).
+/// `envelope` (see the `fan` module) in AVX2 with four running minima merged at the end. Written
+/// with intrinsics because a single chain of `vminps` waits out its latency (4 cycles on recent
+/// Intel cores) at every edge, and the compiler, given the independent chains in plain Rust, split
+/// them across mismatched registers and branched on the merge (measured 13 % slower than one
+/// chain); this form was 5 % faster at 1,000 flames. Bit-identical to the portable loop: the same
+/// separate multiply and add per lane (no FMA), and the minimum of non-NaN values does not depend
+/// on the order (`vminps(v, m)` keeps `m` when `v` is NaN, as `lane_min` does).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn envelope_avx2(env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
@@ -220,14 +220,14 @@ fn envelope_m256(env: &[[f32; 2]], base: f32) -> std::arch::x86_64::__m256 {
     _mm256_min_ps(_mm256_min_ps(m[0], m[1]), _mm256_min_ps(m[2], m[3]))
 }
 
-/// A span of `fill_fan_span` (see the `fan` module) blended with [`add_in_range`] (`blend` there) and no depth test,
-/// two pixels per AVX register instead of one per SSE register: the particles' usual case,
-/// where the per-pixel blend had become the larger half of a fan row's time. Written for the
-/// whole span (the constants set up once, the envelope kept in its register, the pixel pairs
-/// addressed directly) because the per-block form's slicing and set-up cost as much as its
+/// A span of `fill_fan_span` (see the `fan` module) blended with [`add_in_range`] (`blend` there)
+/// and no depth test, two pixels per AVX register instead of one per SSE register: the particles'
+/// usual case, where the per-pixel blend had become the larger half of a fan row's time. Written
+/// for the whole span (the constants set up once, the envelope kept in its register, the pixel
+/// pairs addressed directly) because the per-block form's slicing and set-up cost as much as its
 /// blending. The same operations in the same order per channel as the portable loop, so
-/// bit-identical: the clamp as `min(1, max(0, l))` (what `f32::clamp` computes for a non-NaN
-/// `l`; the envelope is never NaN), `edge + delta·l`, then `min(dst + src·[a, a, a, 1], 1)`.
+/// bit-identical: the clamp as `min(1, max(0, l))` (what `f32::clamp` computes for a non-NaN `l`;
+/// the envelope is never NaN), `edge + delta·l`, then `min(dst + src·[a, a, a, 1], 1)`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32; 4], delta: [f32; 4]) {
@@ -261,12 +261,12 @@ fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32;
     }
 }
 
-/// `tile_lanes` (see the `tiles` module) in AVX2 intrinsics, one register per quantity: the compiler left the
-/// portable loops partly scalar (the coverage mask and the texel conversions lane by lane),
-/// and a dense cloth's triangles spend most of their time here. Bit-identical to it: the same
-/// exact integer edge functions, the same separate multiplies and adds in the same order (no
-/// FMA), an exact division, and `max`/`min` operand orders that give `f32::clamp`'s result
-/// for every input, a NaN included (see `lane_floor` and [`Texels::texel_coords`]).
+/// `tile_lanes` (see the `tiles` module) in AVX2 intrinsics, one register per quantity: the
+/// compiler left the portable loops partly scalar (the coverage mask and the texel conversions lane
+/// by lane), and a dense cloth's triangles spend most of their time here. Bit-identical to it: the
+/// same exact integer edge functions, the same separate multiplies and adds in the same order (no
+/// FMA), an exact division, and `max`/`min` operand orders that give `f32::clamp`'s result for
+/// every input, a NaN included (see `lane_floor` and [`Texels::texel_coords`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn tile_lanes_avx2<const W: usize>(t: &SmallTri, w: [i32; 3], rows_left: usize, tex: Option<&Texels<'_>>) -> Option<TileShading> {
@@ -322,13 +322,12 @@ fn lanes_i32(v: std::arch::x86_64::__m256i) -> [i32; SMALL_LANES] {
     unsafe { std::mem::transmute::<std::arch::x86_64::__m256i, [i32; SMALL_LANES]>(v) }
 }
 
-/// `straight` (see the `framebuffer` module) for two pixels per AVX register, branch-free: the same operations as the
-/// scalar form, which are SSE operations through glam (the alpha as `maxps` over the same
-/// shuffles, `minps` against 1, `divps` by it), so bit-identical. Its two branches are one
-/// here: for `a == 1` dividing by `a` changes nothing; `a ≤ 0` is masked to zero. Over a
-/// 1280×720 frame the scalar form took about 15 instructions per pixel (a tenth of the
-/// instructions of a 144-flame cloth frame's drawing). Returns the pixels converted (all but an
-/// odd last one).
+/// `straight` (see the `framebuffer` module) for two pixels per AVX register, branch-free: the same
+/// operations as the scalar form, which are SSE operations through glam (the alpha as `maxps` over
+/// the same shuffles, `minps` against 1, `divps` by it), so bit-identical. Its two branches are one
+/// here: for `a == 1` dividing by `a` changes nothing; `a ≤ 0` is masked to zero. Over a 1280×720
+/// frame the scalar form took about 15 instructions per pixel (a tenth of the instructions of a
+/// 144-flame cloth frame's drawing). Returns the pixels converted (all but an odd last one).
 ///
 /// # Safety
 /// The CPU must support AVX2, and `out` must be valid for writes of `4 · color.len()` samples.

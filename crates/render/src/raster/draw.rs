@@ -33,8 +33,8 @@ enum Prim {
     Fan { fan: u32, blend: Blend },
 }
 
-/// Geometry ready for [`render`](super::render): built on one thread, many lists may be built in parallel and
-/// rendered together (in list order).
+/// Geometry ready for [`render`](super::render): built on one thread, many lists may be built in
+/// parallel and rendered together (in list order).
 pub struct DrawList {
     pub(super) view: View,
     verts: Vec<SVert>,

@@ -299,9 +299,9 @@ fn lane_min(v: f32, m: f32) -> f32 {
     if v < m { v } else { m }
 }
 
-/// Additive blending of a straight-alpha source already known to have alpha in [0, 1] and
-/// colour ≥ 0 (see `FanSetup::in_range`): [`blend_pixel`](super::blend_pixel)'s `Additive` without its clamps, four
-/// lanes at once.
+/// Additive blending of a straight-alpha source already known to have alpha in [0, 1] and colour ≥
+/// 0 (see `FanSetup::in_range`): [`blend_pixel`](super::blend_pixel)'s `Additive` without its
+/// clamps, four lanes at once.
 #[inline(always)]
 pub(super) fn add_in_range(dst: &mut [f32; 4], src: Vec4) {
     let weight = Vec4::select(BVec4A::new(true, true, true, false), src.wwww(), Vec4::ONE);

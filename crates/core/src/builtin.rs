@@ -1,19 +1,22 @@
 //! The core's own node types: `graph.include` and small value/math utilities for driving
 //! parameters from other nodes.
 
+use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::eval::CookCtx;
 use crate::include::{IncludePlaceholder, include_desc};
+use crate::node::Node;
 use crate::params::Cook;
-use crate::registry::Registry;
 
-/// Adds the built-in node types.
-pub fn register(r: &mut Registry) {
-    r.add(std::sync::Arc::new(IncludePlaceholder(include_desc())));
-    r.add(FloatValue::node());
-    r.add(IntValue::node());
-    r.add(Add::node());
-    r.add(Multiply::node());
+/// The built-in node types, for [`crate::Registry::with_builtins`] (a list rather than a
+/// `register(&mut Registry)`, so this module does not depend on the registry that depends on it).
+pub fn nodes() -> Vec<std::sync::Arc<dyn Node>> {
+    vec![
+        std::sync::Arc::new(IncludePlaceholder(include_desc())),
+        FloatValue::node(),
+        IntValue::node(),
+        Add::node(),
+        Multiply::node(),
+    ]
 }
 
 /// Bound of the value and math nodes' numbers: wide, but finite so sliders have ends.

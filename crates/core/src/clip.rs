@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::eval::CookCtx;
 use crate::fingerprint::Fingerprinter;
 use crate::frame_cache::{ClipKey, FrameCache, next_clip_id};
 use crate::value::{Image, PortType, Value};

@@ -287,8 +287,8 @@ mod tests {
     use std::sync::Mutex;
 
     use super::*;
+    use crate::ctx::CookCtx;
     use crate::error::NodeError;
-    use crate::eval::CookCtx;
     use crate::value::{Channels, Clip, FrameSource, Image, PortType};
 
     /// 8×8 gray frames (256 bytes each) whose pixels depend on the index; logs every compute.
@@ -424,7 +424,7 @@ mod tests {
     /// pressing Cancel while a writer streams the clip).
     struct CancelAt {
         at: usize,
-        token: crate::eval::CancelToken,
+        token: crate::ctx::CancelToken,
         fired: std::sync::atomic::AtomicBool,
     }
 
@@ -442,7 +442,7 @@ mod tests {
 
     #[test]
     fn a_cancelled_streaming_cook_leaves_the_cache_consistent() {
-        let token = crate::eval::CancelToken::new();
+        let token = crate::ctx::CancelToken::new();
         let cache = Arc::new(FrameCache::new(4 * 256));
         let source = Arc::new(CancelAt { at: 5, token: token.clone(), fired: Default::default() });
         let streamed = Clip::with_cache(PortType::Image, 24.0, 11, source, cache.clone());

@@ -3,9 +3,10 @@
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
+use crate::ctx::CookCtx;
 use crate::document::{GraphDoc, NodeDoc, ParamValue};
 use crate::error::{Diagnostic, DiagnosticKind, Location, NodeError};
-use crate::eval::{CookCtx, Evaluator};
+use crate::eval::Evaluator;
 use crate::fingerprint::Fingerprinter;
 use crate::graph::{self, Graph, InputSource, LoadCtx, expand_vars};
 use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};

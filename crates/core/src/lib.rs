@@ -6,6 +6,7 @@
 pub mod builtin;
 pub mod clip;
 mod compact;
+pub mod ctx;
 pub mod document;
 pub mod error;
 pub mod eval;

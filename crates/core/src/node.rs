@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::eval::CookCtx;
 use crate::value::{Clip, Image, Mask, PortType, Value};
 
 /// How a node relates to time; decides lifting and caching.

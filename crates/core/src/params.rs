@@ -12,8 +12,8 @@ use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::eval::CookCtx;
 use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc};
 use crate::value::{
     ArModel, Basis, Clip, ClothState, Contours, FlameModel, FrameList, Image, Mask, Mesh, ParamSeries, Particles, PortType,

@@ -20,7 +20,9 @@ impl Registry {
     /// A registry with the core's own nodes (`graph.include`, `value.*`, `math.*`).
     pub fn with_builtins() -> Self {
         let mut r = Registry::new();
-        crate::builtin::register(&mut r);
+        for node in crate::builtin::nodes() {
+            r.add(node);
+        }
         r
     }
 

@@ -764,7 +764,7 @@ mod tests {
     fn clip_rejects_out_of_range_frames_and_materializes_in_order() {
         let frames = (0..5).map(Value::Int).collect();
         let clip = Clip::from_frames(PortType::Int, 24.0, frames);
-        let ctx = crate::eval::CookCtx::default();
+        let ctx = crate::ctx::CookCtx::default();
         assert!(clip.get(5, &ctx).is_err());
         let all = clip.materialize(&ctx).unwrap();
         let ints: Vec<i64> = all.iter().map(|v| if let Value::Int(i) = v { *i } else { -1 }).collect();

@@ -1,0 +1,133 @@
+//! The context of a cook: cancellation, progress reporting and render settings. Its own
+//! module, depending on nothing but errors, so node types, values and the frame cache can take a
+//! `CookCtx` without reaching into the evaluator.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::error::NodeError;
+
+/// What a long cook reports while it runs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Progress {
+    /// A node started cooking.
+    NodeStarted {
+        /// Its id.
+        node: Arc<str>,
+    },
+    /// A node finished (successfully or not).
+    NodeFinished {
+        /// Its id.
+        node: Arc<str>,
+        /// Whether it succeeded.
+        ok: bool,
+    },
+    /// A node pulled one more frame of a clip.
+    Frame {
+        /// The node doing the pulling.
+        node: Arc<str>,
+        /// Frames done so far.
+        done: usize,
+        /// Frames in all.
+        total: usize,
+    },
+}
+
+/// A progress callback; called from worker threads.
+pub type ProgressFn = Arc<dyn Fn(&Progress) + Send + Sync>;
+
+/// A shared flag that stops a cook at the next node or frame boundary.
+#[derive(Clone, Debug, Default)]
+pub struct CancelToken(Arc<AtomicBool>);
+
+impl CancelToken {
+    /// A token that is not cancelled.
+    pub fn new() -> Self {
+        CancelToken::default()
+    }
+    /// Asks running cooks to stop.
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+    /// Whether cancellation was asked for.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+    /// Clears the flag so the token can be used again.
+    pub fn reset(&self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
+}
+
+/// Settings of one render that sinks (writers) obey.
+#[derive(Clone, Debug, Default)]
+pub struct CookSettings {
+    /// Inclusive frame range to write (`--frames A-B`); all frames when `None`.
+    pub frames: Option<(usize, usize)>,
+    /// Replace existing files even where a writer's `overwrite` parameter is off.
+    pub overwrite: bool,
+    /// Folder for scratch files of out-of-core work (`--cache-dir`); the system's temp folder
+    /// when `None`.
+    pub cache_dir: Option<std::path::PathBuf>,
+}
+
+/// Context of a cook: cancellation, progress, render settings and the node being cooked.
+#[derive(Clone, Default)]
+pub struct CookCtx {
+    cancel: CancelToken,
+    progress: Option<ProgressFn>,
+    settings: Arc<CookSettings>,
+    node: Option<Arc<str>>,
+}
+
+impl CookCtx {
+    /// A context with no progress reporting that is never cancelled.
+    pub fn new() -> Self {
+        CookCtx::default()
+    }
+    /// Uses `token` for cancellation.
+    pub fn with_cancel(mut self, token: CancelToken) -> Self {
+        self.cancel = token;
+        self
+    }
+    /// Reports progress to `f`.
+    pub fn with_progress(mut self, f: ProgressFn) -> Self {
+        self.progress = Some(f);
+        self
+    }
+    /// Uses render settings.
+    pub fn with_settings(mut self, settings: CookSettings) -> Self {
+        self.settings = Arc::new(settings);
+        self
+    }
+    /// The render settings.
+    pub fn settings(&self) -> &CookSettings {
+        &self.settings
+    }
+    /// The cancellation token.
+    pub fn cancel_token(&self) -> &CancelToken {
+        &self.cancel
+    }
+    /// `Err(Cancelled)` once cancellation was asked for.
+    pub fn check_cancel(&self) -> Result<(), NodeError> {
+        if self.cancel.is_cancelled() { Err(NodeError::Cancelled) } else { Ok(()) }
+    }
+    /// The id of the node being cooked, if any.
+    pub fn node_id(&self) -> Option<&str> {
+        self.node.as_deref()
+    }
+    /// Reports per-frame progress of the current node.
+    pub fn frame_progress(&self, done: usize, total: usize) {
+        if let (Some(f), Some(node)) = (&self.progress, &self.node) {
+            f(&Progress::Frame { node: node.clone(), done, total });
+        }
+    }
+    pub(crate) fn report(&self, p: Progress) {
+        if let Some(f) = &self.progress {
+            f(&p);
+        }
+    }
+    pub(crate) fn for_node(&self, id: &Arc<str>) -> CookCtx {
+        CookCtx { node: Some(id.clone()), ..self.clone() }
+    }
+}

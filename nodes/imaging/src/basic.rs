@@ -6,22 +6,19 @@ use std::sync::Arc;
 
 use image::imageops::{self, FilterType};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
-    Value,
-};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Registry, Value, port};
 
 use crate::convert;
 
 /// Adds the basic imaging node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(to_gray_desc(), cook_to_gray));
-    registry.add(FnNode::new(crop_desc(), cook_crop));
-    registry.add(FnNode::new(resize_desc(), cook_resize));
-    registry.add(FnNode::new(time_range_desc(), cook_time_range));
-    registry.add(FnNode::new(composite_desc(), cook_composite));
-    registry.add(FnNode::new(constant_color_desc(), cook_constant_color));
-    registry.add(FnNode::new(mask_to_image_desc(), cook_mask_to_image));
+    registry.add(ToGray::node());
+    registry.add(Crop::node());
+    registry.add(Resize::node());
+    registry.add(TimeRange::node());
+    registry.add(Composite::node());
+    registry.add(ConstantColor::node());
+    registry.add(MaskToImage::node());
 }
 
 /// Largest width or height the nodes here create.
@@ -38,31 +35,21 @@ fn image_size_text(img: &Image) -> String {
 // imaging.to_gray
 // ---------------------------------------------------------------------------------------------
 
-/// How colour is reduced to one intensity.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GrayMode {
-    /// 0.299 R + 0.587 G + 0.114 B (OpenCV's `COLOR_RGB2GRAY`, used by the Eigenfires thesis).
-    Rec601,
-    /// 0.2126 R + 0.7152 G + 0.0722 B (sRGB / HDTV primaries).
-    Rec709,
-    /// (R + G + B) / 3.
-    Average,
-    /// max(R, G, B).
-    Max,
+pyrograph_core::choice! {
+    /// How colour is reduced to one intensity.
+    pub enum GrayMode {
+        /// 0.299 R + 0.587 G + 0.114 B (OpenCV's `COLOR_RGB2GRAY`, used by the Eigenfires thesis).
+        Rec601 = "rec601",
+        /// 0.2126 R + 0.7152 G + 0.0722 B (sRGB / HDTV primaries).
+        Rec709 = "rec709",
+        /// (R + G + B) / 3.
+        Average = "average",
+        /// max(R, G, B).
+        Max = "max",
+    }
 }
 
 impl GrayMode {
-    /// Parses a mode name of the `mode` port.
-    pub fn parse(name: &str) -> Result<Self, NodeError> {
-        match name {
-            "rec601" => Ok(GrayMode::Rec601),
-            "rec709" => Ok(GrayMode::Rec709),
-            "average" => Ok(GrayMode::Average),
-            "max" => Ok(GrayMode::Max),
-            other => Err(NodeError::port("mode", format!("unknown mode '{other}' (rec601, rec709, average, max)"))),
-        }
-    }
-
     fn apply(self, r: f32, g: f32, b: f32) -> f32 {
         match self {
             GrayMode::Rec601 => 0.299 * r + 0.587 * g + 0.114 * b,
@@ -73,21 +60,21 @@ impl GrayMode {
     }
 }
 
-fn to_gray_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.to_gray",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Converts an image to one gray channel.\n\nAlpha is dropped; a gray input passes through unchanged.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "The image to convert."))
-    .input(PortDesc::choice(
-        "mode",
-        &["rec601", "rec709", "average", "max"],
-        "rec601",
-        "Weights: rec601 (OpenCV), rec709, average or max of R, G, B.",
-    ))
-    .output("image", PortType::Image, "The gray image.")
+pyrograph_core::node! {
+    /// Converts an image to one gray channel.
+    ///
+    /// Alpha is dropped; a gray input passes through unchanged.
+    #[node("imaging.to_gray", "Imaging", PerFrame)]
+    pub struct ToGray {
+        /// The image to convert.
+        image: Arc<Image>,
+        /// Weights: rec601 (OpenCV), rec709, average or max of R, G, B.
+        mode: GrayMode = GrayMode::Rec601,
+    }
+    pub struct ToGrayOut {
+        /// The gray image.
+        image: Arc<Image>,
+    }
 }
 
 /// The gray version of `img` (alpha ignored).
@@ -102,23 +89,39 @@ pub fn to_gray(img: &Image, mode: GrayMode) -> Image {
     }
 }
 
-fn cook_to_gray(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let mode = GrayMode::parse(i.choice("mode")?)?;
-    Ok(vec![Value::Image(Arc::new(to_gray(i.image("image")?, mode)))])
+impl Cook for ToGray {
+    fn cook(self, _: &CookCtx) -> Result<ToGrayOut, NodeError> {
+        Ok(ToGrayOut { image: Arc::new(to_gray(&self.image, self.mode)) })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // imaging.crop
 // ---------------------------------------------------------------------------------------------
 
-fn crop_desc() -> NodeDesc {
-    NodeDesc::new("imaging.crop", "Imaging", TimeDep::PerFrame, "Cuts a rectangle out of an image.")
-        .input(PortDesc::new("image", PortType::Image, "The image to crop."))
-        .input(PortDesc::int("x", 0, (0, MAX_OFFSET), "Left edge of the rectangle, in pixels from the left."))
-        .input(PortDesc::int("y", 0, (0, MAX_OFFSET), "Top edge of the rectangle, in pixels from the top."))
-        .input(PortDesc::int("width", 0, (0, MAX_OFFSET), "Width of the rectangle; 0 = up to the right edge."))
-        .input(PortDesc::int("height", 0, (0, MAX_OFFSET), "Height of the rectangle; 0 = up to the bottom edge."))
-        .output("image", PortType::Image, "The cropped image.")
+pyrograph_core::node! {
+    /// Cuts a rectangle out of an image.
+    #[node("imaging.crop", "Imaging", PerFrame)]
+    pub struct Crop {
+        /// The image to crop.
+        image: Arc<Image>,
+        /// Left edge of the rectangle, in pixels from the left.
+        #[range(0, MAX_OFFSET)]
+        x: u32 = 0,
+        /// Top edge of the rectangle, in pixels from the top.
+        #[range(0, MAX_OFFSET)]
+        y: u32 = 0,
+        /// Width of the rectangle; 0 = up to the right edge.
+        #[range(0, MAX_OFFSET)]
+        width: u32 = 0,
+        /// Height of the rectangle; 0 = up to the bottom edge.
+        #[range(0, MAX_OFFSET)]
+        height: u32 = 0,
+    }
+    pub struct CropOut {
+        /// The cropped image.
+        image: Arc<Image>,
+    }
 }
 
 /// Resolves one axis of a crop: `(start, length)` within `size`, or an error naming the ports.
@@ -138,8 +141,8 @@ fn crop_span(start: u32, len: u32, size: u32, ports: (&str, &str), img: &Image) 
 
 /// The `width × height` rectangle at `(x, y)`; 0 sizes reach the right / bottom edge.
 pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Image, NodeError> {
-    let (x, w) = crop_span(x, width, img.width(), ("x", "width"), img)?;
-    let (y, h) = crop_span(y, height, img.height(), ("y", "height"), img)?;
+    let (x, w) = crop_span(x, width, img.width(), (port!(Crop, x), port!(Crop, width)), img)?;
+    let (y, h) = crop_span(y, height, img.height(), (port!(Crop, y), port!(Crop, height)), img)?;
     let n = img.channels().count();
     let row_len = img.width() as usize * n;
     let data: Vec<f32> = img
@@ -149,45 +152,66 @@ pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Imag
         .take(h as usize)
         .flat_map(|row| row.iter().skip(x as usize * n).take(w as usize * n).copied())
         .collect();
-    Image::from_vec(w, h, img.channels(), data).ok_or_else(|| NodeError::port("image", "image data does not match its size"))
+    Image::from_vec(w, h, img.channels(), data)
+        .ok_or_else(|| NodeError::port(port!(Crop, image), "image data does not match its size"))
 }
 
-fn u32_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
-    let v = i.usize(name)?;
-    u32::try_from(v).map_err(|_| NodeError::port(name, format!("{v} is too large")))
-}
-
-fn cook_crop(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = crop(i.image("image")?, u32_port(i, "x")?, u32_port(i, "y")?, u32_port(i, "width")?, u32_port(i, "height")?)?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for Crop {
+    fn cook(self, _: &CookCtx) -> Result<CropOut, NodeError> {
+        Ok(CropOut { image: Arc::new(crop(&self.image, self.x, self.y, self.width, self.height)?) })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // imaging.resize
 // ---------------------------------------------------------------------------------------------
 
-fn resize_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.resize",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Scales an image to a new size.\n\nA width or height of 0 keeps the aspect ratio from the other one.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "The image to scale."))
-    .input(PortDesc::int("width", 0, (0, MAX_SIZE), "New width; 0 = from height, keeping the aspect ratio."))
-    .input(PortDesc::int("height", 0, (0, MAX_SIZE), "New height; 0 = from width, keeping the aspect ratio."))
-    .input(PortDesc::choice("filter", &["nearest", "bilinear", "catmull_rom", "lanczos3"], "bilinear", "Resampling filter."))
-    .output("image", PortType::Image, "The scaled image.")
+pyrograph_core::choice! {
+    /// A resampling filter of `imaging.resize`.
+    pub enum ResizeFilter {
+        /// The nearest pixel.
+        Nearest = "nearest",
+        /// Linear interpolation (a triangle filter).
+        Bilinear = "bilinear",
+        /// The Catmull–Rom cubic.
+        CatmullRom = "catmull_rom",
+        /// Lanczos with a window of 3.
+        Lanczos3 = "lanczos3",
+    }
 }
 
-/// Parses a filter name of the `filter` port.
-pub fn parse_filter(name: &str) -> Result<FilterType, NodeError> {
-    match name {
-        "nearest" => Ok(FilterType::Nearest),
-        "bilinear" => Ok(FilterType::Triangle),
-        "catmull_rom" => Ok(FilterType::CatmullRom),
-        "lanczos3" => Ok(FilterType::Lanczos3),
-        other => Err(NodeError::port("filter", format!("unknown filter '{other}' (nearest, bilinear, catmull_rom, lanczos3)"))),
+impl ResizeFilter {
+    /// The `image` crate's filter.
+    pub fn filter_type(self) -> FilterType {
+        match self {
+            ResizeFilter::Nearest => FilterType::Nearest,
+            ResizeFilter::Bilinear => FilterType::Triangle,
+            ResizeFilter::CatmullRom => FilterType::CatmullRom,
+            ResizeFilter::Lanczos3 => FilterType::Lanczos3,
+        }
+    }
+}
+
+pyrograph_core::node! {
+    /// Scales an image to a new size.
+    ///
+    /// A width or height of 0 keeps the aspect ratio from the other one.
+    #[node("imaging.resize", "Imaging", PerFrame)]
+    pub struct Resize {
+        /// The image to scale.
+        image: Arc<Image>,
+        /// New width; 0 = from height, keeping the aspect ratio.
+        #[range(0, MAX_SIZE)]
+        width: u32 = 0,
+        /// New height; 0 = from width, keeping the aspect ratio.
+        #[range(0, MAX_SIZE)]
+        height: u32 = 0,
+        /// Resampling filter.
+        filter: ResizeFilter = ResizeFilter::Bilinear,
+    }
+    pub struct ResizeOut {
+        /// The scaled image.
+        image: Arc<Image>,
     }
 }
 
@@ -195,11 +219,11 @@ pub fn parse_filter(name: &str) -> Result<FilterType, NodeError> {
 pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32), NodeError> {
     let (w0, h0) = (f64::from(img.width()), f64::from(img.height()));
     if img.width() == 0 || img.height() == 0 {
-        return Err(NodeError::port("image", format!("cannot resize an empty {} image", image_size_text(img))));
+        return Err(NodeError::port(port!(Resize, image), format!("cannot resize an empty {} image", image_size_text(img))));
     }
     let scaled = |v: f64| (v.round() as u32).max(1);
     match (width, height) {
-        (0, 0) => Err(NodeError::port("width", "width and height are both 0; set at least one of them")),
+        (0, 0) => Err(NodeError::port(port!(Resize, width), "width and height are both 0; set at least one of them")),
         (0, h) => Ok((scaled(w0 * f64::from(h) / h0), h)),
         (w, 0) => Ok((w, scaled(h0 * f64::from(w) / w0))),
         (w, h) => Ok((w, h)),
@@ -226,32 +250,35 @@ pub fn resize(img: &Image, width: u32, height: u32, filter: FilterType) -> Resul
     Ok(scale(resized, peak))
 }
 
-fn cook_resize(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let filter = parse_filter(i.choice("filter")?)?;
-    let img = resize(i.image("image")?, u32_port(i, "width")?, u32_port(i, "height")?, filter)?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for Resize {
+    fn cook(self, _: &CookCtx) -> Result<ResizeOut, NodeError> {
+        Ok(ResizeOut { image: Arc::new(resize(&self.image, self.width, self.height, self.filter.filter_type())?) })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // imaging.time_range
 // ---------------------------------------------------------------------------------------------
 
-fn time_range_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.time_range",
-        "Imaging",
-        TimeDep::WholeClip,
-        "Keeps the frames first..=last of a clip.\n\nFrames are pulled from the source clip only when asked for.",
-    )
-    .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The clip to trim."))
-    .input(PortDesc::int("first", 0, (0, 1 << 40), "First frame kept (0-based)."))
-    .input(PortDesc::int(
-        "last",
-        -1,
-        (-(1 << 40), 1 << 40),
-        "Last frame kept, inclusive; negative counts from the end (-1 = last frame).",
-    ))
-    .output("clip", PortType::clip_of(PortType::Image), "The trimmed clip.")
+pyrograph_core::node! {
+    /// Keeps the frames first..=last of a clip.
+    ///
+    /// Frames are pulled from the source clip only when asked for.
+    #[node("imaging.time_range", "Imaging", WholeClip)]
+    pub struct TimeRange {
+        /// The clip to trim.
+        clip: ClipOf<Arc<Image>>,
+        /// First frame kept (0-based).
+        #[range(0, 1i64 << 40)]
+        first: i64 = 0,
+        /// Last frame kept, inclusive; negative counts from the end (-1 = last frame).
+        #[range(-(1i64 << 40), 1i64 << 40)]
+        last: i64 = -1,
+    }
+    pub struct TimeRangeOut {
+        /// The trimmed clip.
+        clip: ClipOf<Arc<Image>>,
+    }
 }
 
 /// Frames `first..first + len` of another clip.
@@ -277,15 +304,21 @@ pub fn resolve_range(len: usize, first: i64, last: i64) -> Result<(usize, usize)
     };
     let len_i = i64::try_from(len).unwrap_or(i64::MAX);
     if first < 0 || first >= len_i {
-        return Err(NodeError::port("first", format!("frame {first} is outside the {len}-frame clip ({})", frames(len))));
+        return Err(NodeError::port(
+            port!(TimeRange, first),
+            format!("frame {first} is outside the {len}-frame clip ({})", frames(len)),
+        ));
     }
     let last_abs = if last < 0 { len_i + last } else { last };
     if last_abs < 0 || last_abs >= len_i {
-        return Err(NodeError::port("last", format!("frame {last} is outside the {len}-frame clip ({})", frames(len))));
+        return Err(NodeError::port(
+            port!(TimeRange, last),
+            format!("frame {last} is outside the {len}-frame clip ({})", frames(len)),
+        ));
     }
     if last_abs < first {
         return Err(NodeError::port(
-            "last",
+            port!(TimeRange, last),
             format!("the range {first}-{last_abs} is empty: last must not be before first (the clip has {len} frames)"),
         ));
     }
@@ -302,42 +335,33 @@ pub fn time_range(clip: &Clip, first: i64, last: i64) -> Result<Clip, NodeError>
     Ok(Clip::new(clip.element().clone(), clip.fps(), h.finish(), Arc::new(source)))
 }
 
-fn cook_time_range(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Clip(time_range(i.clip("clip")?, i.int("first")?, i.int("last")?)?)])
+impl Cook for TimeRange {
+    fn cook(self, _: &CookCtx) -> Result<TimeRangeOut, NodeError> {
+        Ok(TimeRangeOut { clip: ClipOf::new(time_range(&self.clip, self.first, self.last)?) })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // imaging.composite
 // ---------------------------------------------------------------------------------------------
 
-/// How the foreground's colour combines with the background's.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BlendMode {
-    /// Porter–Duff over with straight alpha.
-    Over,
-    /// a + b (not clamped: HDR allowed).
-    Add,
-    /// 1 − (1 − a)(1 − b).
-    Screen,
-    /// max(a, b).
-    Max,
-    /// a × b.
-    Multiply,
+pyrograph_core::choice! {
+    /// How the foreground's colour combines with the background's.
+    pub enum BlendMode {
+        /// Porter–Duff over with straight alpha.
+        Over = "over",
+        /// a + b (not clamped: HDR allowed).
+        Add = "add",
+        /// 1 − (1 − a)(1 − b).
+        Screen = "screen",
+        /// max(a, b).
+        Max = "max",
+        /// a × b.
+        Multiply = "multiply",
+    }
 }
 
 impl BlendMode {
-    /// Parses a mode name of the `mode` port.
-    pub fn parse(name: &str) -> Result<Self, NodeError> {
-        match name {
-            "over" => Ok(BlendMode::Over),
-            "add" => Ok(BlendMode::Add),
-            "screen" => Ok(BlendMode::Screen),
-            "max" => Ok(BlendMode::Max),
-            "multiply" => Ok(BlendMode::Multiply),
-            other => Err(NodeError::port("mode", format!("unknown mode '{other}' (over, add, screen, max, multiply)"))),
-        }
-    }
-
     /// The blended colour of one channel (`over` is the foreground itself).
     fn blend(self, a: f32, b: f32) -> f32 {
         match self {
@@ -350,21 +374,28 @@ impl BlendMode {
     }
 }
 
-fn composite_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.composite",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Combines a foreground image b onto a background a.\n\nThe foreground's weight is opacity × its alpha. `over` \
-         is Porter–Duff over with straight alpha; the other modes mix the background's colour towards \
-         mode(a, b) by that weight and combine alphas as over does. A gray input is promoted to RGBA when the other \
-         is RGBA; two gray inputs give a gray result.",
-    )
-    .input(PortDesc::new("a", PortType::Image, "Background."))
-    .input(PortDesc::new("b", PortType::Image, "Foreground, same size as a."))
-    .input(PortDesc::choice("mode", &["over", "add", "screen", "max", "multiply"], "over", "How b combines with a."))
-    .input(PortDesc::float("opacity", 1.0, (0.0, 1.0), "Strength of the foreground."))
-    .output("image", PortType::Image, "The composite.")
+pyrograph_core::node! {
+    /// Combines a foreground image b onto a background a.
+    ///
+    /// The foreground's weight is opacity × its alpha. `over` is Porter–Duff over with straight alpha; the other
+    /// modes mix the background's colour towards mode(a, b) by that weight and combine alphas as over does. A gray
+    /// input is promoted to RGBA when the other is RGBA; two gray inputs give a gray result.
+    #[node("imaging.composite", "Imaging", PerFrame)]
+    pub struct Composite {
+        /// Background.
+        a: Arc<Image>,
+        /// Foreground, same size as a.
+        b: Arc<Image>,
+        /// How b combines with a.
+        mode: BlendMode = BlendMode::Over,
+        /// Strength of the foreground.
+        #[range(0.0, 1.0)]
+        opacity: f32 = 1.0,
+    }
+    pub struct CompositeOut {
+        /// The composite.
+        image: Arc<Image>,
+    }
 }
 
 /// One straight-alpha RGBA pixel of `b` combined onto `a` with foreground weight `opacity`.
@@ -388,7 +419,7 @@ fn composite_rgba(a: &[f32], b: &[f32], mode: BlendMode, opacity: f32) -> [f32; 
 pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<Image, NodeError> {
     if a.size() != b.size() {
         return Err(NodeError::port(
-            "b",
+            port!(Composite, b),
             format!("b is {} but a is {}; composite needs images of the same size", image_size_text(b), image_size_text(a)),
         ));
     }
@@ -401,25 +432,37 @@ pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<
         a.data().chunks_exact(4).zip(b.data().chunks_exact(4)).flat_map(|(p, q)| composite_rgba(p, q, mode, opacity)).collect()
     };
     let channels = if both_gray { Channels::Gray } else { Channels::Rgba };
-    Image::from_vec(w, h, channels, data).ok_or_else(|| NodeError::port("a", "image data does not match its size"))
+    Image::from_vec(w, h, channels, data)
+        .ok_or_else(|| NodeError::port(port!(Composite, a), "image data does not match its size"))
 }
 
-fn cook_composite(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let mode = BlendMode::parse(i.choice("mode")?)?;
-    let img = composite(i.image("a")?, i.image("b")?, mode, i.float("opacity")? as f32)?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for Composite {
+    fn cook(self, _: &CookCtx) -> Result<CompositeOut, NodeError> {
+        Ok(CompositeOut { image: Arc::new(composite(&self.a, &self.b, self.mode, self.opacity)?) })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // imaging.constant_color / imaging.mask_to_image
 // ---------------------------------------------------------------------------------------------
 
-fn constant_color_desc() -> NodeDesc {
-    NodeDesc::new("imaging.constant_color", "Imaging", TimeDep::Source, "An RGBA image filled with one colour.")
-        .input(PortDesc::int("width", 512, (1, MAX_SIZE), "Width in pixels."))
-        .input(PortDesc::int("height", 512, (1, MAX_SIZE), "Height in pixels."))
-        .input(PortDesc::color("color", [0.0, 0.0, 0.0, 1.0], "The fill colour (linear RGBA, straight alpha)."))
-        .output("image", PortType::Image, "The filled image.")
+pyrograph_core::node! {
+    /// An RGBA image filled with one colour.
+    #[node("imaging.constant_color", "Imaging", Source)]
+    pub struct ConstantColor {
+        /// Width in pixels.
+        #[range(1, MAX_SIZE)]
+        width: u32 = 512,
+        /// Height in pixels.
+        #[range(1, MAX_SIZE)]
+        height: u32 = 512,
+        /// The fill colour (linear RGBA, straight alpha).
+        color: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
+    }
+    pub struct ConstantColorOut {
+        /// The filled image.
+        image: Arc<Image>,
+    }
 }
 
 /// A `width × height` RGBA image of `color`.
@@ -428,38 +471,59 @@ pub fn constant_color(width: u32, height: u32, color: [f32; 4]) -> Image {
     Image::from_vec(width, height, Channels::Rgba, data).unwrap_or_else(|| Image::new(width, height, Channels::Rgba))
 }
 
-fn size_port(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
-    let v = i.int(name)?;
-    u32::try_from(v)
-        .ok()
-        .filter(|&v| v >= 1 && i64::from(v) <= MAX_SIZE)
-        .ok_or_else(|| NodeError::port(name, format!("{v} is outside 1..={MAX_SIZE}")))
+/// `v` when it is a size the nodes here create (1..=[`MAX_SIZE`]), else an error on `port`: the
+/// port's range is only a hint to editors, and a 0 or huge image would fail later and less clearly.
+fn check_size(v: u32, port: &str) -> Result<u32, NodeError> {
+    if v >= 1 && i64::from(v) <= MAX_SIZE { Ok(v) } else { Err(NodeError::port(port, format!("{v} is outside 1..={MAX_SIZE}"))) }
 }
 
-fn cook_constant_color(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = constant_color(size_port(i, "width")?, size_port(i, "height")?, i.color("color")?);
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for ConstantColor {
+    fn cook(self, _: &CookCtx) -> Result<ConstantColorOut, NodeError> {
+        let width = check_size(self.width, port!(ConstantColor, width))?;
+        let height = check_size(self.height, port!(ConstantColor, height))?;
+        Ok(ConstantColorOut { image: Arc::new(constant_color(width, height, self.color)) })
+    }
 }
 
-fn mask_to_image_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.mask_to_image",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Turns a mask into a gray image (0 outside, 1 inside), so masks can be viewed, composited and written.",
-    )
-    .input(PortDesc::new("mask", PortType::Mask, "The mask."))
-    .output("image", PortType::Image, "The gray image.")
+pyrograph_core::node! {
+    /// Turns a mask into a gray image (0 outside, 1 inside), so masks can be viewed, composited and written.
+    #[node("imaging.mask_to_image", "Imaging", PerFrame)]
+    pub struct MaskToImage {
+        /// The mask.
+        mask: Arc<Mask>,
+    }
+    pub struct MaskToImageOut {
+        /// The gray image.
+        image: Arc<Image>,
+    }
 }
 
-fn cook_mask_to_image(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Image(Arc::new(convert::mask_to_image(i.mask("mask")?)))])
+impl Cook for MaskToImage {
+    fn cook(self, _: &CookCtx) -> Result<MaskToImageOut, NodeError> {
+        Ok(MaskToImageOut { image: Arc::new(convert::mask_to_image(&self.mask)) })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pyrograph_core::Mask;
+    use pyrograph_core::params::Declared;
+    use pyrograph_core::{Inputs, PortType};
+
+    /// Cooks node `T` on `values` (one per input, in port order) as the graph would.
+    fn cook_node<T: Cook>(values: &[Value]) -> Result<Vec<Value>, NodeError> {
+        let node = T::node();
+        node.cook(&Inputs::new(node.desc(), values), &CookCtx::new())
+    }
+
+    /// Reads node `T`'s inputs from `values`, as a cook does first.
+    fn read<T: Declared>(values: &[Value]) -> Result<T, NodeError> {
+        T::read(&Inputs::new(&T::desc(), values))
+    }
+
+    fn image_value(img: Image) -> Value {
+        Value::Image(Arc::new(img))
+    }
 
     fn rgba(w: u32, h: u32, data: &[f32]) -> Image {
         Image::from_vec(w, h, Channels::Rgba, data.to_vec()).unwrap()
@@ -496,7 +560,8 @@ mod tests {
         assert_eq!(to_gray(&img, GrayMode::Max).channels(), Channels::Gray);
         let already = gray(2, 1, &[0.1, 0.2]);
         assert_eq!(to_gray(&already, GrayMode::Rec709), already);
-        assert!(GrayMode::parse("luma").unwrap_err().to_string().contains("mode"));
+        let err = read::<ToGray>(&[image_value(already), Value::Enum("luma".into())]).unwrap_err().to_string();
+        assert!(err.contains("mode"), "{err}");
     }
 
     #[test]
@@ -543,8 +608,9 @@ mod tests {
         let hdr = gray(2, 2, &[4.0; 4]);
         let r = resize(&hdr, 1, 1, FilterType::Triangle).unwrap();
         assert_close(r.data(), &[4.0]);
-        assert_eq!(parse_filter("bilinear").unwrap(), FilterType::Triangle);
-        assert!(parse_filter("cubic").unwrap_err().to_string().contains("filter"));
+        assert_eq!(ResizeFilter::parse("bilinear").unwrap().filter_type(), FilterType::Triangle);
+        let values = [image_value(img), Value::Int(1), Value::Int(1), Value::Enum("cubic".into())];
+        assert!(read::<Resize>(&values).unwrap_err().to_string().contains("filter"));
     }
 
     #[test]
@@ -616,19 +682,16 @@ mod tests {
 
     #[test]
     fn cooks_read_their_ports() {
-        let desc = constant_color_desc();
-        let values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap()).collect();
-        let out = cook_constant_color(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+        let values: Vec<Value> = ConstantColor::desc().inputs.iter().map(|p| p.default.clone().unwrap()).collect();
+        let out = cook_node::<ConstantColor>(&values).unwrap();
         assert!(matches!(&out[0], Value::Image(img) if img.size() == (512, 512) && img.pixel(3, 3) == [0.0, 0.0, 0.0, 1.0]));
 
-        let desc = mask_to_image_desc();
         let values = [Value::Mask(Arc::new(Mask::from_vec(2, 1, vec![0, 255]).unwrap()))];
-        let out = cook_mask_to_image(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+        let out = cook_node::<MaskToImage>(&values).unwrap();
         assert!(matches!(&out[0], Value::Image(img) if img.data() == [0.0, 1.0] && img.channels() == Channels::Gray));
 
-        let desc = crop_desc();
-        let values = [Value::Image(Arc::new(gray(2, 2, &[0.0; 4]))), Value::Int(0), Value::Int(0), Value::Int(3), Value::Int(0)];
-        let err = cook_crop(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err().to_string();
+        let values = [image_value(gray(2, 2, &[0.0; 4])), Value::Int(0), Value::Int(0), Value::Int(3), Value::Int(0)];
+        let err = cook_node::<Crop>(&values).unwrap_err().to_string();
         assert!(err.contains("width") && err.contains("2x2"), "{err}");
     }
 }

@@ -443,7 +443,7 @@ fn cook_write_flipbook(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, Node
     check_cells(clip.len(), opts.rows, opts.cols)?;
     let base = i.path("path")?;
     let ext = base.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    let format: OutputFormat = output_format(base, "8", "half")
+    let format: OutputFormat = output_format(base, crate::io::BitDepth::Eight, crate::io::ExrType::Half)
         .map_err(|e| if let NodeError::Port { message, .. } = e { NodeError::port("path", message) } else { e })?;
     let overwrite = i.bool("overwrite")? || ctx.settings().overwrite;
     let fb = build_flipbook(&frames_of(i, ctx)?, &opts)?;

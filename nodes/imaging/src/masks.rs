@@ -3,38 +3,28 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{CookCtx, FnNode, Inputs, Mask, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value};
+use pyrograph_core::{Cook, CookCtx, Mask, NodeError, Registry, port};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(mask_combine_desc(), cook_mask_combine));
+    registry.add(MaskCombine::node());
 }
 
-/// How two masks combine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MaskOp {
-    /// Inside either (union).
-    Add,
-    /// Inside a but not b.
-    Subtract,
-    /// Inside exactly one (symmetric difference).
-    Difference,
-    /// Inside both.
-    Intersect,
+pyrograph_core::choice! {
+    /// How two masks combine.
+    pub enum MaskOp {
+        /// Inside either (union).
+        Add = "add",
+        /// Inside a but not b.
+        Subtract = "subtract",
+        /// Inside exactly one (symmetric difference).
+        Difference = "difference",
+        /// Inside both.
+        Intersect = "intersect",
+    }
 }
 
 impl MaskOp {
-    /// The op named `name` (the node's option names).
-    pub fn from_name(name: &str) -> Option<MaskOp> {
-        Some(match name {
-            "add" => MaskOp::Add,
-            "subtract" => MaskOp::Subtract,
-            "difference" => MaskOp::Difference,
-            "intersect" => MaskOp::Intersect,
-            _ => return None,
-        })
-    }
-
     fn apply(self, a: bool, b: bool) -> bool {
         match self {
             MaskOp::Add => a || b,
@@ -54,25 +44,29 @@ pub fn combine_masks(a: &Mask, b: &Mask, op: MaskOp) -> Result<Mask, String> {
     Mask::from_vec(a.width(), a.height(), data).ok_or_else(|| "mask size overflow".to_string())
 }
 
-fn mask_combine_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.mask_combine",
-        "Pre-processing",
-        TimeDep::PerFrame,
-        "Combines two masks with the blend modes of the HSV mask layers (Eigenfires thesis §3.2, Figure 17): \
-         add = union, subtract = a without b, difference = in exactly one, intersect = in both.",
-    )
-    .input(PortDesc::new("a", PortType::Mask, "First mask."))
-    .input(PortDesc::new("b", PortType::Mask, "Second mask, same size."))
-    .input(PortDesc::choice("mode", &["add", "subtract", "difference", "intersect"], "add", "How b combines with a."))
-    .output("mask", PortType::Mask, "The combined mask.")
+pyrograph_core::node! {
+    /// Combines two masks with the blend modes of the HSV mask layers (Eigenfires thesis §3.2, Figure 17): add = union,
+    /// subtract = a without b, difference = in exactly one, intersect = in both.
+    #[node("imaging.mask_combine", "Pre-processing", PerFrame)]
+    pub struct MaskCombine {
+        /// First mask.
+        a: Arc<Mask>,
+        /// Second mask, same size.
+        b: Arc<Mask>,
+        /// How b combines with a.
+        mode: MaskOp = MaskOp::Add,
+    }
+    pub struct MaskCombineOut {
+        /// The combined mask.
+        mask: Arc<Mask>,
+    }
 }
 
-fn cook_mask_combine(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let mode = i.choice("mode")?;
-    let op = MaskOp::from_name(mode).ok_or_else(|| NodeError::port("mode", format!("unknown mode '{mode}'")))?;
-    let out = combine_masks(i.mask("a")?, i.mask("b")?, op).map_err(|m| NodeError::port("b", m))?;
-    Ok(vec![Value::Mask(Arc::new(out))])
+impl Cook for MaskCombine {
+    fn cook(self, _: &CookCtx) -> Result<MaskCombineOut, NodeError> {
+        let out = combine_masks(&self.a, &self.b, self.mode).map_err(|m| NodeError::port(port!(MaskCombine, b), m))?;
+        Ok(MaskCombineOut { mask: Arc::new(out) })
+    }
 }
 
 #[cfg(test)]

@@ -9,38 +9,55 @@ use std::sync::Arc;
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
-    Value,
-};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value};
 use rayon::prelude::*;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(turbulence_flame_desc(), cook_turbulence_flame));
+    registry.add(TurbulenceFlame::node());
 }
 
-/// Parameters of [`turbulence_flame_frame`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct TurbulenceFlame {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Noise seed.
-    pub seed: u32,
-    /// Flame width at its base, as a fraction of the image width.
-    pub base_width: f64,
-    /// Flame height as a fraction of the image height.
-    pub height_fraction: f64,
-    /// Strength of the noise displacement of the flame's edge.
-    pub turbulence: f64,
-    /// Upward scroll speed of the noise, in flame heights per second.
-    pub speed: f64,
-    /// Noise octaves.
-    pub octaves: usize,
-    /// Frames per second (time step between frames).
-    pub fps: f64,
+pyrograph_core::node! {
+    /// An animated procedural flame: a teardrop whose edge is displaced by upward-scrolling fractal noise (Perlin
+    /// 1985), coloured by a black-body ramp with alpha = intensity. For demos and tests when no footage is at hand;
+    /// not one of the four papers' models.
+    #[node("imaging.turbulence_flame", "Procedural", Source)]
+    pub struct TurbulenceFlame {
+        /// Image width in pixels.
+        #[range(8, 8192)]
+        width: u32 = 256,
+        /// Image height in pixels.
+        #[range(8, 8192)]
+        height: u32 = 384,
+        /// Number of frames.
+        #[range(1, 100_000)]
+        frames: usize = 48,
+        /// Frames per second.
+        #[range(1.0, 240.0)]
+        fps: f64 = 24.0,
+        /// Noise seed.
+        #[range(0, u32::MAX)]
+        seed: u32 = 1,
+        /// Flame width at the base, fraction of the image width.
+        #[range(0.05, 1.0)]
+        base_width: f64 = 0.5,
+        /// Flame height, fraction of the image height.
+        #[range(0.1, 1.0)]
+        height_fraction: f64 = 0.75,
+        /// How strongly noise tears the flame's edge.
+        #[range(0.0, 4.0)]
+        turbulence: f64 = 0.9,
+        /// Upward scroll of the noise, flame heights per second.
+        #[range(0.0, 10.0)]
+        speed: f64 = 1.2,
+        /// Noise octaves (detail).
+        #[range(1, 8)]
+        octaves: usize = 5,
+    }
+    pub struct TurbulenceFlameOut {
+        /// RGBA frames, straight alpha.
+        clip: ClipOf<Arc<Image>>,
+    }
 }
 
 /// Black → deep red → orange → yellow → near white: the colours of a hydrocarbon flame by temperature.
@@ -100,61 +117,27 @@ fn flame_intensity(fbm: &Fbm<Perlin>, p: &TurbulenceFlame, u: f64, v: f64, t: f6
     (body * 1.3).clamp(0.0, 1.0)
 }
 
-fn turbulence_flame_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.turbulence_flame",
-        "Procedural",
-        TimeDep::Source,
-        "An animated procedural flame: a teardrop whose edge is displaced by upward-scrolling fractal \
-         noise (Perlin 1985), coloured by a black-body ramp with alpha = intensity. For demos and tests \
-         when no footage is at hand; not one of the four papers' models.",
-    )
-    .input(PortDesc::int("width", 256, (8, 8192), "Image width in pixels."))
-    .input(PortDesc::int("height", 384, (8, 8192), "Image height in pixels."))
-    .input(PortDesc::int("frames", 48, (1, 100_000), "Number of frames."))
-    .input(PortDesc::float("fps", 24.0, (1.0, 240.0), "Frames per second."))
-    .input(PortDesc::int("seed", 1, (0, u32::MAX as i64), "Noise seed."))
-    .input(PortDesc::float("base_width", 0.5, (0.05, 1.0), "Flame width at the base, fraction of the image width."))
-    .input(PortDesc::float("height_fraction", 0.75, (0.1, 1.0), "Flame height, fraction of the image height."))
-    .input(PortDesc::float("turbulence", 0.9, (0.0, 4.0), "How strongly noise tears the flame's edge."))
-    .input(PortDesc::float("speed", 1.2, (0.0, 10.0), "Upward scroll of the noise, flame heights per second."))
-    .input(PortDesc::int("octaves", 5, (1, 8), "Noise octaves (detail)."))
-    .output("clip", PortType::clip_of(PortType::Image), "RGBA frames, straight alpha.")
-}
-
-struct FlameSource {
-    params: TurbulenceFlame,
-    frames: usize,
-}
+/// The flame's frames, made on request.
+struct FlameSource(TurbulenceFlame);
 
 impl FrameSource for FlameSource {
     fn len(&self) -> usize {
-        self.frames
+        self.0.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::Image(Arc::new(turbulence_flame_frame(&self.params, index))))
+        Ok(Value::Image(Arc::new(turbulence_flame_frame(&self.0, index))))
     }
 }
 
-fn cook_turbulence_flame(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let params = TurbulenceFlame {
-        width: i.usize("width")? as u32,
-        height: i.usize("height")? as u32,
-        seed: i.usize("seed")? as u32,
-        base_width: i.float("base_width")?,
-        height_fraction: i.float("height_fraction")?,
-        turbulence: i.float("turbulence")?,
-        speed: i.float("speed")?,
-        octaves: i.usize("octaves")?,
-        fps: i.float("fps")?,
-    };
-    let frames = i.usize("frames")?;
-    let mut h = Fingerprinter::new();
-    std::hash::Hash::hash(&format!("{params:?}{frames}"), &mut h);
-    let fp = std::hash::Hasher::finish(&h);
-    let fps = params.fps;
-    let clip = Clip::new(PortType::Image, fps, fp, Arc::new(FlameSource { params, frames }));
-    Ok(vec![Value::Clip(clip)])
+impl Cook for TurbulenceFlame {
+    fn cook(self, _: &CookCtx) -> Result<TurbulenceFlameOut, NodeError> {
+        // Every parameter, the frame count included, is in the Debug text.
+        let mut h = Fingerprinter::new();
+        std::hash::Hash::hash(&format!("{self:?}"), &mut h);
+        let fp = std::hash::Hasher::finish(&h);
+        let clip = Clip::new(PortType::Image, self.fps, fp, Arc::new(FlameSource(self)));
+        Ok(TurbulenceFlameOut { clip: ClipOf::new(clip) })
+    }
 }
 
 #[cfg(test)]
@@ -165,6 +148,7 @@ mod tests {
         TurbulenceFlame {
             width: 32,
             height: 48,
+            frames: 8,
             seed: 3,
             base_width: 0.55,
             height_fraction: 0.8,

@@ -1,13 +1,13 @@
 //! Contact sheets: frames of a clip laid out in a grid, for reviews, READMEs and previews.
 
-use pyrograph_core::{
-    Channels, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use std::sync::Arc;
+
+use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, Registry, port};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(contact_sheet_desc(), cook_contact_sheet));
-    registry.add(FnNode::new(stack_desc(), cook_stack));
+    registry.add(ContactSheet::node());
+    registry.add(Stack::node());
 }
 
 /// Puts `b` below (or right of) `a`, `gap` pixels apart, on `background`; narrower (shorter)
@@ -30,30 +30,43 @@ pub fn stack(a: &Image, b: &Image, vertical: bool, gap: u32, background: [f32; 4
     Image::from_vec(w, h, Channels::Rgba, data).unwrap_or_else(|| Image::new(w, h, Channels::Rgba))
 }
 
-fn stack_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.stack",
-        "Imaging",
-        TimeDep::PerFrame,
-        "Stacks two images, b below a (or right of it), for multi-row sheets and side-by-side comparisons.",
-    )
-    .input(PortDesc::new("a", PortType::Image, "First (top or left) image."))
-    .input(PortDesc::new("b", PortType::Image, "Second (bottom or right) image."))
-    .input(PortDesc::choice(
-        "direction",
-        &["vertical", "horizontal"],
-        "vertical",
-        "vertical puts b below a, horizontal to its right.",
-    ))
-    .input(PortDesc::int("gap", 4, (0, 4096), "Pixels between the two."))
-    .input(PortDesc::color("background", [0.08, 0.08, 0.08, 1.0], "Colour of the gap and of padding."))
-    .output("image", PortType::Image, "The stacked image (RGBA).")
+pyrograph_core::choice! {
+    /// Where `imaging.stack` puts its second image.
+    pub enum StackDirection {
+        /// b below a.
+        Vertical = "vertical",
+        /// b right of a.
+        Horizontal = "horizontal",
+    }
 }
 
-fn cook_stack(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let vertical = i.choice("direction")? == "vertical";
-    let out = stack(i.image("a")?, i.image("b")?, vertical, i.usize("gap")? as u32, i.color("background")?);
-    Ok(vec![Value::Image(std::sync::Arc::new(out))])
+pyrograph_core::node! {
+    /// Stacks two images, b below a (or right of it), for multi-row sheets and side-by-side comparisons.
+    #[node("imaging.stack", "Imaging", PerFrame)]
+    pub struct Stack {
+        /// First (top or left) image.
+        a: Arc<Image>,
+        /// Second (bottom or right) image.
+        b: Arc<Image>,
+        /// vertical puts b below a, horizontal to its right.
+        direction: StackDirection = StackDirection::Vertical,
+        /// Pixels between the two.
+        #[range(0, 4096)]
+        gap: u32 = 4,
+        /// Colour of the gap and of padding.
+        background: [f32; 4] = [0.08, 0.08, 0.08, 1.0],
+    }
+    pub struct StackOut {
+        /// The stacked image (RGBA).
+        image: Arc<Image>,
+    }
+}
+
+impl Cook for Stack {
+    fn cook(self, _: &CookCtx) -> Result<StackOut, NodeError> {
+        let vertical = self.direction == StackDirection::Vertical;
+        Ok(StackOut { image: Arc::new(stack(&self.a, &self.b, vertical, self.gap, self.background)) })
+    }
 }
 
 /// Indices of `count` frames spread evenly over `len` frames, first and last included.
@@ -92,32 +105,43 @@ pub fn contact_sheet(frames: &[&Image], columns: usize, gap: u32, background: [f
     Image::from_vec(sheet_w, sheet_h, Channels::Rgba, data).ok_or_else(|| "sheet size overflow".to_string())
 }
 
-fn contact_sheet_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.contact_sheet",
-        "Imaging",
-        TimeDep::WholeClip,
-        "Lays frames of a clip out in a grid (left→right, top→bottom), picked evenly from first to last.",
-    )
-    .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "The clip to sample."))
-    .input(PortDesc::int("count", 8, (1, 1024), "How many frames to show (fewer if the clip is shorter)."))
-    .input(PortDesc::int("columns", 8, (1, 1024), "Frames per row."))
-    .input(PortDesc::int("gap", 4, (0, 256), "Pixels between and around frames."))
-    .input(PortDesc::color("background", [0.08, 0.08, 0.08, 1.0], "Colour of the gaps."))
-    .output("image", PortType::Image, "The sheet (RGBA).")
+pyrograph_core::node! {
+    /// Lays frames of a clip out in a grid (left→right, top→bottom), picked evenly from first to last.
+    #[node("imaging.contact_sheet", "Imaging", WholeClip)]
+    pub struct ContactSheet {
+        /// The clip to sample.
+        clip: ClipOf<Arc<Image>>,
+        /// How many frames to show (fewer if the clip is shorter).
+        #[range(1, 1024)]
+        count: usize = 8,
+        /// Frames per row.
+        #[range(1, 1024)]
+        columns: usize = 8,
+        /// Pixels between and around frames.
+        #[range(0, 256)]
+        gap: u32 = 4,
+        /// Colour of the gaps.
+        background: [f32; 4] = [0.08, 0.08, 0.08, 1.0],
+    }
+    pub struct ContactSheetOut {
+        /// The sheet (RGBA).
+        image: Arc<Image>,
+    }
 }
 
-fn cook_contact_sheet(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let clip = i.clip("clip")?;
-    if clip.is_empty() {
-        return Err(NodeError::port("clip", "the clip has no frames"));
+impl Cook for ContactSheet {
+    fn cook(self, ctx: &CookCtx) -> Result<ContactSheetOut, NodeError> {
+        let clip = &self.clip;
+        if clip.is_empty() {
+            return Err(NodeError::port(port!(ContactSheet, clip), "the clip has no frames"));
+        }
+        let picks = pick_frames(clip.len(), self.count);
+        let frames = picks.iter().map(|&f| clip.image(f, ctx)).collect::<Result<Vec<_>, _>>()?;
+        let refs: Vec<&Image> = frames.iter().map(|f| f.as_ref()).collect();
+        let sheet = contact_sheet(&refs, self.columns, self.gap, self.background)
+            .map_err(|m| NodeError::port(port!(ContactSheet, clip), m))?;
+        Ok(ContactSheetOut { image: Arc::new(sheet) })
     }
-    let picks = pick_frames(clip.len(), i.usize("count")?);
-    let frames = picks.iter().map(|&f| clip.image(f, ctx)).collect::<Result<Vec<_>, _>>()?;
-    let refs: Vec<&Image> = frames.iter().map(|f| f.as_ref()).collect();
-    let sheet = contact_sheet(&refs, i.usize("columns")?, i.usize("gap")? as u32, i.color("background")?)
-        .map_err(|m| NodeError::port("clip", m))?;
-    Ok(vec![Value::Image(std::sync::Arc::new(sheet))])
 }
 
 #[cfg(test)]

@@ -17,9 +17,9 @@ use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value, port};
 
-use crate::io::{DEFAULT_FPS, fingerprint_files};
+use crate::io::{DEFAULT_FPS, LoadSequence, fingerprint_files};
 
 const MISSING_FFMPEG: &str = "install ffmpeg (apt-get install ffmpeg) or convert the video to PNG frames";
 
@@ -43,11 +43,16 @@ pub struct VideoInfo {
     pub constant_rate: bool,
 }
 
+/// An error about the video, on the loader's `path` port (videos are read by `imaging.load_sequence`).
+fn path_error(message: String) -> NodeError {
+    NodeError::port(port!(LoadSequence, path), message)
+}
+
 fn run_error(program: &str, path: &Path, e: &std::io::Error) -> NodeError {
     if e.kind() == std::io::ErrorKind::NotFound {
-        NodeError::port("path", format!("{}: '{program}' is not on PATH; {MISSING_FFMPEG}", path.display()))
+        path_error(format!("{}: '{program}' is not on PATH; {MISSING_FFMPEG}", path.display()))
     } else {
-        NodeError::port("path", format!("{}: could not run '{program}': {e}", path.display()))
+        path_error(format!("{}: could not run '{program}': {e}", path.display()))
     }
 }
 
@@ -62,7 +67,7 @@ fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> 
         .map_err(|e| run_error(ffprobe, path, &e))?;
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr);
-        return Err(NodeError::port("path", format!("{}: ffprobe failed: {}", path.display(), why.trim())));
+        return Err(path_error(format!("{}: ffprobe failed: {}", path.display(), why.trim())));
     }
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
@@ -72,8 +77,7 @@ fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> 
 /// of the file without decoding.
 pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, NodeError> {
     let text = ffprobe_fields(ffprobe, path, &[], "stream=width,height,avg_frame_rate,r_frame_rate,nb_frames")?;
-    let mut info =
-        parse_probe(&text).ok_or_else(|| NodeError::port("path", format!("{}: no video stream found", path.display())))?;
+    let mut info = parse_probe(&text).ok_or_else(|| path_error(format!("{}: no video stream found", path.display())))?;
     if info.frames.is_none() {
         let text = ffprobe_fields(ffprobe, path, &["-count_packets"], "stream=nb_read_packets")?;
         let field = text.lines().find_map(|l| l.trim().strip_prefix("nb_read_packets=")?.parse().ok());
@@ -291,7 +295,7 @@ pub fn video_clip(path: &Path, fps: f64, _ctx: &CookCtx) -> Result<Clip, NodeErr
 /// [`video_clip`] with the executables named.
 pub fn video_clip_with(ffmpeg: &str, ffprobe: &str, path: &Path, fps: f64) -> Result<Clip, NodeError> {
     let info = probe_video(ffprobe, path)?;
-    let len = info.frames.ok_or_else(|| NodeError::port("path", format!("{}: the video has no frames", path.display())))?;
+    let len = info.frames.ok_or_else(|| path_error(format!("{}: the video has no frames", path.display())))?;
     let source_fps = info.fps.unwrap_or(DEFAULT_FPS);
     let fps = if fps > 0.0 { fps } else { source_fps };
     let fingerprint = fingerprint_files(&[path.to_path_buf()])?;

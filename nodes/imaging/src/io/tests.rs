@@ -1,6 +1,12 @@
-//! Tests of the loaders and writers in `io.rs`.
+//! Tests of the loaders and writers in `io/`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use pyrograph_core::{Channels, Clip, Cook, CookCtx, Image, Inputs, PortType, Value};
 
 use super::*;
+use crate::color::AlphaMode;
 
 #[test]
 fn write_image_writes_once_and_refuses_to_overwrite() {
@@ -201,9 +207,12 @@ fn writer_honours_frame_range_start_and_creates_folders() {
 
 #[test]
 fn output_format_follows_the_extension() {
-    assert_eq!(output_format(Path::new("a_#.PNG"), "16", "half").unwrap(), OutputFormat::Png { sixteen_bit: true });
-    assert_eq!(output_format(Path::new("a_#.exr"), "8", "float").unwrap(), OutputFormat::Exr { half: false });
-    assert!(output_format(Path::new("a_#.tif"), "8", "half").unwrap_err().to_string().contains("pattern"));
+    let png = output_format(Path::new("a_#.PNG"), BitDepth::Sixteen, ExrType::Half).unwrap();
+    assert_eq!(png, OutputFormat::Png { sixteen_bit: true });
+    let exr = output_format(Path::new("a_#.exr"), BitDepth::Eight, ExrType::Float).unwrap();
+    assert_eq!(exr, OutputFormat::Exr { half: false });
+    let err = output_format(Path::new("a_#.tif"), BitDepth::Eight, ExrType::Half).unwrap_err();
+    assert!(err.to_string().contains("pattern"));
 }
 
 #[test]
@@ -272,11 +281,12 @@ fn mismatched_sizes_name_the_odd_file() {
 #[test]
 fn cook_reads_ports_and_reports_frames_written() {
     let dir = tempfile::tempdir().unwrap();
-    let desc = write_sequence_desc();
+    let node = WriteSequence::node();
+    let desc = node.desc();
     let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
     values[0] = Value::Clip(clip_of(vec![gray(1, 1, &[1.0]); 2]));
     values[1] = Value::Path(dir.path().join("o_####.png"));
-    let out = cook_write_sequence(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+    let out = node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap();
     assert!(matches!(out[0], Value::Int(2)));
     assert!(matches!(&out[1], Value::Path(p) if p.ends_with("o_0000.png")));
 }

@@ -1,0 +1,211 @@
+//! One image file: reading its header and pixels (PNG, JPEG, OpenEXR), encoding an image as PNG
+//! or OpenEXR bytes, and writing a file atomically.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use exr::prelude::{SpecificChannels, Vec2, WritableImage as _, f16};
+use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
+use pyrograph_core::document::write_atomic;
+use pyrograph_core::{Channels, Image, NodeError, port};
+
+use super::nodes::{BitDepth, ExrType, LoadImage, WriteImage, WriteSequence};
+use super::{has_extension, no_such};
+use crate::convert;
+
+// ---------------------------------------------------------------------------------------------
+// Reading still images
+// ---------------------------------------------------------------------------------------------
+
+fn is_exr(path: &Path) -> bool {
+    has_extension(path, &["exr"])
+}
+
+/// Width and height from the file's header, without decoding the pixels.
+pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
+    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    if is_exr(path) {
+        // The exr crate, not `image`, so gray (`Y`) files written by the writer read back too.
+        let meta = exr::prelude::MetaData::read_from_file(path, false).map_err(|e| named(&e))?;
+        let header = meta.headers.first().ok_or_else(|| named(&"no image layer"))?;
+        let size = header.layer_size;
+        return Ok((to_u32(size.0, path)?, to_u32(size.1, path)?));
+    }
+    image::ImageReader::open(path)
+        .map_err(|e| named(&e))?
+        .with_guessed_format()
+        .map_err(|e| named(&e))?
+        .into_dimensions()
+        .map_err(|e| named(&e))
+}
+
+fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
+    u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
+}
+
+/// Decodes one image file: colour files become RGBA, gray files gray.
+pub fn decode_image(path: &Path) -> Result<Image, NodeError> {
+    if is_exr(path) {
+        return decode_exr(path);
+    }
+    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    let img = image::ImageReader::open(path)
+        .map_err(|e| named(&e))?
+        .with_guessed_format()
+        .map_err(|e| named(&e))?
+        .decode()
+        .map_err(|e| named(&e))?;
+    Ok(convert::from_dynamic(img))
+}
+
+/// Decodes the first layer of an OpenEXR file: `Y` only → gray, else R, G, B (and A, default 1).
+pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
+    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    let file = exr::prelude::read_first_flat_layer_from_file(path).map_err(|e| named(&e))?;
+    let layer = &file.layer_data;
+    let (w, h) = (to_u32(layer.size.0, path)?, to_u32(layer.size.1, path)?);
+    let pixels = w as usize * h as usize;
+    // Subsampled channels (chroma) hold fewer samples than pixels; they are treated as absent.
+    let channel = |name: &str| -> Option<Vec<f32>> {
+        let c = layer.channel_data.list.iter().find(|c| c.name.eq(name))?;
+        let samples: Vec<f32> = c.sample_data.values_as_f32().collect();
+        (samples.len() == pixels).then_some(samples)
+    };
+    let image = match (channel("R"), channel("G"), channel("B"), channel("Y")) {
+        (Some(r), Some(g), Some(b), _) => {
+            let a = channel("A").unwrap_or_else(|| vec![1.0; pixels]);
+            let data = (0..pixels).flat_map(|i| [r[i], g[i], b[i], a[i]]).collect();
+            Image::from_vec(w, h, Channels::Rgba, data)
+        }
+        (_, _, _, Some(y)) => Image::from_vec(w, h, Channels::Gray, y),
+        _ => return Err(named(&"has neither R, G, B nor Y channels")),
+    };
+    image.ok_or_else(|| named(&"channel sizes do not match the image size"))
+}
+
+/// Loads one image file; errors name the file.
+pub fn load_image(path: &Path) -> Result<Image, NodeError> {
+    if path.is_dir() {
+        return Err(NodeError::port(
+            port!(LoadImage, path),
+            format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display()),
+        ));
+    }
+    if !path.is_file() {
+        return Err(no_such(port!(LoadImage, path), path));
+    }
+    image_dimensions(path).map_err(|e| NodeError::port(port!(LoadImage, path), e.to_string()))?;
+    decode_image(path).map_err(|e| NodeError::port(port!(LoadImage, path), e.to_string()))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Encoding
+// ---------------------------------------------------------------------------------------------
+
+/// A file format the writer produces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// PNG, 8 or 16 bits per channel (values clamped to 0..1).
+    Png {
+        /// Whether to write 16-bit samples.
+        sixteen_bit: bool,
+    },
+    /// OpenEXR, half or full float (HDR values kept).
+    Exr {
+        /// Whether to write 16-bit half floats instead of 32-bit floats.
+        half: bool,
+    },
+}
+
+/// Encodes an image into the bytes of a file: gray images stay one-channel (PNG L8/L16, EXR `Y`).
+pub fn encode_image(img: &Image, format: OutputFormat) -> Result<Vec<u8>, NodeError> {
+    match format {
+        OutputFormat::Png { sixteen_bit } => encode_png(img, sixteen_bit),
+        OutputFormat::Exr { half } => encode_exr(img, half),
+    }
+}
+
+// `write_to` encodes with image's default PNG settings, the png crate's `Compression::Fast` with
+// adaptive filters: a writer's cost stays near the decoder's (benches/stream/run.sh, BENCHMARKS.md).
+fn encode_png(img: &Image, sixteen_bit: bool) -> Result<Vec<u8>, NodeError> {
+    let (w, h) = img.size();
+    let dynamic = match (img.channels(), sixteen_bit) {
+        (Channels::Gray, false) => DynamicImage::ImageLuma8(convert::to_gray8(img)),
+        (Channels::Gray, true) => {
+            let data = img.data().iter().map(|&v| unit_to_u16(v)).collect();
+            let buf: ImageBuffer<Luma<u16>, Vec<u16>> =
+                ImageBuffer::from_raw(w, h, data).ok_or_else(|| NodeError::msg("image data does not match its size"))?;
+            DynamicImage::ImageLuma16(buf)
+        }
+        (Channels::Rgba, false) => DynamicImage::ImageRgba8(convert::to_rgba8(img)),
+        (Channels::Rgba, true) => DynamicImage::ImageRgba16(convert::to_rgba16(img)),
+    };
+    let mut bytes = Vec::new();
+    dynamic.write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png).map_err(|e| NodeError::msg(format!("encoding PNG: {e}")))?;
+    Ok(bytes)
+}
+
+/// 0..1 float to a 16-bit sample, clamped and rounded (as `convert::to_rgba16`).
+fn unit_to_u16(v: f32) -> u16 {
+    (v.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
+}
+
+fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let n = img.channels().count();
+    let data = img.data();
+    let sample = move |x: usize, y: usize, c: usize| data.get((y * w + x) * n + c).copied().unwrap_or(0.0);
+    let mut bytes = Vec::new();
+    let cursor = Cursor::new(&mut bytes);
+    let result = match (img.channels(), half) {
+        (Channels::Gray, true) => {
+            let pixels =
+                SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (f16::from_f32(sample(p.0, p.1, 0)),));
+            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
+        }
+        (Channels::Gray, false) => {
+            let pixels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (sample(p.0, p.1, 0),));
+            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
+        }
+        (Channels::Rgba, true) => {
+            let px = |p: Vec2<usize>| {
+                let s = |c| f16::from_f32(sample(p.0, p.1, c));
+                (s(0), s(1), s(2), s(3))
+            };
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
+        }
+        (Channels::Rgba, false) => {
+            let px = |p: Vec2<usize>| (sample(p.0, p.1, 0), sample(p.0, p.1, 1), sample(p.0, p.1, 2), sample(p.0, p.1, 3));
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
+        }
+    };
+    result.map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;
+    Ok(bytes)
+}
+
+/// The format named by the pattern's extension, with the PNG / EXR options; an error names the
+/// sequence writer's `pattern` (a single-file writer renames it to its own path port).
+pub fn output_format(pattern: &Path, bit_depth: BitDepth, exr_type: ExrType) -> Result<OutputFormat, NodeError> {
+    let ext = pattern.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    match ext.as_str() {
+        "png" => Ok(OutputFormat::Png { sixteen_bit: bit_depth == BitDepth::Sixteen }),
+        "exr" => Ok(OutputFormat::Exr { half: exr_type == ExrType::Half }),
+        _ => Err(NodeError::port(port!(WriteSequence, pattern), format!("'{}' must end in .png or .exr", pattern.display()))),
+    }
+}
+
+/// Writes one image atomically; an existing file is an error unless `overwrite`.
+pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), NodeError> {
+    if !overwrite && path.exists() {
+        return Err(NodeError::port(
+            port!(WriteImage, overwrite),
+            format!("{} already exists; nothing was written. Set overwrite to true or render with --overwrite", path.display()),
+        ));
+    }
+    let path_port = port!(WriteImage, path);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| NodeError::port(path_port, format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let bytes = encode_image(img, format)?;
+    write_atomic(path, &bytes, overwrite).map_err(|e| NodeError::port(path_port, format!("writing {}: {e}", path.display())))
+}

@@ -1,0 +1,360 @@
+//! Sequences of image files: frame-number patterns (`frame_####.png`, `frame_%04d.png`), finding
+//! a loader's files, the lazy clip that decodes them on demand, and the parallel sequence writer.
+
+use std::cmp::Ordering;
+use std::hash::{Hash, Hasher};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
+
+use pyrograph_core::document::write_atomic;
+use pyrograph_core::fingerprint::{Fingerprinter, hash_metadata};
+use pyrograph_core::{Clip, CookCtx, FrameSource, NodeError, PortType, Value, port};
+use rayon::prelude::*;
+
+use super::files::{OutputFormat, decode_image, encode_image, image_dimensions};
+use super::nodes::{LoadSequence, WriteSequence};
+use super::{DEFAULT_FPS, IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, has_extension, no_such};
+use crate::color::{AlphaMode, premultiply};
+
+// ---------------------------------------------------------------------------------------------
+// Frame-number patterns
+// ---------------------------------------------------------------------------------------------
+
+/// A file name with one frame-number placeholder: `frame_####.png` or `frame_%04d.png`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FramePattern {
+    /// Text before the number.
+    pub prefix: String,
+    /// Zero-padding width (the number of `#`, or the `04` of `%04d`; 0 for `%d`).
+    pub width: usize,
+    /// Text after the number, extension included.
+    pub suffix: String,
+}
+
+impl FramePattern {
+    /// Parses a file name; `Ok(None)` when it has no placeholder, `Err` when it has several.
+    pub fn parse(name: &str) -> Result<Option<FramePattern>, String> {
+        let Some((start, end, width)) = find_placeholder(name) else {
+            return Ok(None);
+        };
+        let suffix = &name[end..];
+        if find_placeholder(suffix).is_some() {
+            return Err(format!("'{name}' has more than one frame-number placeholder; use exactly one (#### or %04d)"));
+        }
+        Ok(Some(FramePattern { prefix: name[..start].to_string(), width, suffix: suffix.to_string() }))
+    }
+
+    /// The file name of frame `number`.
+    pub fn file_name(&self, number: u64) -> String {
+        format!("{}{:0width$}{}", self.prefix, number, self.suffix, width = self.width)
+    }
+
+    /// The frame number a file name carries, when it matches the pattern (same padding).
+    pub fn number_of(&self, name: &str) -> Option<u64> {
+        let digits = name.strip_prefix(&self.prefix)?.strip_suffix(&self.suffix)?;
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        // A longer number is only the same padding when it did not need padding at all.
+        let padded_alike = digits.len() == self.width || (digits.len() > self.width && !digits.starts_with('0'));
+        if self.width > 0 && !padded_alike {
+            return None;
+        }
+        digits.parse().ok()
+    }
+}
+
+/// `(start, end, width)` of the first `###` run or `%0Nd` in `name`.
+fn find_placeholder(name: &str) -> Option<(usize, usize, usize)> {
+    let hashes = name.find('#').map(|s| {
+        let run = name[s..].bytes().take_while(|&b| b == b'#').count();
+        (s, s + run, run)
+    });
+    let printf = name.match_indices('%').find_map(|(s, _)| {
+        let rest = &name[s + 1..];
+        let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+        (rest.as_bytes().get(digits) == Some(&b'd')).then(|| (s, s + digits + 2, rest[..digits].parse().unwrap_or(0)))
+    });
+    match (hashes, printf) {
+        (Some(h), Some(p)) => Some(if h.0 < p.0 { h } else { p }),
+        (h, p) => h.or(p),
+    }
+}
+
+/// Compares file names so that `frame_2` sorts before `frame_10`.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    natural_chunks(a).cmp(&natural_chunks(b)).then_with(|| a.cmp(b))
+}
+
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
+enum Chunk<'a> {
+    Number(u128),
+    Text(&'a str),
+}
+
+fn natural_chunks(s: &str) -> Vec<Chunk<'_>> {
+    let mut chunks = Vec::new();
+    let mut rest = s;
+    while let Some(first) = rest.chars().next() {
+        let is_digit = first.is_ascii_digit();
+        let len = rest.find(|c: char| c.is_ascii_digit() != is_digit).unwrap_or(rest.len());
+        let (head, tail) = rest.split_at(len);
+        chunks.push(match head.parse() {
+            Ok(n) if is_digit => Chunk::Number(n),
+            _ => Chunk::Text(head),
+        });
+        rest = tail;
+    }
+    chunks
+}
+
+// ---------------------------------------------------------------------------------------------
+// Finding the input files
+// ---------------------------------------------------------------------------------------------
+
+/// What a loader's `path` names.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum InputFiles {
+    /// Still images, in frame order.
+    Images(Vec<PathBuf>),
+    /// One video file.
+    Video(PathBuf),
+}
+
+/// Resolves a loader path: a directory, a `####` / `%04d` pattern, a video or a single image.
+pub fn find_input_files(path: &Path) -> Result<InputFiles, NodeError> {
+    if path.is_dir() {
+        return list_directory(path).map(InputFiles::Images);
+    }
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    if let Some(pattern) = FramePattern::parse(name).map_err(|e| NodeError::port(port!(LoadSequence, path), e))? {
+        return list_pattern(path, &pattern).map(InputFiles::Images);
+    }
+    if !path.is_file() {
+        return Err(no_such(port!(LoadSequence, path), path));
+    }
+    if has_extension(path, VIDEO_EXTENSIONS) {
+        Ok(InputFiles::Video(path.to_path_buf()))
+    } else {
+        Ok(InputFiles::Images(vec![path.to_path_buf()]))
+    }
+}
+
+/// The image files of a directory, in natural name order.
+pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, NodeError> {
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", dir.display())))?;
+    let mut files: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && has_extension(p, IMAGE_EXTENSIONS)).collect();
+    files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+    if files.is_empty() {
+        return Err(NodeError::port(
+            port!(LoadSequence, path),
+            format!("{} holds no image files (looked for {})", dir.display(), IMAGE_EXTENSIONS.join(", ")),
+        ));
+    }
+    Ok(files)
+}
+
+/// The existing files matching `pattern` in the folder of `path`, by frame number.
+pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>, NodeError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(no_such(port!(LoadSequence, path), dir));
+    }
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", dir.display())))?;
+    let mut numbered: Vec<(u64, PathBuf)> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .filter_map(|p| {
+            let n = pattern.number_of(p.file_name()?.to_str()?)?;
+            Some((n, p))
+        })
+        .collect();
+    numbered.sort();
+    if numbered.is_empty() {
+        return Err(NodeError::port(port!(LoadSequence, path), format!("no files match {}", path.display())));
+    }
+    Ok(numbered.into_iter().map(|(_, p)| p).collect())
+}
+
+/// Hash of file names, sizes and modification times: changes whenever a file is replaced.
+pub fn fingerprint_files(files: &[PathBuf]) -> Result<u64, NodeError> {
+    let mut h = Fingerprinter::new();
+    for f in files {
+        let meta =
+            std::fs::metadata(f).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", f.display())))?;
+        f.hash(&mut h);
+        hash_metadata(&mut h, &meta);
+    }
+    Ok(h.finish())
+}
+
+/// Reads every file's header (in parallel) and checks that all frames share one size.
+pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), NodeError> {
+    let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f)).collect();
+    let mut first: Option<((u32, u32), &PathBuf)> = None;
+    for (size, file) in sizes.into_iter().zip(files) {
+        let size = size.map_err(|e| NodeError::port(port!(LoadSequence, path), e.to_string()))?;
+        match first {
+            None => first = Some((size, file)),
+            Some((want, first_file)) if want != size => {
+                return Err(NodeError::port(
+                    port!(LoadSequence, path),
+                    format!(
+                        "{} is {}x{} but {} is {}x{}; all frames of a sequence must have the same size",
+                        file.display(),
+                        size.0,
+                        size.1,
+                        first_file.display(),
+                        want.0,
+                        want.1
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
+    }
+    first.map(|(s, _)| s).ok_or_else(|| NodeError::port(port!(LoadSequence, path), "no image files"))
+}
+
+/// Frames decoded lazily from a list of image files.
+struct FileFrames {
+    files: Vec<PathBuf>,
+    size: (u32, u32),
+}
+
+impl FrameSource for FileFrames {
+    fn len(&self) -> usize {
+        self.files.len()
+    }
+    fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
+        let file = self.files.get(index).ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
+        let img = decode_image(file)?;
+        // The file may have been replaced since the headers were checked.
+        if img.size() != self.size {
+            return Err(NodeError::msg(format!(
+                "{} is {}x{} but the sequence is {}x{}",
+                file.display(),
+                img.width(),
+                img.height(),
+                self.size.0,
+                self.size.1
+            )));
+        }
+        Ok(Value::Image(Arc::new(img)))
+    }
+}
+
+/// A lazy clip of image files after checking every header; frames decode on access.
+pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, NodeError> {
+    let size = check_same_size(&files)?;
+    let fingerprint = fingerprint_files(&files)?;
+    Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(FileFrames { files, size })))
+}
+
+/// Loads `path` (folder, pattern, image or video) as a clip; `fps` 0 means automatic.
+pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
+    match find_input_files(path)? {
+        InputFiles::Video(video) => crate::video::video_clip(&video, fps, ctx),
+        InputFiles::Images(files) => image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS }),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing sequences
+// ---------------------------------------------------------------------------------------------
+
+/// What and where [`write_sequence`] writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WriteOptions {
+    /// Output path whose file name holds the frame-number placeholder.
+    pub pattern: PathBuf,
+    /// PNG or EXR flavour.
+    pub format: OutputFormat,
+    /// File number of the clip's frame 0.
+    pub start: u64,
+    /// Replace existing files.
+    pub overwrite: bool,
+    /// Inclusive range of clip frames to write; every frame when `None`.
+    pub frames: Option<(usize, usize)>,
+    /// Alpha convention of the files (frames are straight in memory; gray frames have no alpha).
+    pub alpha: AlphaMode,
+}
+
+/// The parsed pattern of a writer path, with the folder it writes into.
+pub fn output_pattern(pattern: &Path) -> Result<(PathBuf, FramePattern), NodeError> {
+    let port = port!(WriteSequence, pattern);
+    let name = pattern.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
+        NodeError::port(port, format!("'{}' does not end in a file name like frame_####.png", pattern.display()))
+    })?;
+    let parsed = FramePattern::parse(name).map_err(|e| NodeError::port(port, e))?.ok_or_else(|| {
+        NodeError::port(port, format!("'{name}' has no frame-number placeholder; add #### or %04d (frame_####.png)"))
+    })?;
+    let dir = pattern.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ok((dir, parsed))
+}
+
+/// The clip frames to write: the requested inclusive range (checked) or all of them.
+pub fn frames_to_write(len: usize, frames: Option<(usize, usize)>) -> Result<Range<usize>, NodeError> {
+    if len == 0 {
+        return Err(NodeError::port(port!(WriteSequence, clip), "the clip has no frames"));
+    }
+    match frames {
+        None => Ok(0..len),
+        Some((a, b)) if a <= b && b < len => Ok(a..b + 1),
+        Some((a, b)) => Err(NodeError::msg(format!("frame range {a}-{b} is outside the clip's frames 0-{}", len - 1))),
+    }
+}
+
+/// Writes the frames of `clip` as files; returns the paths written, in frame order.
+///
+/// Nothing is written when any target exists and `overwrite` is off.
+pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, NodeError> {
+    let (dir, pattern) = output_pattern(&options.pattern)?;
+    let range = frames_to_write(clip.len(), options.frames)?;
+    let targets: Vec<(usize, PathBuf)> = range.map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
+    if !options.overwrite {
+        refuse_existing(&targets)?;
+    }
+    if !dir.as_os_str().is_empty() {
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| NodeError::port(port!(WriteSequence, pattern), format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let done = AtomicUsize::new(0);
+    targets.par_iter().try_for_each(|(i, path)| {
+        ctx.check_cancel()?;
+        let img = clip.image(*i, ctx).map_err(|e| NodeError::Frame { frame: *i, source: Box::new(e) })?;
+        let bytes = match options.alpha {
+            AlphaMode::Straight => encode_image(&img, options.format)?,
+            AlphaMode::Premultiplied => encode_image(&premultiply(&img), options.format)?,
+        };
+        write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+        ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
+        Ok::<(), NodeError>(())
+    })?;
+    Ok(targets.into_iter().map(|(_, p)| p).collect())
+}
+
+fn refuse_existing(targets: &[(usize, PathBuf)]) -> Result<(), NodeError> {
+    let existing: Vec<&PathBuf> = targets.iter().map(|(_, p)| p).filter(|p| p.exists()).collect();
+    match existing.first() {
+        None => Ok(()),
+        Some(first) => Err(NodeError::port(
+            port!(WriteSequence, overwrite),
+            format!(
+                "{} already exists ({} of the {} target files do); nothing was written. Set overwrite to true or \
+                 render with --overwrite to replace them",
+                first.display(),
+                existing.len(),
+                targets.len()
+            ),
+        )),
+    }
+}

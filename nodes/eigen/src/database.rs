@@ -9,22 +9,20 @@
 //! components when asked. Every file is written atomically and the header last; a truncated,
 //! altered or foreign file is a clear error.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{
-    Basis, CookCtx, FnNode, FrameRef, Inputs, NodeDesc, NodeError, PathRole, PortDesc, PortType, Registry, TimeDep, Value,
-    Weights,
-};
+use pyrograph_core::params::{Cook, InputPath, OutputPath};
+use pyrograph_core::{Basis, CookCtx, FrameRef, NodeError, Registry, Weights, port};
 use serde::{Deserialize, Serialize};
 
 use crate::pca::Database;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(save_desc(), cook_save));
-    registry.add(FnNode::new(load_desc(), cook_load));
+    registry.add(SaveDatabase::node());
+    registry.add(LoadDatabase::node());
 }
 
 /// The `format` string of a header.
@@ -262,49 +260,66 @@ pub fn load(dir: &Path, components: usize) -> Result<Database, String> {
     Ok(Database { basis, weights })
 }
 
-fn save_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.save_database",
-        "Eigenfires",
-        TimeDep::Sink,
-        "Writes an Eigenfires database folder: RON header plus little-endian f32 packs (thesis §4.1 off-line mode, §4.8).\n\n\
-         Packs of pack_size eigenfires (with their weight columns) can later be dropped to shrink the database. \
-         Every file is written atomically, the header last; an existing database is kept unless overwrite is on.",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The basis to save."))
-    .input(PortDesc::new("weights", PortType::Weights, "Its training weights."))
-    .input(PortDesc::path("path", PathRole::Output, Some("eigenfires.db"), "Database folder."))
-    .input(PortDesc::int("pack_size", 500, (1, 1_000_000), "Eigenfires per pack file (packSize)."))
-    .input(PortDesc::bool("overwrite", false, "Replace an existing database."))
-    .output("path", PortType::Path, "The database folder.")
+pyrograph_core::node! {
+    /// Writes an Eigenfires database folder: RON header plus little-endian f32 packs (thesis §4.1 off-line mode, §4.8).
+    ///
+    /// Packs of pack_size eigenfires (with their weight columns) can later be dropped to shrink the database.
+    /// Every file is written atomically, the header last; an existing database is kept unless overwrite is on.
+    #[node("eigen.save_database", "Eigenfires", Sink)]
+    pub struct SaveDatabase {
+        /// The basis to save.
+        basis: Arc<Basis>,
+        /// Its training weights.
+        weights: Arc<Weights>,
+        /// Database folder.
+        path: OutputPath = "eigenfires.db".into(),
+        /// Eigenfires per pack file (packSize).
+        #[range(1, 1_000_000)]
+        pack_size: usize = 500,
+        /// Replace an existing database.
+        overwrite: bool = false,
+    }
+    pub struct SaveDatabaseOut {
+        /// The database folder.
+        path: OutputPath,
+    }
 }
 
-fn cook_save(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let path: PathBuf = i.path("path")?.to_path_buf();
-    let db = Database { basis: i.basis("basis")?.as_ref().clone(), weights: i.weights("weights")?.as_ref().clone() };
-    save(&db, &path, i.usize("pack_size")?, i.bool("overwrite")? || ctx.settings().overwrite)
-        .map_err(|m| NodeError::port("path", m))?;
-    Ok(vec![Value::Path(path)])
+impl Cook for SaveDatabase {
+    fn cook(self, ctx: &CookCtx) -> Result<SaveDatabaseOut, NodeError> {
+        let db = Database { basis: Arc::unwrap_or_clone(self.basis), weights: Arc::unwrap_or_clone(self.weights) };
+        save(&db, &self.path, self.pack_size, self.overwrite || ctx.settings().overwrite)
+            .map_err(|m| NodeError::port(port!(SaveDatabase, path), m))?;
+        Ok(SaveDatabaseOut { path: self.path })
+    }
 }
 
-fn load_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.load_database",
-        "Eigenfires",
-        TimeDep::Source,
-        "Loads an Eigenfires database folder written by eigen.save_database (thesis §4.1, §4.8).\n\n\
-         components loads only the first E eigenfires (and weight columns), reading only the packs it needs; \
-         0 loads every pack present. Sizes and checksums are verified.",
-    )
-    .input(PortDesc::path("path", PathRole::Input, None, "Database folder."))
-    .input(PortDesc::int("components", 0, (0, 1_000_000), "Eigenfires to load; 0 = all present."))
-    .output("basis", PortType::Basis, "The basis.")
-    .output("weights", PortType::Weights, "The training weights.")
+pyrograph_core::node! {
+    /// Loads an Eigenfires database folder written by eigen.save_database (thesis §4.1, §4.8).
+    ///
+    /// components loads only the first E eigenfires (and weight columns), reading only the packs it needs;
+    /// 0 loads every pack present. Sizes and checksums are verified.
+    #[node("eigen.load_database", "Eigenfires", Source)]
+    pub struct LoadDatabase {
+        /// Database folder.
+        path: InputPath,
+        /// Eigenfires to load; 0 = all present.
+        #[range(0, 1_000_000)]
+        components: usize = 0,
+    }
+    pub struct LoadDatabaseOut {
+        /// The basis.
+        basis: Arc<Basis>,
+        /// The training weights.
+        weights: Arc<Weights>,
+    }
 }
 
-fn cook_load(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let db = load(i.path("path")?, i.usize("components")?).map_err(|m| NodeError::port("path", m))?;
-    Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
+impl Cook for LoadDatabase {
+    fn cook(self, _: &CookCtx) -> Result<LoadDatabaseOut, NodeError> {
+        let db = load(&self.path, self.components).map_err(|m| NodeError::port(port!(LoadDatabase, path), m))?;
+        Ok(LoadDatabaseOut { basis: Arc::new(db.basis), weights: Arc::new(db.weights) })
+    }
 }
 
 #[cfg(test)]

@@ -5,22 +5,18 @@
 use std::ops::RangeInclusive;
 use std::sync::Arc;
 
-use pyrograph_core::{
-    Basis, Clip, CookCtx, FnNode, FrameItem, FrameList, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
-    Value, Weights,
-};
+use pyrograph_core::params::{ClipOf, Cook};
+use pyrograph_core::{Basis, Clip, CookCtx, FrameItem, FrameList, Image, NodeError, PortType, Registry, Weights, port};
 use rayon::prelude::*;
 
-use crate::pca::{components_to_use, optional_clip_port, reconstruct, samples_to_clip};
-use crate::transition::{
-    check_range, direct_bridging, end_exclusion, end_growing, exclusion_mask, lowpass_kernel, lowpass_transition,
-};
+use crate::pca::{components_to_use, empty_clip, reconstruct, samples_to_clip};
+use crate::transition::{Kernel, check_range, direct_bridging, end_exclusion, end_growing, exclusion_mask, lowpass_transition};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(motion_list_desc(), cook_motion_list));
-    registry.add(FnNode::new(frames_to_clip_desc(), cook_frames_to_clip));
-    registry.add(FnNode::new(weights_edit_desc(), cook_weights_edit));
+    registry.add(MotionList::node());
+    registry.add(FramesToClip::node());
+    registry.add(WeightsEdit::node());
 }
 
 /// How two motions are joined (§5.1).
@@ -170,64 +166,101 @@ pub fn parse_scenario(text: &str, motions: &[(String, RangeInclusive<usize>)]) -
         .collect()
 }
 
-fn motion_list_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.motion_list",
-        "Eigenfires",
-        TimeDep::WholeClip,
-        "Builds an animation from named motions and a scenario, joined by a motion transition (thesis §5.1, Figs. 32–33).\n\n\
-         motions names ranges of database frames (\"T1 = 100-180; T2 = 400-450\"); scenario plays them in order \
-         (\"T1 + T2 + T1\"); loop adds a transition from the last back into the first. method: cut (plain \
-         attachment), lowpass (§5.1.1; its morphed frames replace `span` frames each side of the seam), \
-         direct_bridging (§5.1.2.1; `steps` frames, T1 and T2 frames excluded) or end_growing (§5.1.2.2; at most \
-         `steps` frames).",
-    )
-    .input(PortDesc::new("weights", PortType::Weights, "The database's training weights."))
-    .input(PortDesc::string("motions", "T1 = 0-49; T2 = 100-149", "Named motions: NAME = first-last; …"))
-    .input(PortDesc::string("scenario", "T1 + T2", "Motions in playing order."))
-    .input(PortDesc::bool("loop", false, "Join the end of the last motion back to the first."))
-    .input(PortDesc::choice("method", &["cut", "lowpass", "direct_bridging", "end_growing"], "end_growing", "Transition method."))
-    .input(PortDesc::int("components", 0, (0, 1_000_000), "E for detection (recognition methods); 0 = all."))
-    .input(PortDesc::float("theta_min", 0.0, (0.0, 1e9), "Minimum threshold θ_min (recognition methods)."))
-    .input(PortDesc::int("steps", 40, (1, 100_000), "Direct Bridging: frames inserted; End Growing: maximum frames."))
-    .input(PortDesc::int("exclude", 7, (0, 100_000), "End Growing: frames at each motion's end/start that may not be picked."))
-    .input(PortDesc::int("lowpass_components", 50, (1, 1_000_000), "Low-pass: components filtered."))
-    .input(PortDesc::choice("kernel", &["box3", "box5", "end_weighted"], "box3", "Low-pass kernel."))
-    .input(PortDesc::int("span", 2, (1, 10_000), "Low-pass: morphed frames each side of a seam."))
-    .output("frames", PortType::FrameList, "The animation's frames.")
-    .output("count", PortType::Int, "Number of frames.")
+pyrograph_core::choice! {
+    /// The transition method of `eigen.motion_list`: the kinds of [`Method`].
+    pub enum MethodKind {
+        /// [`Method::Cut`].
+        Cut = "cut",
+        /// [`Method::LowPass`].
+        LowPass = "lowpass",
+        /// [`Method::DirectBridging`].
+        DirectBridging = "direct_bridging",
+        /// [`Method::EndGrowing`].
+        EndGrowing = "end_growing",
+    }
 }
 
-fn cook_motion_list(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let db = i.weights("weights")?;
-    let motions = parse_motions(i.string("motions")?).map_err(|m| NodeError::port("motions", m))?;
-    for (name, r) in &motions {
-        check_range(r, db.frames, &format!("motion {name}")).map_err(|m| NodeError::port("motions", m))?;
+pyrograph_core::node! {
+    /// Builds an animation from named motions and a scenario, joined by a motion transition (thesis §5.1, Figs. 32–33).
+    ///
+    /// motions names ranges of database frames ("T1 = 100-180; T2 = 400-450"); scenario plays them in order
+    /// ("T1 + T2 + T1"); loop adds a transition from the last back into the first. method: cut (plain
+    /// attachment), lowpass (§5.1.1; its morphed frames replace `span` frames each side of the seam),
+    /// direct_bridging (§5.1.2.1; `steps` frames, T1 and T2 frames excluded) or end_growing (§5.1.2.2; at most
+    /// `steps` frames).
+    #[node("eigen.motion_list", "Eigenfires", WholeClip)]
+    pub struct MotionList {
+        /// The database's training weights.
+        weights: Arc<Weights>,
+        /// Named motions: NAME = first-last; …
+        motions: String = "T1 = 0-49; T2 = 100-149".to_string(),
+        /// Motions in playing order.
+        scenario: String = "T1 + T2".to_string(),
+        /// Join the end of the last motion back to the first.
+        r#loop: bool = false,
+        /// Transition method.
+        method: MethodKind = MethodKind::EndGrowing,
+        /// E for detection (recognition methods); 0 = all.
+        #[range(0, 1_000_000)]
+        components: usize = 0,
+        /// Minimum threshold θ_min (recognition methods).
+        #[range(0.0, 1e9)]
+        theta_min: f64 = 0.0,
+        /// Direct Bridging: frames inserted; End Growing: maximum frames.
+        #[range(1, 100_000)]
+        steps: usize = 40,
+        /// End Growing: frames at each motion's end/start that may not be picked.
+        #[range(0, 100_000)]
+        exclude: usize = 7,
+        /// Low-pass: components filtered.
+        #[range(1, 1_000_000)]
+        lowpass_components: usize = 50,
+        /// Low-pass kernel.
+        kernel: Kernel = Kernel::Box3,
+        /// Low-pass: morphed frames each side of a seam.
+        #[range(1, 10_000)]
+        span: usize = 2,
     }
-    let segments = parse_scenario(i.string("scenario")?, &motions).map_err(|m| NodeError::port("scenario", m))?;
-    let method = match i.choice("method")? {
-        "cut" => Method::Cut,
-        "lowpass" => Method::LowPass {
-            components: components_to_use(i.usize("lowpass_components")?, db.components, "lowpass_components")?,
-            kernel: lowpass_kernel(i.choice("kernel")?).map_err(|m| NodeError::port("kernel", m))?,
-            span: i.usize("span")?,
-        },
-        "direct_bridging" => Method::DirectBridging {
-            steps: i.usize("steps")?,
-            components: components_to_use(i.usize("components")?, db.components, "components")?,
-            theta_min: i.float("theta_min")?,
-        },
-        "end_growing" => Method::EndGrowing {
-            steps: i.usize("steps")?,
-            components: components_to_use(i.usize("components")?, db.components, "components")?,
-            theta_min: i.float("theta_min")?,
-            exclude: i.usize("exclude")?,
-        },
-        other => return Err(NodeError::port("method", format!("unknown method '{other}'"))),
-    };
-    let items = motion_list(db, &segments, i.bool("loop")?, &method).map_err(|m| NodeError::port("method", m))?;
-    let n = items.len() as i64;
-    Ok(vec![Value::FrameList(Arc::new(FrameList { items })), Value::Int(n)])
+    pub struct MotionListOut {
+        /// The animation's frames.
+        frames: Arc<FrameList>,
+        /// Number of frames.
+        count: usize,
+    }
+}
+
+impl Cook for MotionList {
+    fn cook(self, _: &CookCtx) -> Result<MotionListOut, NodeError> {
+        let db = &*self.weights;
+        let motions_port = port!(MotionList, motions);
+        let motions = parse_motions(&self.motions).map_err(|m| NodeError::port(motions_port, m))?;
+        for (name, r) in &motions {
+            check_range(r, db.frames, &format!("motion {name}")).map_err(|m| NodeError::port(motions_port, m))?;
+        }
+        let segments = parse_scenario(&self.scenario, &motions).map_err(|m| NodeError::port(port!(MotionList, scenario), m))?;
+        let components = || components_to_use(self.components, db.components, port!(MotionList, components));
+        let method = match self.method {
+            MethodKind::Cut => Method::Cut,
+            MethodKind::LowPass => Method::LowPass {
+                components: components_to_use(self.lowpass_components, db.components, port!(MotionList, lowpass_components))?,
+                kernel: self.kernel.weights(),
+                span: self.span,
+            },
+            MethodKind::DirectBridging => {
+                Method::DirectBridging { steps: self.steps, components: components()?, theta_min: self.theta_min }
+            }
+            MethodKind::EndGrowing => Method::EndGrowing {
+                steps: self.steps,
+                components: components()?,
+                theta_min: self.theta_min,
+                exclude: self.exclude,
+            },
+        };
+        let items =
+            motion_list(db, &segments, self.r#loop, &method).map_err(|m| NodeError::port(port!(MotionList, method), m))?;
+        let count = items.len();
+        Ok(MotionListOut { frames: Arc::new(FrameList { items }), count })
+    }
 }
 
 /// The weight rows of `items` (database frames are rows of `db`), cut or zero-padded to `e`.
@@ -258,90 +291,120 @@ pub fn frames_to_samples(basis: &Basis, db: &Weights, items: &[FrameItem], e: us
     Ok(out)
 }
 
-fn frames_to_clip_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.frames_to_clip",
-        "Eigenfires",
-        TimeDep::WholeClip,
-        "Turns a frame list into a clip by reconstruction (thesis §4.8, eq. 22) or from the source clips (§7.1.2).\n\n\
-         reconstruct: every frame is I = eigenfire Ω + Ψ with `components` eigenfires (the E for rendering), in \
-         batched matrix products. source: database frames are fetched from the connected training clips (the \
-         \"modified video\" trick: pre/post-processed originals, no reconstruction; clip1..3 as in \
-         eigen.eigenfires), and synthesized weights are still reconstructed.",
-    )
-    .input(PortDesc::new("frames", PortType::FrameList, "The animation."))
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::new("weights", PortType::Weights, "The database's training weights."))
-    .input(PortDesc::choice("mode", &["reconstruct", "source"], "reconstruct", "How database frames become images."))
-    .input(PortDesc::int("components", 0, (0, 1_000_000), "E for rendering; 0 = all."))
-    .input(optional_clip_port("clip1", "Source clip 1 (mode source)."))
-    .input(optional_clip_port("clip2", "Source clip 2 (mode source)."))
-    .input(optional_clip_port("clip3", "Source clip 3 (mode source)."))
-    .input(PortDesc::bool("clamp", true, "Clamp reconstructed samples to 0..1."))
-    .input(PortDesc::float("fps", 30.0, (0.001, 1000.0), "Frame rate of the clip."))
-    .output("clip", PortType::clip_of(PortType::Image), "The frames.")
+pyrograph_core::choice! {
+    /// How `eigen.frames_to_clip` turns database frames into images.
+    pub enum ClipMode {
+        /// Reconstruct every frame from its weights (eq. 22).
+        Reconstruct = "reconstruct",
+        /// Fetch database frames from the training clips (§7.1.2).
+        Source = "source",
+    }
 }
 
-fn cook_frames_to_clip(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let list = i.frame_list("frames")?;
-    let basis = i.basis("basis")?;
-    let db = i.weights("weights")?;
-    if list.items.is_empty() {
-        return Err(NodeError::port("frames", "the frame list is empty"));
+pyrograph_core::node! {
+    /// Turns a frame list into a clip by reconstruction (thesis §4.8, eq. 22) or from the source clips (§7.1.2).
+    ///
+    /// reconstruct: every frame is I = eigenfire Ω + Ψ with `components` eigenfires (the E for rendering), in
+    /// batched matrix products. source: database frames are fetched from the connected training clips (the
+    /// "modified video" trick: pre/post-processed originals, no reconstruction; clip1..3 as in
+    /// eigen.eigenfires), and synthesized weights are still reconstructed.
+    #[node("eigen.frames_to_clip", "Eigenfires", WholeClip)]
+    pub struct FramesToClip {
+        /// The animation.
+        frames: Arc<FrameList>,
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// The database's training weights.
+        weights: Arc<Weights>,
+        /// How database frames become images.
+        mode: ClipMode = ClipMode::Reconstruct,
+        /// E for rendering; 0 = all.
+        #[range(0, 1_000_000)]
+        components: usize = 0,
+        /// Source clip 1 (mode source).
+        clip1: ClipOf<Arc<Image>> = ClipOf::new(empty_clip()),
+        /// Source clip 2 (mode source).
+        clip2: ClipOf<Arc<Image>> = ClipOf::new(empty_clip()),
+        /// Source clip 3 (mode source).
+        clip3: ClipOf<Arc<Image>> = ClipOf::new(empty_clip()),
+        /// Clamp reconstructed samples to 0..1.
+        clamp: bool = true,
+        /// Frame rate of the clip.
+        #[range(0.001, 1000.0)]
+        fps: f64 = 30.0,
     }
-    let e = components_to_use(i.usize("components")?, basis.components().min(db.components), "components")?;
-    let (clamp, fps) = (i.bool("clamp")?, i.float("fps")?);
-    let rendered = |items: &[FrameItem]| -> Result<Clip, NodeError> {
-        let samples = frames_to_samples(basis, db, items, e).map_err(|m| NodeError::port("frames", m))?;
-        samples_to_clip(basis, samples, clamp, fps)
-    };
-    if i.choice("mode")? == "reconstruct" {
-        return Ok(vec![Value::Clip(rendered(&list.items)?)]);
+    pub struct FramesToClipOut {
+        /// The frames.
+        clip: ClipOf<Arc<Image>>,
     }
-    let clips = [i.clip("clip1")?, i.clip("clip2")?, i.clip("clip3")?];
-    let synth: Vec<FrameItem> = list.items.iter().filter(|x| matches!(x, FrameItem::Weights(_))).cloned().collect();
-    let synth_clip = if synth.is_empty() { None } else { Some(rendered(&synth)?) };
-    let mut synth_index = Vec::with_capacity(list.items.len());
-    let mut k = 0;
-    for item in &list.items {
-        synth_index.push(if matches!(item, FrameItem::Weights(_)) {
-            k += 1;
-            Some(k - 1)
-        } else {
-            None
-        });
-    }
-    let frames = list
-        .items
-        .par_iter()
-        .zip(&synth_index)
-        .map(|(item, s)| match (item, s, &synth_clip) {
-            (_, Some(s), Some(c)) => c.get(*s, ctx),
-            (FrameItem::Frame(f), _, _) => {
-                let src = basis
-                    .sources
-                    .get(*f as usize)
-                    .ok_or_else(|| NodeError::port("frames", format!("frame {f} is past the database's frames")))?;
-                let port = format!("clip{}", src.clip + 1);
-                let clip = clips.get(src.clip as usize).ok_or_else(|| NodeError::port("frames", format!("no input {port}")))?;
-                if clip.len() <= src.index as usize {
-                    return Err(NodeError::port(
-                        port,
-                        format!(
-                            "database frame {f} is frame {} of training clip {}; connect that clip here",
-                            src.index,
-                            src.clip + 1
-                        ),
-                    ));
+}
+
+impl Cook for FramesToClip {
+    fn cook(self, ctx: &CookCtx) -> Result<FramesToClipOut, NodeError> {
+        let (list, basis, db) = (&*self.frames, &*self.basis, &*self.weights);
+        let frames_port = port!(FramesToClip, frames);
+        if list.items.is_empty() {
+            return Err(NodeError::port(frames_port, "the frame list is empty"));
+        }
+        let e = components_to_use(self.components, basis.components().min(db.components), port!(FramesToClip, components))?;
+        let (clamp, fps) = (self.clamp, self.fps);
+        let rendered = |items: &[FrameItem]| -> Result<Clip, NodeError> {
+            let samples = frames_to_samples(basis, db, items, e).map_err(|m| NodeError::port(frames_port, m))?;
+            samples_to_clip(basis, samples, clamp, fps)
+        };
+        if self.mode == ClipMode::Reconstruct {
+            return Ok(FramesToClipOut { clip: ClipOf::new(rendered(&list.items)?) });
+        }
+        let clips: [(&str, &Clip); 3] = [
+            (port!(FramesToClip, clip1), &*self.clip1),
+            (port!(FramesToClip, clip2), &*self.clip2),
+            (port!(FramesToClip, clip3), &*self.clip3),
+        ];
+        let synth: Vec<FrameItem> = list.items.iter().filter(|x| matches!(x, FrameItem::Weights(_))).cloned().collect();
+        let synth_clip = if synth.is_empty() { None } else { Some(rendered(&synth)?) };
+        let mut synth_index = Vec::with_capacity(list.items.len());
+        let mut k = 0;
+        for item in &list.items {
+            synth_index.push(if matches!(item, FrameItem::Weights(_)) {
+                k += 1;
+                Some(k - 1)
+            } else {
+                None
+            });
+        }
+        let frames = list
+            .items
+            .par_iter()
+            .zip(&synth_index)
+            .map(|(item, s)| match (item, s, &synth_clip) {
+                (_, Some(s), Some(c)) => c.get(*s, ctx),
+                (FrameItem::Frame(f), _, _) => {
+                    let src = basis
+                        .sources
+                        .get(*f as usize)
+                        .ok_or_else(|| NodeError::port(frames_port, format!("frame {f} is past the database's frames")))?;
+                    let &(port, clip) = clips
+                        .get(src.clip as usize)
+                        .ok_or_else(|| NodeError::port(frames_port, format!("no input clip{}", src.clip + 1)))?;
+                    if clip.len() <= src.index as usize {
+                        return Err(NodeError::port(
+                            port,
+                            format!(
+                                "database frame {f} is frame {} of training clip {}; connect that clip here",
+                                src.index,
+                                src.clip + 1
+                            ),
+                        ));
+                    }
+                    clip.get(src.index as usize, ctx)
                 }
-                clip.get(src.index as usize, ctx)
-            }
-            _ => Err(NodeError::msg("inconsistent frame list")),
-        })
-        .collect::<Vec<_>>();
-    // Sequential so the error reported is the first in list order, not whichever thread lost.
-    let frames = frames.into_iter().collect::<Result<Vec<_>, _>>()?;
-    Ok(vec![Value::Clip(Clip::from_frames(PortType::Image, fps, frames))])
+                _ => Err(NodeError::msg("inconsistent frame list")),
+            })
+            .collect::<Vec<_>>();
+        // Sequential so the error reported is the first in list order, not whichever thread lost.
+        let frames = frames.into_iter().collect::<Result<Vec<_>, _>>()?;
+        Ok(FramesToClipOut { clip: ClipOf::new(Clip::from_frames(PortType::Image, fps, frames)) })
+    }
 }
 
 /// Parses `"2=1.5, 3=-0.8"` (1-based component = value).
@@ -386,35 +449,66 @@ pub fn edit_weights(
     Ok(w)
 }
 
-fn weights_edit_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.weights_edit",
-        "Eigenfires",
-        TimeDep::Source,
-        "Synthesizes a flame by setting eigenfire weights by hand (thesis §5.2, Fig. 44).\n\n\
-         Starts from database frame `frame`, or from all zeros (the mean image) when frame is -1, then sets (or \
-         adds) the listed weights, e.g. \"2=1.5, 3=-0.8, 50=0.1\". In sigma units a value is multiplied by √λ_k, \
-         the spread of that weight over the training set. Feed the result to eigen.reconstruct.",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::new("weights", PortType::Weights, "The database's training weights (for frame)."))
-    .input(PortDesc::int("frame", -1, (-1, 100_000_000), "Database frame to start from; -1 = zeros (mean image)."))
-    .input(PortDesc::string("edits", "", "COMPONENT=VALUE pairs, 1-based, comma separated."))
-    .input(PortDesc::choice("units", &["sigma", "absolute"], "sigma", "Values in standard deviations √λ_k or raw weights."))
-    .input(PortDesc::choice("mode", &["set", "add"], "set", "Replace the weights or add to them."))
-    .output("weights", PortType::Weights, "One row of weights.")
+pyrograph_core::choice! {
+    /// The units of `eigen.weights_edit`'s values.
+    pub enum Units {
+        /// Standard deviations √λ_k.
+        Sigma = "sigma",
+        /// Raw weights.
+        Absolute = "absolute",
+    }
 }
 
-fn cook_weights_edit(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let basis = i.basis("basis")?;
-    let db = i.weights("weights")?;
-    let edits = parse_edits(i.string("edits")?, basis.components()).map_err(|m| NodeError::port("edits", m))?;
-    let frame = usize::try_from(i.int("frame")?).ok();
-    let w = edit_weights(basis, db, frame, &edits, i.choice("units")? == "sigma", i.choice("mode")? == "add")
-        .map_err(|m| NodeError::port("frame", m))?;
-    let n = w.len();
-    let w = Weights::new(1, n, w).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
-    Ok(vec![Value::Weights(Arc::new(w))])
+pyrograph_core::choice! {
+    /// Whether `eigen.weights_edit` replaces the weights or adds to them.
+    pub enum EditMode {
+        /// Replace the weights.
+        Set = "set",
+        /// Add to them.
+        Add = "add",
+    }
+}
+
+pyrograph_core::node! {
+    /// Synthesizes a flame by setting eigenfire weights by hand (thesis §5.2, Fig. 44).
+    ///
+    /// Starts from database frame `frame`, or from all zeros (the mean image) when frame is -1, then sets (or
+    /// adds) the listed weights, e.g. "2=1.5, 3=-0.8, 50=0.1". In sigma units a value is multiplied by √λ_k,
+    /// the spread of that weight over the training set. Feed the result to eigen.reconstruct.
+    #[node("eigen.weights_edit", "Eigenfires", Source)]
+    pub struct WeightsEdit {
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// The database's training weights (for frame).
+        weights: Arc<Weights>,
+        /// Database frame to start from; -1 = zeros (mean image).
+        #[range(-1, 100_000_000)]
+        frame: i64 = -1,
+        /// COMPONENT=VALUE pairs, 1-based, comma separated.
+        edits: String = String::new(),
+        /// Values in standard deviations √λ_k or raw weights.
+        units: Units = Units::Sigma,
+        /// Replace the weights or add to them.
+        mode: EditMode = EditMode::Set,
+    }
+    pub struct WeightsEditOut {
+        /// One row of weights.
+        weights: Arc<Weights>,
+    }
+}
+
+impl Cook for WeightsEdit {
+    fn cook(self, _: &CookCtx) -> Result<WeightsEditOut, NodeError> {
+        let (basis, db) = (&*self.basis, &*self.weights);
+        let edits = parse_edits(&self.edits, basis.components()).map_err(|m| NodeError::port(port!(WeightsEdit, edits), m))?;
+        // -1 (any negative frame) starts from zeros.
+        let frame = usize::try_from(self.frame).ok();
+        let w = edit_weights(basis, db, frame, &edits, self.units == Units::Sigma, self.mode == EditMode::Add)
+            .map_err(|m| NodeError::port(port!(WeightsEdit, frame), m))?;
+        let n = w.len();
+        let w = Weights::new(1, n, w).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
+        Ok(WeightsEditOut { weights: Arc::new(w) })
+    }
 }
 
 #[cfg(test)]

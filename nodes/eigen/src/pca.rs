@@ -12,17 +12,15 @@ use std::sync::Arc;
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
-use pyrograph_core::{
-    Basis, Channels, Clip, CookCtx, FnNode, FrameRef, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
-    Value, Weights,
-};
+use pyrograph_core::params::{ClipOf, Cook};
+use pyrograph_core::{Basis, Channels, Clip, CookCtx, FrameRef, Image, NodeError, PortType, Registry, Value, Weights, port};
 use rayon::prelude::*;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(eigenfires_desc(), cook_eigenfires));
-    registry.add(FnNode::new(project_desc(), cook_project));
-    registry.add(FnNode::new(reconstruct_desc(), cook_reconstruct));
+    registry.add(Eigenfires::node());
+    registry.add(Project::node());
+    registry.add(Reconstruct::node());
 }
 
 /// A trained Eigenfires database: the basis and the weights of its training frames.
@@ -312,13 +310,8 @@ pub fn reconstruct(basis: &Basis, weights: &Weights, e: usize) -> Result<Vec<f32
 }
 
 /// An empty `Clip<Image>`: the default of optional clip inputs.
-pub fn empty_clip() -> Value {
-    Value::Clip(Clip::from_frames(PortType::Image, 0.0, Vec::new()))
-}
-
-/// An optional `Clip<Image>` input port (defaults to an empty clip).
-pub fn optional_clip_port(name: &str, doc: &str) -> PortDesc {
-    PortDesc { default: Some(empty_clip()), ..PortDesc::new(name, PortType::clip_of(PortType::Image), doc) }
+pub fn empty_clip() -> Clip {
+    Clip::from_frames(PortType::Image, 0.0, Vec::new())
 }
 
 /// Pulls every frame of `clip` (in parallel) into `out` (one `N`-sample gray frame after
@@ -372,84 +365,102 @@ pub fn samples_to_clip(basis: &Basis, samples: Vec<f32>, clamp: bool, fps: f64) 
 // eigen.eigenfires
 // ---------------------------------------------------------------------------------------------
 
-fn eigenfires_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.eigenfires",
-        "Eigenfires",
-        TimeDep::WholeClip,
-        "Trains an Eigenfires database by PCA (thesis §4.2, eq. 12–17; weights eq. 18).\n\n\
-         The frames of clip1, then clip2 and clip3 when connected (fires A, B, C of the thesis), become one \
-         database of M gray frames of one size; the basis remembers each frame's source clip and index. \
-         The mean image Ψ (eq. 12) and the eigenfires come from the M×M Gram matrix (eq. 16–17), never the \
-         N×N covariance; they are sorted by eigenvalue, at most M − 1 are meaningful (fewer if frames repeat), \
-         and max_components caps how many are kept. The weights output is every training frame projected \
-         (eq. 18). Pixel values are 0..1, so weights and distances are 1/255 of the thesis' numbers. A \
-         database of more f32 frames than memory_mb trains out of core: the frames are read from the clips once, kept \
-         in a scratch file in the cache folder (`--cache-dir`, else the system's temp folder; read from the clips \
-         again when it has no room) and read back in blocks of at most 512 MiB and half of memory_mb, two blocks in \
-         memory at a time. The eigenfires equal the in-memory ones up to rounding (set max_components: the \
-         eigenfires themselves stay in memory).",
-    )
-    .input(PortDesc::new("clip1", PortType::clip_of(PortType::Image), "First training clip (gray frames)."))
-    .input(optional_clip_port("clip2", "Optional second training clip, same frame size."))
-    .input(optional_clip_port("clip3", "Optional third training clip, same frame size."))
-    .input(PortDesc::int("max_components", 0, (0, 1_000_000), "Keep at most this many eigenfires; 0 = all meaningful (M − 1)."))
-    .input(PortDesc::int(
-        "memory_mb",
-        DEFAULT_MEMORY_MB,
-        (1, 1 << 30),
-        "MiB of f32 frames held for training: a larger database trains out of core, block by block.",
-    ))
-    .output("basis", PortType::Basis, "Mean image, eigenfires and eigenvalues.")
-    .output("weights", PortType::Weights, "Weights of every training frame (frames × components).")
+pyrograph_core::node! {
+    /// Trains an Eigenfires database by PCA (thesis §4.2, eq. 12–17; weights eq. 18).
+    ///
+    /// The frames of clip1, then clip2 and clip3 when connected (fires A, B, C of the thesis), become one
+    /// database of M gray frames of one size; the basis remembers each frame's source clip and index.
+    /// The mean image Ψ (eq. 12) and the eigenfires come from the M×M Gram matrix (eq. 16–17), never the
+    /// N×N covariance; they are sorted by eigenvalue, at most M − 1 are meaningful (fewer if frames repeat),
+    /// and max_components caps how many are kept. The weights output is every training frame projected
+    /// (eq. 18). Pixel values are 0..1, so weights and distances are 1/255 of the thesis' numbers. A
+    /// database of more f32 frames than memory_mb trains out of core: the frames are read from the clips once, kept
+    /// in a scratch file in the cache folder (`--cache-dir`, else the system's temp folder; read from the clips
+    /// again when it has no room) and read back in blocks of at most 512 MiB and half of memory_mb, two blocks in
+    /// memory at a time. The eigenfires equal the in-memory ones up to rounding (set max_components: the
+    /// eigenfires themselves stay in memory).
+    #[node("eigen.eigenfires", "Eigenfires", WholeClip)]
+    pub struct Eigenfires {
+        /// First training clip (gray frames).
+        clip1: ClipOf<Arc<Image>>,
+        /// Optional second training clip, same frame size.
+        clip2: ClipOf<Arc<Image>> = ClipOf::new(empty_clip()),
+        /// Optional third training clip, same frame size.
+        clip3: ClipOf<Arc<Image>> = ClipOf::new(empty_clip()),
+        /// Keep at most this many eigenfires; 0 = all meaningful (M − 1).
+        #[range(0, 1_000_000)]
+        max_components: usize = 0,
+        /// MiB of f32 frames held for training: a larger database trains out of core, block by block.
+        #[range(1, 1 << 30)]
+        memory_mb: usize = DEFAULT_MEMORY_MB,
+    }
+    pub struct EigenfiresOut {
+        /// Mean image, eigenfires and eigenvalues.
+        basis: Arc<Basis>,
+        /// Weights of every training frame (frames × components).
+        weights: Arc<Weights>,
+    }
 }
 
-fn cook_eigenfires(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let clips: Vec<(&str, &Clip)> =
-        ["clip1", "clip2", "clip3"].iter().map(|p| Ok((*p, i.clip(p)?))).collect::<Result<_, NodeError>>()?;
-    if clips[0].1.is_empty() {
-        return Err(NodeError::port("clip1", "the clip has no frames"));
+impl From<Database> for EigenfiresOut {
+    fn from(db: Database) -> Self {
+        EigenfiresOut { basis: Arc::new(db.basis), weights: Arc::new(db.weights) }
     }
-    let first = clips[0].1.image(0, ctx).map_err(|e| NodeError::port("clip1", e.to_string()))?;
-    let size = first.size();
-    let n = size.0 as usize * size.1 as usize;
-    let m: usize = clips.iter().map(|(_, c)| c.len()).sum();
-    let total = n.checked_mul(m).ok_or_else(|| NodeError::msg("database too large"))?;
-    let max_components = i.usize("max_components")?;
-    let memory = i.usize("memory_mb")?.saturating_mul(1 << 20);
-    if total.saturating_mul(4) > memory {
-        // Two blocks in memory: at most half the budget each, and no more than BLOCK_BYTES.
-        let block = (BLOCK_BYTES.min(memory / 2) / (n * 4)).max(1);
-        return train_from_clips(&clips, size, max_components, block, ctx);
+}
+
+impl Cook for Eigenfires {
+    fn cook(self, ctx: &CookCtx) -> Result<EigenfiresOut, NodeError> {
+        let clips: [(&str, &Clip); 3] = [
+            (port!(Eigenfires, clip1), &*self.clip1),
+            (port!(Eigenfires, clip2), &*self.clip2),
+            (port!(Eigenfires, clip3), &*self.clip3),
+        ];
+        let clip1 = port!(Eigenfires, clip1);
+        if self.clip1.is_empty() {
+            return Err(NodeError::port(clip1, "the clip has no frames"));
+        }
+        let first = self.clip1.image(0, ctx).map_err(|e| NodeError::port(clip1, e.to_string()))?;
+        let size = first.size();
+        let n = size.0 as usize * size.1 as usize;
+        let m: usize = clips.iter().map(|(_, c)| c.len()).sum();
+        let total = n.checked_mul(m).ok_or_else(|| NodeError::msg("database too large"))?;
+        let max_components = self.max_components;
+        let memory = self.memory_mb.saturating_mul(1 << 20);
+        if total.saturating_mul(4) > memory {
+            // Two blocks in memory: at most half the budget each, and no more than BLOCK_BYTES.
+            let block = (BLOCK_BYTES.min(memory / 2) / (n * 4)).max(1);
+            return train_from_clips(&clips, size, max_components, block, ctx).map(EigenfiresOut::from);
+        }
+        let mut data = vec![0.0_f32; total];
+        let mut sources = Vec::with_capacity(m);
+        let mut offset = 0;
+        for (k, (port, clip)) in clips.iter().enumerate() {
+            let len = clip.len();
+            gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], port, ctx)?;
+            sources.extend((0..len).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
+            offset += len;
+        }
+        ctx.check_cancel()?;
+        let db = train(size.0, size.1, data, sources, max_components).map_err(|m| NodeError::port(clip1, m))?;
+        Ok(db.into())
     }
-    let mut data = vec![0.0_f32; total];
-    let mut sources = Vec::with_capacity(m);
-    let mut offset = 0;
-    for (k, (port, clip)) in clips.iter().enumerate() {
-        let len = clip.len();
-        gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], port, ctx)?;
-        sources.extend((0..len).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
-        offset += len;
-    }
-    ctx.check_cancel()?;
-    let db = train(size.0, size.1, data, sources, max_components).map_err(|m| NodeError::port("clip1", m))?;
-    Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
 }
 
 /// Default of `memory_mb`: databases of more f32 frames than this train out of core.
-const DEFAULT_MEMORY_MB: i64 = 4096;
+const DEFAULT_MEMORY_MB: usize = 4096;
 
 /// Bytes of frames per block of the out-of-core training.
 const BLOCK_BYTES: usize = 512 << 20;
 
-/// [`crate::pca_blocks::train_blocks`] over the frames of the training clips, read block by block.
+/// [`crate::pca_blocks::train_blocks`] over the frames of the training clips (named by their
+/// ports), read block by block.
 fn train_from_clips(
     clips: &[(&str, &Clip)],
     size: (u32, u32),
     max_components: usize,
     block: usize,
     ctx: &CookCtx,
-) -> Result<Vec<Value>, NodeError> {
+) -> Result<Database, NodeError> {
     let n = size.0 as usize * size.1 as usize;
     let mut starts = Vec::with_capacity(clips.len());
     let mut sources = Vec::new();
@@ -472,92 +483,110 @@ fn train_from_clips(
     let scratch = ctx.settings().cache_dir.clone().unwrap_or_else(std::env::temp_dir);
     let progress = |done: usize, total: usize| ctx.frame_progress(done, total);
     let source = crate::pca_blocks::BlockSource { read: &read, scratch: Some(&scratch), progress: &progress };
-    let db = crate::pca_blocks::train_blocks(size.0, size.1, sources, max_components, block, &source)
-        .map_err(|m| NodeError::port("clip1", m))?;
-    Ok(vec![Value::Basis(Arc::new(db.basis)), Value::Weights(Arc::new(db.weights))])
+    crate::pca_blocks::train_blocks(size.0, size.1, sources, max_components, block, &source)
+        .map_err(|m| NodeError::port(port!(Eigenfires, clip1), m))
 }
 
 // ---------------------------------------------------------------------------------------------
 // eigen.project
 // ---------------------------------------------------------------------------------------------
 
-fn project_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.project",
-        "Eigenfires",
-        TimeDep::WholeClip,
-        "Projects gray frames into fire space: ω_k = eigenfire_kᵀ (I − Ψ) (thesis §4.3, eq. 18).\n\n\
-         Every frame of the clip becomes one row of weights, computed in batches as matrix products. \
-         components is the E used for detection (§5.1.2); 0 = all.",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "Gray frames of the basis size."))
-    .input(PortDesc::int("components", 0, (0, 1_000_000), "Eigenfires to project on (E); 0 = all."))
-    .output("weights", PortType::Weights, "Frames × components weights.")
+pyrograph_core::node! {
+    /// Projects gray frames into fire space: ω_k = eigenfire_kᵀ (I − Ψ) (thesis §4.3, eq. 18).
+    ///
+    /// Every frame of the clip becomes one row of weights, computed in batches as matrix products.
+    /// components is the E used for detection (§5.1.2); 0 = all.
+    #[node("eigen.project", "Eigenfires", WholeClip)]
+    pub struct Project {
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// Gray frames of the basis size.
+        clip: ClipOf<Arc<Image>>,
+        /// Eigenfires to project on (E); 0 = all.
+        #[range(0, 1_000_000)]
+        components: usize = 0,
+    }
+    pub struct ProjectOut {
+        /// Frames × components weights.
+        weights: Arc<Weights>,
+    }
 }
 
 /// Frames per batch while projecting a clip.
 const PROJECT_BATCH: usize = 256;
 
-fn cook_project(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let basis = i.basis("basis")?;
-    let clip = i.clip("clip")?;
-    let e = components_to_use(i.usize("components")?, basis.components(), "components")?;
-    if clip.is_empty() {
-        return Err(NodeError::port("clip", "the clip has no frames"));
+impl Cook for Project {
+    fn cook(self, ctx: &CookCtx) -> Result<ProjectOut, NodeError> {
+        let (basis, clip) = (&*self.basis, &*self.clip);
+        let port = port!(Project, clip);
+        let e = components_to_use(self.components, basis.components(), port!(Project, components))?;
+        if clip.is_empty() {
+            return Err(NodeError::port(port, "the clip has no frames"));
+        }
+        let n = basis.pixels();
+        let mut data = Vec::with_capacity(clip.len() * e);
+        let mut start = 0;
+        while start < clip.len() {
+            let end = (start + PROJECT_BATCH).min(clip.len());
+            let mut frames = vec![0.0_f32; (end - start) * n];
+            frames.par_chunks_mut(n).enumerate().try_for_each(|(k, dst)| {
+                let img = clip.image(start + k, ctx).map_err(|e| NodeError::port(port, e.to_string()))?;
+                check_frame(&img, (basis.width, basis.height), start + k, port)?;
+                dst.copy_from_slice(img.data());
+                Ok::<_, NodeError>(())
+            })?;
+            let w = project(basis, &frames, e).map_err(|m| NodeError::port(port, m))?;
+            data.extend_from_slice(&w.data);
+            ctx.frame_progress(end, clip.len());
+            start = end;
+        }
+        let w = Weights::new(clip.len(), e, data).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
+        Ok(ProjectOut { weights: Arc::new(w) })
     }
-    let n = basis.pixels();
-    let mut data = Vec::with_capacity(clip.len() * e);
-    let mut start = 0;
-    while start < clip.len() {
-        let end = (start + PROJECT_BATCH).min(clip.len());
-        let mut frames = vec![0.0_f32; (end - start) * n];
-        frames.par_chunks_mut(n).enumerate().try_for_each(|(k, dst)| {
-            let img = clip.image(start + k, ctx).map_err(|e| NodeError::port("clip", e.to_string()))?;
-            check_frame(&img, (basis.width, basis.height), start + k, "clip")?;
-            dst.copy_from_slice(img.data());
-            Ok::<_, NodeError>(())
-        })?;
-        let w = project(basis, &frames, e).map_err(|m| NodeError::port("clip", m))?;
-        data.extend_from_slice(&w.data);
-        ctx.frame_progress(end, clip.len());
-        start = end;
-    }
-    let w = Weights::new(clip.len(), e, data).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
-    Ok(vec![Value::Weights(Arc::new(w))])
 }
 
 // ---------------------------------------------------------------------------------------------
 // eigen.reconstruct
 // ---------------------------------------------------------------------------------------------
 
-fn reconstruct_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.reconstruct",
-        "Eigenfires",
-        TimeDep::WholeClip,
-        "Reconstructs images from weights: I = eigenfire Ω + Ψ (thesis §4.8, eq. 22).\n\n\
-         All rows of the weights become frames through one matrix product. components is the E used for \
-         rendering (§4.8, §5.1.2), separate from the E of detection; fewer components compress (Fig. 29).",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::new("weights", PortType::Weights, "One row of weights per frame."))
-    .input(PortDesc::int("components", 0, (0, 1_000_000), "Eigenfires used for rendering (E); 0 = all the weights hold."))
-    .input(PortDesc::bool("clamp", true, "Clamp the samples to 0..1."))
-    .input(PortDesc::float("fps", 30.0, (0.001, 1000.0), "Frame rate of the output clip."))
-    .output("clip", PortType::clip_of(PortType::Image), "The reconstructed gray frames.")
+pyrograph_core::node! {
+    /// Reconstructs images from weights: I = eigenfire Ω + Ψ (thesis §4.8, eq. 22).
+    ///
+    /// All rows of the weights become frames through one matrix product. components is the E used for
+    /// rendering (§4.8, §5.1.2), separate from the E of detection; fewer components compress (Fig. 29).
+    #[node("eigen.reconstruct", "Eigenfires", WholeClip)]
+    pub struct Reconstruct {
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// One row of weights per frame.
+        weights: Arc<Weights>,
+        /// Eigenfires used for rendering (E); 0 = all the weights hold.
+        #[range(0, 1_000_000)]
+        components: usize = 0,
+        /// Clamp the samples to 0..1.
+        clamp: bool = true,
+        /// Frame rate of the output clip.
+        #[range(0.001, 1000.0)]
+        fps: f64 = 30.0,
+    }
+    pub struct ReconstructOut {
+        /// The reconstructed gray frames.
+        clip: ClipOf<Arc<Image>>,
+    }
 }
 
-fn cook_reconstruct(i: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let basis = i.basis("basis")?;
-    let weights = i.weights("weights")?;
-    if weights.frames == 0 {
-        return Err(NodeError::port("weights", "there are no rows of weights to reconstruct"));
+impl Cook for Reconstruct {
+    fn cook(self, _: &CookCtx) -> Result<ReconstructOut, NodeError> {
+        let (basis, weights) = (&*self.basis, &*self.weights);
+        if weights.frames == 0 {
+            return Err(NodeError::port(port!(Reconstruct, weights), "there are no rows of weights to reconstruct"));
+        }
+        let components = port!(Reconstruct, components);
+        let e = components_to_use(self.components, basis.components().min(weights.components), components)?;
+        let samples = reconstruct(basis, weights, e).map_err(|m| NodeError::port(components, m))?;
+        let clip = samples_to_clip(basis, samples, self.clamp, self.fps)?;
+        Ok(ReconstructOut { clip: ClipOf::new(clip) })
     }
-    let e = components_to_use(i.usize("components")?, basis.components().min(weights.components), "components")?;
-    let samples = reconstruct(basis, weights, e).map_err(|m| NodeError::port("components", m))?;
-    let clip = samples_to_clip(basis, samples, i.bool("clamp")?, i.float("fps")?)?;
-    Ok(vec![Value::Clip(clip)])
 }
 
 #[cfg(test)]
@@ -594,7 +623,7 @@ pub(crate) mod tests {
         let clips = [("clip1", &clip1), ("clip2", &empty), ("clip3", &clip3)];
         let ctx = CookCtx::new();
         let out = train_from_clips(&clips, (w, h), 0, 4, &ctx).unwrap();
-        let Value::Basis(b) = &out[0] else { panic!("a basis") };
+        let b = &out.basis;
         let whole = train(w, h, frames.clone(), sources(23), 0).unwrap();
         assert_eq!(b.components(), whole.basis.components());
         assert_eq!(b.sources[15], FrameRef { clip: 2, index: 0 }, "frames keep their clip and index");

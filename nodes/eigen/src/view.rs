@@ -5,17 +5,15 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{
-    Basis, Channels, CookCtx, FnNode, FrameItem, FrameList, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry,
-    TimeDep, Value, Weights,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{Basis, Channels, CookCtx, FrameItem, FrameList, Image, NodeError, Registry, Weights, port};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(view_desc(), cook_view));
-    registry.add(FnNode::new(grid_desc(), cook_grid));
-    registry.add(FnNode::new(plot_desc(), cook_plot));
-    registry.add(FnNode::new(bars_desc(), cook_bars));
+    registry.add(EigenfireView::node());
+    registry.add(EigenfireGrid::node());
+    registry.add(PcaPlot::node());
+    registry.add(WeightBars::node());
 }
 
 /// Eq. 19–20: `samples` scaled by `255 / (max − min)` and shifted by `−255 min / (max − min)`,
@@ -278,66 +276,94 @@ pub fn weight_bars(weights: &Weights, first: usize, frames: usize, components: u
     Ok(canvas.into_image())
 }
 
-fn view_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.eigenfire_view",
-        "Eigenfires",
-        TimeDep::Source,
-        "Shows eigenfire k as an 8-bit gray image, scaled by 255/(max − min) and shifted by −255·min/(max − min) (thesis §4.4, eq. 19–20).\n\n\
-         k = 0 shows the mean image Ψ the same way.",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::int("k", 1, (0, 1_000_000), "Eigenfire number (1 = largest eigenvalue); 0 = mean image."))
-    .output("image", PortType::Image, "The eigenfire (gray, 8-bit steps).")
+pyrograph_core::node! {
+    /// Shows eigenfire k as an 8-bit gray image, scaled by 255/(max − min) and shifted by −255·min/(max − min) (thesis §4.4, eq. 19–20).
+    ///
+    /// k = 0 shows the mean image Ψ the same way.
+    #[node("eigen.eigenfire_view", "Eigenfires", Source)]
+    pub struct EigenfireView {
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// Eigenfire number (1 = largest eigenvalue); 0 = mean image.
+        #[range(0, 1_000_000)]
+        k: usize = 1,
+    }
+    pub struct EigenfireViewOut {
+        /// The eigenfire (gray, 8-bit steps).
+        image: Arc<Image>,
+    }
 }
 
-fn cook_view(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = eigenfire_image(i.basis("basis")?, i.usize("k")?).map_err(|m| NodeError::port("k", m))?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for EigenfireView {
+    fn cook(self, _: &CookCtx) -> Result<EigenfireViewOut, NodeError> {
+        let img = eigenfire_image(&self.basis, self.k).map_err(|m| NodeError::port(port!(EigenfireView, k), m))?;
+        Ok(EigenfireViewOut { image: Arc::new(img) })
+    }
 }
 
-fn grid_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.eigenfire_grid",
-        "Eigenfires",
-        TimeDep::Source,
-        "Lays the first n eigenfires out as one labelled sheet, each scaled to 8 bits by eq. 19–20 (thesis §4.4, Fig. 23).\n\n\
-         Labels are the eigenfire numbers in a built-in pixel font.",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The Eigenfires basis."))
-    .input(PortDesc::int("count", 9, (1, 10_000), "How many eigenfires, from the first."))
-    .input(PortDesc::int("columns", 3, (1, 1000), "Eigenfires per row."))
-    .input(PortDesc::bool("labels", true, "Print each eigenfire's number under it."))
-    .output("image", PortType::Image, "The sheet (RGBA).")
+pyrograph_core::node! {
+    /// Lays the first n eigenfires out as one labelled sheet, each scaled to 8 bits by eq. 19–20 (thesis §4.4, Fig. 23).
+    ///
+    /// Labels are the eigenfire numbers in a built-in pixel font.
+    #[node("eigen.eigenfire_grid", "Eigenfires", Source)]
+    pub struct EigenfireGrid {
+        /// The Eigenfires basis.
+        basis: Arc<Basis>,
+        /// How many eigenfires, from the first.
+        #[range(1, 10_000)]
+        count: usize = 9,
+        /// Eigenfires per row.
+        #[range(1, 1000)]
+        columns: usize = 3,
+        /// Print each eigenfire's number under it.
+        labels: bool = true,
+    }
+    pub struct EigenfireGridOut {
+        /// The sheet (RGBA).
+        image: Arc<Image>,
+    }
 }
 
-fn cook_grid(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let img = eigenfire_grid(i.basis("basis")?, i.usize("count")?, i.usize("columns")?, i.bool("labels")?)
-        .map_err(|m| NodeError::port("count", m))?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for EigenfireGrid {
+    fn cook(self, _: &CookCtx) -> Result<EigenfireGridOut, NodeError> {
+        let img = eigenfire_grid(&self.basis, self.count, self.columns, self.labels)
+            .map_err(|m| NodeError::port(port!(EigenfireGrid, count), m))?;
+        Ok(EigenfireGridOut { image: Arc::new(img) })
+    }
 }
 
-fn plot_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.pca_plot",
-        "Eigenfires",
-        TimeDep::Source,
-        "Plots every frame as a point in the first three components, with paths joining consecutive frames (thesis §4.4, Fig. 24).\n\n\
-         Points are coloured by training clip (red, yellow, green, …); axes red, green, blue are components 1, 2, 3. \
-         A frame list (a generated animation) can be traced on top in white (§4.4: validating new images).",
-    )
-    .input(PortDesc::new("basis", PortType::Basis, "The basis (for each frame's source clip)."))
-    .input(PortDesc::new("weights", PortType::Weights, "The weights to plot (e.g. the training weights)."))
-    .input(PortDesc {
-        default: Some(Value::FrameList(Arc::new(FrameList::default()))),
-        ..PortDesc::new("overlay", PortType::FrameList, "Optional animation traced in white (database frames index weights).")
-    })
-    .input(PortDesc::float("yaw", 30.0, (-360.0, 360.0), "Camera turn about component 2, degrees."))
-    .input(PortDesc::float("pitch", 20.0, (-90.0, 90.0), "Camera tilt, degrees."))
-    .input(PortDesc::bool("paths", true, "Join consecutive frames of each clip."))
-    .input(PortDesc::int("width", 640, (16, 8192), "Image width."))
-    .input(PortDesc::int("height", 640, (16, 8192), "Image height."))
-    .output("image", PortType::Image, "The plot (RGBA).")
+pyrograph_core::node! {
+    /// Plots every frame as a point in the first three components, with paths joining consecutive frames (thesis §4.4, Fig. 24).
+    ///
+    /// Points are coloured by training clip (red, yellow, green, …); axes red, green, blue are components 1, 2, 3.
+    /// A frame list (a generated animation) can be traced on top in white (§4.4: validating new images).
+    #[node("eigen.pca_plot", "Eigenfires", Source)]
+    pub struct PcaPlot {
+        /// The basis (for each frame's source clip).
+        basis: Arc<Basis>,
+        /// The weights to plot (e.g. the training weights).
+        weights: Arc<Weights>,
+        /// Optional animation traced in white (database frames index weights).
+        overlay: Arc<FrameList> = Arc::new(FrameList::default()),
+        /// Camera turn about component 2, degrees.
+        #[range(-360.0, 360.0)]
+        yaw: f64 = 30.0,
+        /// Camera tilt, degrees.
+        #[range(-90.0, 90.0)]
+        pitch: f64 = 20.0,
+        /// Join consecutive frames of each clip.
+        paths: bool = true,
+        /// Image width.
+        #[range(16, 8192)]
+        width: u32 = 640,
+        /// Image height.
+        #[range(16, 8192)]
+        height: u32 = 640,
+    }
+    pub struct PcaPlotOut {
+        /// The plot (RGBA).
+        image: Arc<Image>,
+    }
 }
 
 /// Weight vectors of a frame list: database frames are rows of `weights`.
@@ -354,40 +380,56 @@ pub fn frame_list_weights(list: &FrameList, weights: &Weights) -> Result<Vec<Vec
         .collect()
 }
 
-fn cook_plot(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let basis = i.basis("basis")?;
-    let weights = i.weights("weights")?;
-    let clip_of: Vec<u32> =
-        if basis.sources.len() == weights.frames { basis.sources.iter().map(|s| s.clip).collect() } else { Vec::new() };
-    let overlay = frame_list_weights(i.frame_list("overlay")?, weights).map_err(|m| NodeError::port("overlay", m))?;
-    let size = (i.usize("width")? as u32, i.usize("height")? as u32);
-    let img = pca_plot(weights, &clip_of, &overlay, size, i.float("yaw")?, i.float("pitch")?, i.bool("paths")?)
-        .map_err(|m| NodeError::port("weights", m))?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for PcaPlot {
+    fn cook(self, _: &CookCtx) -> Result<PcaPlotOut, NodeError> {
+        let (basis, weights) = (&*self.basis, &*self.weights);
+        let clip_of: Vec<u32> =
+            if basis.sources.len() == weights.frames { basis.sources.iter().map(|s| s.clip).collect() } else { Vec::new() };
+        let overlay = frame_list_weights(&self.overlay, weights).map_err(|m| NodeError::port(port!(PcaPlot, overlay), m))?;
+        let size = (self.width, self.height);
+        let img = pca_plot(weights, &clip_of, &overlay, size, self.yaw, self.pitch, self.paths)
+            .map_err(|m| NodeError::port(port!(PcaPlot, weights), m))?;
+        Ok(PcaPlotOut { image: Arc::new(img) })
+    }
 }
 
-fn bars_desc() -> NodeDesc {
-    NodeDesc::new(
-        "eigen.weight_bars",
-        "Eigenfires",
-        TimeDep::Source,
-        "Charts the weights of consecutive frames as clustered columns per eigenfire (thesis §4.6, Figs. 27–28).\n\n\
-         One cluster per component, one bar per frame from dark (first) to bright (last); frames = 1 gives Fig. 28.",
-    )
-    .input(PortDesc::new("weights", PortType::Weights, "The weights."))
-    .input(PortDesc::int("first", 0, (0, 100_000_000), "First frame (row)."))
-    .input(PortDesc::int("frames", 31, (1, 10_000), "Number of frames per cluster."))
-    .input(PortDesc::int("components", 10, (1, 10_000), "Number of eigenfires (clusters)."))
-    .input(PortDesc::int("width", 960, (16, 8192), "Image width."))
-    .input(PortDesc::int("height", 360, (32, 8192), "Image height."))
-    .output("image", PortType::Image, "The chart (RGBA).")
+pyrograph_core::node! {
+    /// Charts the weights of consecutive frames as clustered columns per eigenfire (thesis §4.6, Figs. 27–28).
+    ///
+    /// One cluster per component, one bar per frame from dark (first) to bright (last); frames = 1 gives Fig. 28.
+    #[node("eigen.weight_bars", "Eigenfires", Source)]
+    pub struct WeightBars {
+        /// The weights.
+        weights: Arc<Weights>,
+        /// First frame (row).
+        #[range(0, 100_000_000)]
+        first: usize = 0,
+        /// Number of frames per cluster.
+        #[range(1, 10_000)]
+        frames: usize = 31,
+        /// Number of eigenfires (clusters).
+        #[range(1, 10_000)]
+        components: usize = 10,
+        /// Image width.
+        #[range(16, 8192)]
+        width: u32 = 960,
+        /// Image height.
+        #[range(32, 8192)]
+        height: u32 = 360,
+    }
+    pub struct WeightBarsOut {
+        /// The chart (RGBA).
+        image: Arc<Image>,
+    }
 }
 
-fn cook_bars(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let size = (i.usize("width")? as u32, i.usize("height")? as u32);
-    let img = weight_bars(i.weights("weights")?, i.usize("first")?, i.usize("frames")?, i.usize("components")?, size)
-        .map_err(|m| NodeError::port("frames", m))?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for WeightBars {
+    fn cook(self, _: &CookCtx) -> Result<WeightBarsOut, NodeError> {
+        let size = (self.width, self.height);
+        let img = weight_bars(&self.weights, self.first, self.frames, self.components, size)
+            .map_err(|m| NodeError::port(port!(WeightBars, frames), m))?;
+        Ok(WeightBarsOut { image: Arc::new(img) })
+    }
 }
 
 #[cfg(test)]

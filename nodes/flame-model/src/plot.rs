@@ -4,14 +4,13 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{
-    CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, ParamSeries, Registry, port};
 use pyrograph_nodes_eigen::view::Canvas;
 
 /// Adds `flame_model.param_plot`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(plot_desc(), cook_plot));
+    registry.add(ParamPlot::node());
 }
 
 const BACKGROUND: [f32; 4] = [0.08, 0.08, 0.08, 1.0];
@@ -46,17 +45,17 @@ impl Default for PlotLayout {
 pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) -> Result<Image, NodeError> {
     let dim = real.dim();
     if dim == 0 || real.frames == 0 || real.data.len() != real.frames * dim {
-        return Err(NodeError::port("real", "the series is empty or malformed"));
+        return Err(NodeError::port(port!(ParamPlot, real), "the series is empty or malformed"));
     }
     let has_synth = synth.dim() > 0;
     if has_synth && synth.names != real.names {
         return Err(NodeError::port(
-            "synth",
+            port!(ParamPlot, synth),
             format!("its columns ({}) differ from the real series' ({})", synth.names.join(", "), real.names.join(", ")),
         ));
     }
     if has_synth && synth.data.len() != synth.frames * dim {
-        return Err(NodeError::port("synth", "the series is malformed"));
+        return Err(NodeError::port(port!(ParamPlot, synth), "the series is malformed"));
     }
     let (tr, ts) =
         (real.frames.min(layout.max_frames.max(1)), if has_synth { synth.frames.min(layout.max_frames.max(1)) } else { 0 });
@@ -67,7 +66,7 @@ pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) 
     let width = columns as i64 * (cw + gap) + gap;
     let height = rows as i64 * (ch + gap) + gap;
     if width * height > 100_000_000 {
-        return Err(NodeError::port("cell_width", format!("the plot would be {width}x{height} pixels")));
+        return Err(NodeError::port(port!(ParamPlot, cell_width), format!("the plot would be {width}x{height} pixels")));
     }
     let mut canvas = Canvas::new(width as u32, height as u32, BACKGROUND);
     let total = (tr + ts).max(2) as f64;
@@ -109,37 +108,44 @@ pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) 
     Ok(canvas.into_image())
 }
 
-fn plot_desc() -> NodeDesc {
-    NodeDesc::new(
-        "flame_model.param_plot",
-        "Flame model",
-        TimeDep::Source,
-        "Plots every parameter over time, the real series beside a synthesized one (Stich & Magnor §4.3, §5.1), as a grid of small line plots.\n\n\
-         Each plot shows the real (fitted) trace in orange, then after a gray bar the synthesized trace in blue on the \
-         same value scale, with the real mean as a dark line; the number is the column index (path_0.., width_0.., \
-         eig_0.., height for flame_model.fit). Leave `synth` unconnected to plot one series (e.g. arp_learn's \
-         log-likelihood).",
-    )
-    .input(PortDesc::new("real", PortType::ParamSeries, "The training (fitted) series."))
-    .input(PortDesc {
-        default: Some(Value::ParamSeries(Arc::new(ParamSeries::default()))),
-        ..PortDesc::new("synth", PortType::ParamSeries, "Optional synthesized series with the same columns (flame_model.arp_sample).")
-    })
-    .input(PortDesc::int("frames", 300, (2, 1_000_000), "Most frames of each series drawn."))
-    .input(PortDesc::int("columns", 4, (1, 256), "Plots per row."))
-    .input(PortDesc::int("cell_width", 240, (16, 4096), "Width of one plot in pixels."))
-    .input(PortDesc::int("cell_height", 80, (16, 4096), "Height of one plot in pixels."))
-    .output("image", PortType::Image, "The plots (RGBA).")
+pyrograph_core::node! {
+    /// Plots every parameter over time, the real series beside a synthesized one (Stich & Magnor §4.3, §5.1), as a grid of small line plots.
+    ///
+    /// Each plot shows the real (fitted) trace in orange, then after a gray bar the synthesized trace in blue on the
+    /// same value scale, with the real mean as a dark line; the number is the column index (path_0.., width_0..,
+    /// eig_0.., height for flame_model.fit). Leave `synth` unconnected to plot one series (e.g. arp_learn's
+    /// log-likelihood).
+    #[node("flame_model.param_plot", "Flame model", Source)]
+    pub struct ParamPlot {
+        /// The training (fitted) series.
+        real: Arc<ParamSeries>,
+        /// Optional synthesized series with the same columns (flame_model.arp_sample).
+        synth: Arc<ParamSeries> = Arc::new(ParamSeries::default()),
+        /// Most frames of each series drawn.
+        #[range(2, 1_000_000)]
+        frames: usize = 300,
+        /// Plots per row.
+        #[range(1, 256)]
+        columns: usize = 4,
+        /// Width of one plot in pixels.
+        #[range(16, 4096)]
+        cell_width: u32 = 240,
+        /// Height of one plot in pixels.
+        #[range(16, 4096)]
+        cell_height: u32 = 80,
+    }
+    pub struct ParamPlotOut {
+        /// The plots (RGBA).
+        image: Arc<Image>,
+    }
 }
 
-fn cook_plot(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let layout = PlotLayout {
-        columns: i.usize("columns")?,
-        cell: (i.usize("cell_width")? as u32, i.usize("cell_height")? as u32),
-        max_frames: i.usize("frames")?,
-    };
-    let img = param_plot(i.param_series("real")?, i.param_series("synth")?, &layout)?;
-    Ok(vec![Value::Image(Arc::new(img))])
+impl Cook for ParamPlot {
+    fn cook(self, _: &CookCtx) -> Result<ParamPlotOut, NodeError> {
+        let layout = PlotLayout { columns: self.columns, cell: (self.cell_width, self.cell_height), max_frames: self.frames };
+        let img = param_plot(&self.real, &self.synth, &layout)?;
+        Ok(ParamPlotOut { image: Arc::new(img) })
+    }
 }
 
 #[cfg(test)]

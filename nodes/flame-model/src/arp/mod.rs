@@ -9,18 +9,17 @@ pub mod sampler;
 use std::sync::Arc;
 
 use faer::Mat;
-use pyrograph_core::{
-    ArModel, CookCtx, FnNode, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{ArModel, CookCtx, NodeError, ParamSeries, Registry, port};
 
-pub use sampler::{ArSampler, BendShape, Controls, Ramp, sample};
+pub use sampler::{ArSampler, ArpSample, BendShape, ControlPorts, Controls, Ramp, sample};
 
 use em::Lambda;
 
 /// Adds `flame_model.arp_learn` and `flame_model.arp_sample`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(learn_desc(), cook_learn));
-    registry.add(FnNode::new(sampler::sample_desc(), sampler::cook_sample));
+    registry.add(ArpLearn::node());
+    registry.add(ArpSample::node());
 }
 
 /// How the E-step computes the expected statistics.
@@ -64,13 +63,14 @@ pub struct LearnOptions {
     pub learn_constant: bool,
 }
 
-/// The starting parameters λ_0 of EM.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Init {
-    /// §4.2: diagonal A_k from each parameter's own AR fit, d = 0, B = diag(sd).
-    Diagonal,
-    /// The full VAR(K) by conditional least squares on the observations (the no-noise limit).
-    LeastSquares,
+pyrograph_core::choice! {
+    /// The starting parameters λ_0 of EM.
+    pub enum Init {
+        /// §4.2: diagonal A_k from each parameter's own AR fit, d = 0, B = diag(sd).
+        Diagonal = "diagonal",
+        /// The full VAR(K) by conditional least squares on the observations (the no-noise limit).
+        LeastSquares = "least_squares",
+    }
 }
 
 impl Default for LearnOptions {
@@ -100,21 +100,21 @@ pub fn min_frames(dim: usize, order: usize) -> usize {
 pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), NodeError> {
     let dim = series.dim();
     if dim == 0 {
-        return Err(NodeError::port("params", "the parameter series has no columns"));
+        return Err(NodeError::port(port!(ArpLearn, params), "the parameter series has no columns"));
     }
     if series.data.len() != series.frames * dim {
         return Err(NodeError::port(
-            "params",
+            port!(ArpLearn, params),
             format!("the series holds {} values, not frames × parameters = {} × {dim}", series.data.len(), series.frames),
         ));
     }
     if order == 0 {
-        return Err(NodeError::port("order", "the order K must be at least 1"));
+        return Err(NodeError::port(port!(ArpLearn, order), "the order K must be at least 1"));
     }
     let need = min_frames(dim, order);
     if series.frames < need {
         return Err(NodeError::port(
-            "params",
+            port!(ArpLearn, params),
             format!(
                 "too few frames for K = {order}: {} frames of {dim} parameters, an order-{order} process needs at least \
                  K·D + K + 1 = {need}",
@@ -124,7 +124,7 @@ pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), NodeErr
     }
     if let Some(k) = series.data.iter().position(|v| !v.is_finite()) {
         return Err(NodeError::port(
-            "params",
+            port!(ArpLearn, params),
             format!("parameter '{}' is {} at frame {}", series.names[k % dim], series.data[k], k / dim),
         ));
     }
@@ -132,7 +132,7 @@ pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), NodeErr
     for i in 0..dim {
         if sd[i] <= 1e-12 * mean[i].abs().max(1e-300) || sd[i] == 0.0 {
             return Err(NodeError::port(
-                "params",
+                port!(ArpLearn, params),
                 format!(
                     "parameter '{}' does not vary (constant {}); a zero-variance parameter cannot be scaled to unit variance \
                      (§4.2) — drop it from the series",
@@ -287,7 +287,7 @@ fn cholesky_lower(q: &Mat<f64>) -> Result<Vec<f64>, NodeError> {
 /// Checks the shapes and numbers of an [`ArModel`]; errors name the port `model`.
 pub fn validate_model(m: &ArModel) -> Result<(), NodeError> {
     let (dim, k) = (m.dim(), m.order);
-    let bad = |what: &str| Err(NodeError::port("model", format!("malformed ARP: {what}")));
+    let bad = |what: &str| Err(NodeError::port(port!(ArpSample, model), format!("malformed ARP: {what}")));
     if dim == 0 || k == 0 {
         return bad("no parameters or order 0");
     }
@@ -327,91 +327,94 @@ pub fn spectral_radius(m: &ArModel) -> Result<f64, NodeError> {
     Ok(ev.iter().map(|c| c.re.hypot(c.im)).fold(0.0, f64::max))
 }
 
-fn learn_desc() -> NodeDesc {
-    NodeDesc::new(
-        "flame_model.arp_learn",
-        "Flame model",
-        TimeDep::WholeClip,
-        "Learns the auto-regressive process x_t = Σ_k A_k x_{t−k} + d + B w_t of a parameter series by EM (Stich & Magnor §4, §4.1).\n\n\
-         The state is observed through noise; the E-step is an exact Kalman smoother on the stacked state (K·D) or the \
-         paper's condensation with N_c particles. λ_0 follows §4.2: diagonal A_k from each parameter's own AR fit, d = 0, \
-         B = diag(standard deviations), the data scaled to unit variance and the result rescaled. EM stops when the \
-         likelihood has not increased for 3 consecutive iterations (§5). An unstable fit (companion spectral radius ≥ 1) \
-         is an error.",
-    )
-    .input(PortDesc::new("params", PortType::ParamSeries, "Training parameter series x_t (e.g. flame_model.fit's params)."))
-    .input(PortDesc::int("order", 2, (1, 16), "Order K of the process (§5: 2)."))
-    .input(PortDesc::choice(
-        "e_step",
-        &["kalman", "condensation"],
-        "kalman",
-        "E-step: exact Kalman smoother, or the paper's condensation particle filter (§4.1).",
-    ))
-    .input(PortDesc::int("particles", 200, (10, 100_000), "Particles N_c of the condensation E-step (§4.1: 50–300; §5: 200)."))
-    .input(PortDesc::int("max_iterations", 200, (1, 100_000), "Most EM iterations."))
-    .input(PortDesc::int("patience", 3, (1, 1000), "Stop after this many iterations without a likelihood increase (§5: 3)."))
-    .input(PortDesc::float(
-        "tolerance",
-        1e-7,
-        (0.0, 1.0),
-        "Relative likelihood gain below which an iteration does not count as an increase.",
-    ))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the condensation particle filter."))
-    .input(PortDesc::choice(
-        "init",
-        &["diagonal", "least_squares"],
-        "diagonal",
-        "λ_0: the paper's diagonal start (§4.2), or the full VAR(K) by least squares on the observations.",
-    ))
-    .input(PortDesc::bool(
-        "learn_constant",
-        false,
-        "Learn d (§4). Off holds d = 0 on the centred data so the process mean is the training mean exactly; a short, \
-         slowly drifting clip otherwise leaves the synthesized mean visibly off.",
-    ))
-    .output("model", PortType::ArModel, "The learned process λ = {A, d, B} with scaling and initial state.")
-    .output(
-        "log_likelihood",
-        PortType::ParamSeries,
-        "Log-likelihood of the training data after each EM iteration (one column; plot it with flame_model.param_plot).",
-    )
-    .output("spectral_radius", PortType::Float, "Spectral radius of the learned companion matrix (< 1: stable).")
+pyrograph_core::choice! {
+    /// The E-step of `flame_model.arp_learn`: the kinds of [`EStep`].
+    pub enum EStepKind {
+        /// [`EStep::Kalman`].
+        Kalman = "kalman",
+        /// [`EStep::Condensation`].
+        Condensation = "condensation",
+    }
 }
 
-fn cook_learn(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let series = i.param_series("params")?;
-    let e_step = match i.choice("e_step")? {
-        "kalman" => EStep::Kalman,
-        "condensation" => EStep::Condensation { particles: i.usize("particles")?, seed: i.int("seed")? as u64 },
-        other => return Err(NodeError::port("e_step", format!("unknown option '{other}'"))),
-    };
-    let tolerance = i.float("tolerance")?;
-    if !tolerance.is_finite() || tolerance < 0.0 {
-        return Err(NodeError::port("tolerance", format!("must be a finite number ≥ 0, got {tolerance}")));
+pyrograph_core::node! {
+    /// Learns the auto-regressive process x_t = Σ_k A_k x_{t−k} + d + B w_t of a parameter series by EM (Stich & Magnor §4, §4.1).
+    ///
+    /// The state is observed through noise; the E-step is an exact Kalman smoother on the stacked state (K·D) or the
+    /// paper's condensation with N_c particles. λ_0 follows §4.2: diagonal A_k from each parameter's own AR fit, d = 0,
+    /// B = diag(standard deviations), the data scaled to unit variance and the result rescaled. EM stops when the
+    /// likelihood has not increased for 3 consecutive iterations (§5). An unstable fit (companion spectral radius ≥ 1)
+    /// is an error.
+    #[node("flame_model.arp_learn", "Flame model", WholeClip)]
+    pub struct ArpLearn {
+        /// Training parameter series x_t (e.g. flame_model.fit's params).
+        params: Arc<ParamSeries>,
+        /// Order K of the process (§5: 2).
+        #[range(1, 16)]
+        order: usize = 2,
+        /// E-step: exact Kalman smoother, or the paper's condensation particle filter (§4.1).
+        e_step: EStepKind = EStepKind::Kalman,
+        /// Particles N_c of the condensation E-step (§4.1: 50–300; §5: 200).
+        #[range(10, 100_000)]
+        particles: usize = 200,
+        /// Most EM iterations.
+        #[range(1, 100_000)]
+        max_iterations: usize = 200,
+        /// Stop after this many iterations without a likelihood increase (§5: 3).
+        #[range(1, 1000)]
+        patience: usize = 3,
+        /// Relative likelihood gain below which an iteration does not count as an increase.
+        #[range(0.0, 1.0)]
+        tolerance: f64 = 1e-7,
+        /// Seed of the condensation particle filter.
+        #[range(0, u32::MAX)]
+        seed: u64 = 0,
+        /// λ_0: the paper's diagonal start (§4.2), or the full VAR(K) by least squares on the observations.
+        init: Init = Init::Diagonal,
+        /// Learn d (§4). Off holds d = 0 on the centred data so the process mean is the training mean exactly; a short,
+        /// slowly drifting clip otherwise leaves the synthesized mean visibly off.
+        learn_constant: bool = false,
     }
-    let opts = LearnOptions {
-        order: i.usize("order")?,
-        max_iterations: i.usize("max_iterations")?,
-        patience: i.usize("patience")?,
-        tolerance,
-        e_step,
-        init: match i.choice("init")? {
-            "diagonal" => Init::Diagonal,
-            "least_squares" => Init::LeastSquares,
-            other => return Err(NodeError::port("init", format!("unknown option '{other}'"))),
-        },
-        learn_constant: i.bool("learn_constant")?,
-        ..LearnOptions::default()
-    };
-    let model = learn(series, &opts, ctx)?;
-    let rho = spectral_radius(&model)?;
-    let ll = ParamSeries {
-        names: vec!["log_likelihood".into()],
-        frames: model.log_likelihood.len(),
-        data: model.log_likelihood.clone(),
-        fps: 1.0,
-    };
-    Ok(vec![Value::ArModel(Arc::new(model)), Value::ParamSeries(Arc::new(ll)), Value::Float(rho)])
+    pub struct ArpLearnOut {
+        /// The learned process λ = {A, d, B} with scaling and initial state.
+        model: Arc<ArModel>,
+        /// Log-likelihood of the training data after each EM iteration (one column; plot it with flame_model.param_plot).
+        log_likelihood: Arc<ParamSeries>,
+        /// Spectral radius of the learned companion matrix (< 1: stable).
+        spectral_radius: f64,
+    }
+}
+
+impl Cook for ArpLearn {
+    fn cook(self, ctx: &CookCtx) -> Result<ArpLearnOut, NodeError> {
+        let e_step = match self.e_step {
+            EStepKind::Kalman => EStep::Kalman,
+            EStepKind::Condensation => EStep::Condensation { particles: self.particles, seed: self.seed },
+        };
+        let tolerance = self.tolerance;
+        if !tolerance.is_finite() || tolerance < 0.0 {
+            return Err(NodeError::port(port!(ArpLearn, tolerance), format!("must be a finite number ≥ 0, got {tolerance}")));
+        }
+        let opts = LearnOptions {
+            order: self.order,
+            max_iterations: self.max_iterations,
+            patience: self.patience,
+            tolerance,
+            e_step,
+            init: self.init,
+            learn_constant: self.learn_constant,
+            ..LearnOptions::default()
+        };
+        let model = learn(&self.params, &opts, ctx)?;
+        let rho = spectral_radius(&model)?;
+        let ll = ParamSeries {
+            names: vec!["log_likelihood".into()],
+            frames: model.log_likelihood.len(),
+            data: model.log_likelihood.clone(),
+            fps: 1.0,
+        };
+        Ok(ArpLearnOut { model: Arc::new(model), log_likelihood: Arc::new(ll), spectral_radius: rho })
+    }
 }
 
 #[cfg(test)]

@@ -4,7 +4,8 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{ArModel, CookCtx, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{ArModel, CookCtx, NodeError, ParamSeries, port};
 
 use super::rng::Rng;
 use super::spectral_radius;
@@ -38,7 +39,7 @@ impl ArSampler {
         let rho = spectral_radius(model)?;
         if rho >= 1.0 {
             return Err(NodeError::port(
-                "model",
+                port!(ArpSample, model),
                 format!("the process is unstable (companion spectral radius {rho:.4} ≥ 1); its samples would diverge"),
             ));
         }
@@ -76,7 +77,10 @@ impl ArSampler {
     pub fn set_history(&mut self, rows: &[f64]) -> Result<(), NodeError> {
         let (dim, k) = (self.dim, self.n / self.dim);
         if rows.len() != self.n || rows.iter().any(|v| !v.is_finite()) {
-            return Err(NodeError::port("model", format!("the initial state must be {k} finite rows of {dim} parameters")));
+            return Err(NodeError::port(
+                port!(ArpSample, model),
+                format!("the initial state must be {k} finite rows of {dim} parameters"),
+            ));
         }
         for lag in 0..k {
             let row = &rows[(k - 1 - lag) * dim..(k - lag) * dim];
@@ -172,15 +176,16 @@ impl Ramp {
     }
 }
 
-/// How the bend offset is spread over the path samples path_0 … path_{N_p−1} (path_0 at the base).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BendShape {
-    /// The same offset on every path sample (§5.1 taken literally: the flame shifts sideways).
-    Uniform,
-    /// Offset growing linearly with height: the flame leans.
-    Linear,
-    /// Offset growing with the square of height: the flame bends like a plume in a cross wind.
-    Quadratic,
+pyrograph_core::choice! {
+    /// How the bend offset is spread over the path samples path_0 … path_{N_p−1} (path_0 at the base).
+    pub enum BendShape {
+        /// The same offset on every path sample (§5.1 taken literally: the flame shifts sideways).
+        Uniform = "uniform",
+        /// Offset growing linearly with height: the flame leans.
+        Linear = "linear",
+        /// Offset growing with the square of height: the flame bends like a plume in a cross wind.
+        Quadratic = "quadratic",
+    }
 }
 
 impl BendShape {
@@ -285,77 +290,100 @@ pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls
     Ok(ParamSeries { names: model.names.clone(), frames, data, fps: model.fps })
 }
 
-pub(super) fn sample_desc() -> NodeDesc {
-    let ramp_doc = |what: &str| format!("{what} on the last frame when `ramp` is on (linear in between).");
-    NodeDesc::new(
-        "flame_model.arp_sample",
-        "Flame model",
-        TimeDep::Simulation,
-        "Synthesizes a new parameter series of any length by evaluating the learned ARP repeatedly (Stich & Magnor §4.3), with the §5.1 controls.\n\n\
-         Starts from the last K training rows, deterministic for a seed. An offset on the path parameters bends the flame \
-         (wind); height, width and scale multiply the height, the width parameters and the whole flame. With `ramp` on, \
-         every control moves linearly from its value on the first frame to its `_end` value on the last.",
-    )
-    .input(PortDesc::new("model", PortType::ArModel, "The learned process (flame_model.arp_learn)."))
-    .input(PortDesc::int("frames", 400, (1, 100_000_000), "Number of frames to synthesize."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the process noise w_t."))
-    .input(PortDesc::int("warmup", 0, (0, 1_000_000), "Steps run and discarded before the first output frame."))
-    .input(PortDesc::float("bend", 0.0, (-1.0e6, 1.0e6), "Offset added to the path parameters (§5.1: a bent flame, e.g. wind)."))
-    .input(PortDesc::choice(
-        "bend_shape",
-        &["uniform", "linear", "quadratic"],
-        "quadratic",
-        "How the bend offset grows from path_0 (base) to the last path sample: same everywhere, linearly or quadratically.",
-    ))
-    .input(PortDesc::float("height", 1.0, (0.0, 100.0), "Factor on the flame height (§5.1)."))
-    .input(PortDesc::float("width", 1.0, (0.0, 100.0), "Factor on the width parameters (§5.1)."))
-    .input(PortDesc::float("scale", 1.0, (0.0, 100.0), "Factor on the whole flame: path, width and height (§5.1)."))
-    .input(PortDesc::bool(
-        "observation_noise",
-        true,
-        "Add the learned observation noise to each frame (the footage's flicker, and its statistics); off: the smooth process x_t.",
-    ))
-    .input(PortDesc::bool("ramp", false, "Ramp every control linearly from its value to its `_end` value over the frames."))
-    .input(PortDesc::float("bend_end", 0.0, (-1.0e6, 1.0e6), &ramp_doc("Bend offset")))
-    .input(PortDesc::float("height_end", 1.0, (0.0, 100.0), &ramp_doc("Height factor")))
-    .input(PortDesc::float("width_end", 1.0, (0.0, 100.0), &ramp_doc("Width factor")))
-    .input(PortDesc::float("scale_end", 1.0, (0.0, 100.0), &ramp_doc("Scale factor")))
-    .output("params", PortType::ParamSeries, "The synthesized series, in the training series' columns.")
+pyrograph_core::ports! {
+    /// The §5.1 controls of `flame_model.arp_sample` as ports: each control's value, and its
+    /// `_end` value on the last frame when `ramp` is on. [`ControlPorts::controls`] gives the
+    /// [`Controls`] of a cook.
+    pub struct ControlPorts {
+        /// Offset added to the path parameters (§5.1: a bent flame, e.g. wind).
+        #[range(-1.0e6, 1.0e6)]
+        bend: f64 = 0.0,
+        /// How the bend offset grows from path_0 (base) to the last path sample: same everywhere, linearly or quadratically.
+        bend_shape: BendShape = BendShape::Quadratic,
+        /// Factor on the flame height (§5.1).
+        #[range(0.0, 100.0)]
+        height: f64 = 1.0,
+        /// Factor on the width parameters (§5.1).
+        #[range(0.0, 100.0)]
+        width: f64 = 1.0,
+        /// Factor on the whole flame: path, width and height (§5.1).
+        #[range(0.0, 100.0)]
+        scale: f64 = 1.0,
+        /// Add the learned observation noise to each frame (the footage's flicker, and its statistics); off: the smooth process x_t.
+        observation_noise: bool = true,
+        /// Ramp every control linearly from its value to its `_end` value over the frames.
+        ramp: bool = false,
+        /// Bend offset on the last frame when `ramp` is on (linear in between).
+        #[range(-1.0e6, 1.0e6)]
+        bend_end: f64 = 0.0,
+        /// Height factor on the last frame when `ramp` is on (linear in between).
+        #[range(0.0, 100.0)]
+        height_end: f64 = 1.0,
+        /// Width factor on the last frame when `ramp` is on (linear in between).
+        #[range(0.0, 100.0)]
+        width_end: f64 = 1.0,
+        /// Scale factor on the last frame when `ramp` is on (linear in between).
+        #[range(0.0, 100.0)]
+        scale_end: f64 = 1.0,
+    }
 }
 
-fn finite(i: &Inputs<'_>, name: &str) -> Result<f64, NodeError> {
-    let v = i.float(name)?;
-    if v.is_finite() { Ok(v) } else { Err(NodeError::port(name, format!("must be finite, got {v}"))) }
+impl ControlPorts {
+    /// The [`Controls`] these ports describe; a value that is not finite is an error naming its port.
+    pub fn controls(&self) -> Result<Controls, NodeError> {
+        let finite = |v: f64, port: &str| {
+            if v.is_finite() { Ok(v) } else { Err(NodeError::port(port, format!("must be finite, got {v}"))) }
+        };
+        // The `_end` value is read only when ramping: otherwise the control is constant.
+        let pair = |start: (f64, &str), end: (f64, &str)| -> Result<Ramp, NodeError> {
+            let start = finite(start.0, start.1)?;
+            let end = if self.ramp { finite(end.0, end.1)? } else { start };
+            Ok(Ramp { start, end })
+        };
+        Ok(Controls {
+            bend: pair((self.bend, port!(ControlPorts, bend)), (self.bend_end, port!(ControlPorts, bend_end)))?,
+            bend_shape: self.bend_shape,
+            height: pair((self.height, port!(ControlPorts, height)), (self.height_end, port!(ControlPorts, height_end)))?,
+            width: pair((self.width, port!(ControlPorts, width)), (self.width_end, port!(ControlPorts, width_end)))?,
+            scale: pair((self.scale, port!(ControlPorts, scale)), (self.scale_end, port!(ControlPorts, scale_end)))?,
+            observation_noise: self.observation_noise,
+        })
+    }
 }
 
-/// The [`Controls`] described by the node's inputs; errors name the port.
-pub fn controls_from_inputs(i: &Inputs<'_>) -> Result<Controls, NodeError> {
-    let ramp = i.bool("ramp")?;
-    let pair = |name: &str| -> Result<Ramp, NodeError> {
-        let start = finite(i, name)?;
-        let end = if ramp { finite(i, &format!("{name}_end"))? } else { start };
-        Ok(Ramp { start, end })
-    };
-    let bend_shape = match i.choice("bend_shape")? {
-        "uniform" => BendShape::Uniform,
-        "linear" => BendShape::Linear,
-        "quadratic" => BendShape::Quadratic,
-        other => return Err(NodeError::port("bend_shape", format!("unknown option '{other}'"))),
-    };
-    Ok(Controls {
-        bend: pair("bend")?,
-        bend_shape,
-        height: pair("height")?,
-        width: pair("width")?,
-        scale: pair("scale")?,
-        observation_noise: i.bool("observation_noise")?,
-    })
+pyrograph_core::node! {
+    /// Synthesizes a new parameter series of any length by evaluating the learned ARP repeatedly (Stich & Magnor §4.3), with the §5.1 controls.
+    ///
+    /// Starts from the last K training rows, deterministic for a seed. An offset on the path parameters bends the flame
+    /// (wind); height, width and scale multiply the height, the width parameters and the whole flame. With `ramp` on,
+    /// every control moves linearly from its value on the first frame to its `_end` value on the last.
+    #[node("flame_model.arp_sample", "Flame model", Simulation)]
+    pub struct ArpSample {
+        /// The learned process (flame_model.arp_learn).
+        model: Arc<ArModel>,
+        /// Number of frames to synthesize.
+        #[range(1, 100_000_000)]
+        frames: usize = 400,
+        /// Seed of the process noise w_t.
+        #[range(0, u32::MAX)]
+        seed: u64 = 0,
+        /// Steps run and discarded before the first output frame.
+        #[range(0, 1_000_000)]
+        warmup: usize = 0,
+        /// The §5.1 controls.
+        controls: ControlPorts,
+    }
+    pub struct ArpSampleOut {
+        /// The synthesized series, in the training series' columns.
+        params: Arc<ParamSeries>,
+    }
 }
 
-pub(super) fn cook_sample(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let model = i.ar_model("model")?;
-    let controls = controls_from_inputs(i)?;
-    ctx.check_cancel()?;
-    let out = sample(model, i.usize("frames")?, i.usize("warmup")?, i.int("seed")? as u64, &controls)?;
-    Ok(vec![Value::ParamSeries(Arc::new(out))])
+impl Cook for ArpSample {
+    fn cook(self, ctx: &CookCtx) -> Result<ArpSampleOut, NodeError> {
+        let controls = self.controls.controls()?;
+        ctx.check_cancel()?;
+        let out = sample(&self.model, self.frames, self.warmup, self.seed, &controls)?;
+        Ok(ArpSampleOut { params: Arc::new(out) })
+    }
 }

@@ -1,7 +1,8 @@
 use proptest::prelude::*;
 
+use pyrograph_core::{Inputs, NodeDesc, Value};
+
 use super::rng::Rng;
-use super::sampler::{cook_sample, sample_desc};
 use super::*;
 
 /// `frames` rows of x_t = A_1 x_{t−1} + A_2 x_{t−2} + d + B w_t (+ observation noise of standard
@@ -220,15 +221,17 @@ fn cook_values(desc: &NodeDesc, set: &[(&str, Value)]) -> Vec<Value> {
 #[test]
 fn the_nodes_learn_and_sample_through_their_ports() {
     let series = Arc::new(ar2_series(&A1, &A2, &D, &B, 400, 0.01, 8));
-    let desc = learn_desc();
+    let learn = ArpLearn::node();
+    let desc = learn.desc().clone();
     let values = cook_values(&desc, &[("params", Value::ParamSeries(series.clone()))]);
-    let out = cook_learn(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+    let out = learn.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
     let (Value::ArModel(model), Value::ParamSeries(ll), Value::Float(rho)) = (&out[0], &out[1], &out[2]) else {
         panic!("outputs {out:?}")
     };
     assert_eq!((ll.frames, ll.data.as_slice()), (model.log_likelihood.len(), model.log_likelihood.as_slice()));
     assert!(*rho < 1.0);
-    let desc = sample_desc();
+    let sampler = ArpSample::node();
+    let desc = sampler.desc().clone();
     let values = cook_values(
         &desc,
         &[
@@ -238,11 +241,11 @@ fn the_nodes_learn_and_sample_through_their_ports() {
             ("height_end", Value::Float(2.0)),
         ],
     );
-    let out = cook_sample(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+    let out = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
     let Value::ParamSeries(p) = &out[0] else { panic!("{out:?}") };
     assert_eq!((p.frames, p.dim()), (50, 3));
     let values = cook_values(&desc, &[("model", Value::ArModel(model.clone())), ("bend", Value::Float(f64::NAN))]);
-    let e = cook_sample(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err();
+    let e = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, .. } if port == "bend"), "{e}");
 }
 

@@ -11,61 +11,80 @@
 //! scaled to 1, and the intensity scaled to the clip's average. PCA of the normalized images
 //! (the Eigenfires code) gives the eigenflames and the N_e appearance weights (§3.2).
 
-use pyrograph_core::{FlameModel, FrameRef, ParamSeries};
+use pyrograph_core::params::Field;
+use pyrograph_core::{FlameModel, FrameRef, Inputs, NodeDesc, ParamSeries, TimeDep, Value};
 use pyrograph_nodes_eigen::pca;
 use rayon::prelude::*;
 
 use super::shape::{Moments, Spline, plumes, slice_value};
 
-/// Settings of the fit.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FitSettings {
-    /// Path samples N_p.
-    pub path_samples: usize,
-    /// Width samples N_w.
-    pub width_samples: usize,
-    /// Eigenflames N_e (fewer when the frames do not have that many independent variations).
-    pub eigenflames: usize,
-    /// Height slices N_s measured per frame.
-    pub slices: usize,
-    /// Normalized image size (width, height).
-    pub norm_size: (u32, u32),
-    /// Gray values at or below this are background.
-    pub threshold: f32,
-    /// Plumes holding less than this fraction of a frame's intensity are specks and removed;
-    /// two or more larger ones make the frame a multi-plume frame (skipped).
-    pub min_plume: f64,
-    /// Flame height = this × σ along the main axis (a uniform ellipse is 4σ long).
-    pub height_sigmas: f64,
-    /// The flame base lies this many σ below the centroid along the main axis.
-    pub base_sigmas: f64,
-    /// The normalized image spans u ∈ −u_extent..u_extent local widths (σ of the slice).
-    pub u_extent: f64,
-    /// Heights covered by the normalized image: from −v_below to 1 + v_above flame heights.
-    pub v_below: f64,
-    /// See `v_below`.
-    pub v_above: f64,
-    /// Scale each normalized image to the clip's average intensity (§3.1).
-    pub normalize_intensity: bool,
+pyrograph_core::ports! {
+    /// Settings of the fit: the ports of `flame_model.fit` after its clip, with their defaults.
+    #[derive(PartialEq)]
+    pub struct FitSettings {
+        /// Path samples N_p at equidistant heights (paper: 10).
+        #[range(1, 64)]
+        n_p: usize = 10,
+        /// Width samples N_w at equidistant heights (paper: 10).
+        #[range(1, 64)]
+        n_w: usize = 10,
+        // Fewer when the frames do not have that many independent variations.
+        /// Eigenflames N_e (paper: 5); at most frames − 1 are available.
+        #[range(1, 1000)]
+        n_e: usize = 5,
+        /// Height slices N_s measured per frame before sampling path and width.
+        #[range(1, 512)]
+        n_s: usize = 20,
+        /// Width of the normalized images (eigenflame size).
+        #[range(4, 1024)]
+        norm_width: u32 = 64,
+        /// Height of the normalized images (eigenflame size).
+        #[range(4, 1024)]
+        norm_height: u32 = 128,
+        /// Gray values at or below this are background.
+        #[range(0.0, 1.0)]
+        threshold: f32 = 0.08,
+        /// Plumes under this fraction of a frame's intensity are specks (removed); two larger ones skip the frame.
+        #[range(0.0, 1.0)]
+        min_plume: f64 = 0.05,
+        // A uniform ellipse is 4σ long; real flames' faint tips pull σ in, hence 6.
+        /// Flame height = this × σ along the main axis (second-order moment).
+        #[range(0.5, 20.0)]
+        height_sigmas: f64 = 6.0,
+        /// The flame base lies this many σ below the centroid along the main axis.
+        #[range(0.0, 10.0)]
+        base_sigmas: f64 = 3.6,
+        // The normalized image spans u ∈ −u_extent..u_extent.
+        /// Half-width of the normalized image, in local widths (σ of a slice).
+        #[range(0.5, 20.0)]
+        u_extent: f64 = 3.0,
+        // Heights covered by the normalized image: from −v_below to 1 + v_above flame heights.
+        /// Normalized image margin below the base, in flame heights.
+        #[range(0.0, 2.0)]
+        v_below: f64 = 0.12,
+        /// Normalized image margin above the tip, in flame heights.
+        #[range(0.0, 2.0)]
+        v_above: f64 = 0.2,
+        /// Scale every normalized image to the clip's average intensity (§3.1).
+        normalize_intensity: bool = true,
+    }
+}
+
+impl FitSettings {
+    /// The normalized image size (width, height).
+    pub fn norm_size(&self) -> (u32, u32) {
+        (self.norm_width, self.norm_height)
+    }
 }
 
 impl Default for FitSettings {
+    /// The declared defaults of the ports.
     fn default() -> Self {
-        FitSettings {
-            path_samples: 10,
-            width_samples: 10,
-            eigenflames: 5,
-            slices: 20,
-            norm_size: (64, 128),
-            threshold: 0.08,
-            min_plume: 0.05,
-            height_sigmas: 6.0,
-            base_sigmas: 3.6,
-            u_extent: 3.0,
-            v_below: 0.12,
-            v_above: 0.2,
-            normalize_intensity: true,
-        }
+        let mut ports = Vec::new();
+        <FitSettings as Field>::describe("", "", None, None, &mut ports);
+        let desc = NodeDesc { inputs: ports, ..NodeDesc::new("", "", TimeDep::Source, "") };
+        let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
+        <FitSettings as Field>::read(&Inputs::new(&desc, &values), "").expect("every fit setting has a valid default")
     }
 }
 
@@ -222,7 +241,7 @@ pub const MIN_WIDTH: f64 = 0.5;
 /// Measures the N_s height slices of one plume in frame `f0` for a flame of `height` pixels and
 /// samples path and width at equidistant heights (§3.1).
 pub fn measure_shape(plume: &Plume, f0: &Frame0, height: f64, s: &FitSettings) -> Shape {
-    let ns = s.slices.max(1);
+    let ns = s.n_s.max(1);
     let across = f0.across();
     let mut acc = vec![[0.0_f64; 3]; ns];
     for y in 0..plume.height {
@@ -272,15 +291,15 @@ pub fn measure_shape(plume: &Plume, f0: &Frame0, height: f64, s: &FitSettings) -
     let width_slices: Vec<f64> = filled.iter().map(|p| p.1).collect();
     Shape {
         height,
-        path: (0..s.path_samples).map(|k| slice_value(&path_slices, knot(k, s.path_samples))).collect(),
-        width: (0..s.width_samples).map(|k| slice_value(&width_slices, knot(k, s.width_samples)).max(MIN_WIDTH)).collect(),
+        path: (0..s.n_p).map(|k| slice_value(&path_slices, knot(k, s.n_p))).collect(),
+        width: (0..s.n_w).map(|k| slice_value(&width_slices, knot(k, s.n_w)).max(MIN_WIDTH)).collect(),
     }
 }
 
 /// Normalizes one plume into a `norm_size` image: the inverse of [`crate::model::render`]'s
 /// deformation, sampled bilinearly.
 pub fn normalize(plume: &Plume, f0: &Frame0, shape: &Shape, s: &FitSettings) -> Vec<f32> {
-    let (nw, nh) = (s.norm_size.0 as usize, s.norm_size.1 as usize);
+    let (nw, nh) = (s.norm_size().0 as usize, s.norm_size().1 as usize);
     let path = Spline::new(&shape.path);
     let width = Spline::new(&shape.width);
     let across = f0.across();
@@ -369,7 +388,7 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         })
         .collect();
 
-    let n = s.norm_size.0 as usize * s.norm_size.1 as usize;
+    let n = s.norm_size().0 as usize * s.norm_size().1 as usize;
     let mut data = Vec::with_capacity(n * shaped.len());
     let means: Vec<f64> = shaped.iter().map(|(_, img)| img.iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64).collect();
     let target = means.iter().sum::<f64>() / means.len() as f64;
@@ -378,10 +397,10 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         data.extend(img.iter().map(|v| v * gain));
     }
     let sources = (0..shaped.len()).map(|i| FrameRef { clip: 0, index: kept[i] as u32 }).collect();
-    let db = pca::train(s.norm_size.0, s.norm_size.1, data, sources, s.eigenflames)?;
+    let db = pca::train(s.norm_size().0, s.norm_size().1, data, sources, s.n_e)?;
     let e = db.basis.components();
 
-    let names = param_names(s.path_samples, s.width_samples, e);
+    let names = param_names(s.n_p, s.n_w, e);
     let dim = names.len();
     let mut rows = Vec::with_capacity(dim * shaped.len());
     for (f, (shape, _)) in shaped.iter().enumerate() {
@@ -394,11 +413,11 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
     let mean_params = (0..dim).map(|c| rows.iter().skip(c).step_by(dim).sum::<f64>() / shaped.len() as f64).collect();
     let params = ParamSeries::new(names, shaped.len(), rows, fps).ok_or("parameter rows have the wrong size")?;
     let model = FlameModel {
-        path_samples: s.path_samples,
-        width_samples: s.width_samples,
+        path_samples: s.n_p,
+        width_samples: s.n_w,
         eigenflames: e,
-        width: s.norm_size.0,
-        height: s.norm_size.1,
+        width: s.norm_size().0,
+        height: s.norm_size().1,
         mean: db.basis.mean,
         basis: db.basis.eigenvectors,
         eigenvalues: db.basis.eigenvalues,
@@ -424,10 +443,10 @@ pub fn fit_gray_frames(frames: &[Vec<f32>], frame_size: (u32, u32), s: &FitSetti
 }
 
 fn check_settings(s: &FitSettings) -> Result<(), String> {
-    if s.path_samples == 0 || s.width_samples == 0 || s.eigenflames == 0 || s.slices == 0 {
+    if s.n_p == 0 || s.n_w == 0 || s.n_e == 0 || s.n_s == 0 {
         return Err("n_p, n_w, n_e and n_s must each be at least 1".into());
     }
-    if s.norm_size.0 < 2 || s.norm_size.1 < 2 {
+    if s.norm_size().0 < 2 || s.norm_size().1 < 2 {
         return Err("the normalized image must be at least 2x2".into());
     }
     if !(s.height_sigmas > 0.0 && s.u_extent > 0.0 && s.v_below >= 0.0 && s.v_above >= 0.0) {

@@ -10,9 +10,9 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::params::{ClipOf, Cook};
 use pyrograph_core::{
-    Channels, Clip, CookCtx, FlameModel, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, ParamSeries, PortDesc,
-    PortType, Registry, TimeDep, Value,
+    Channels, Clip, CookCtx, FlameModel, FrameSource, Image, NodeError, ParamSeries, PortType, Registry, Value, port,
 };
 use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
 use rayon::prelude::*;
@@ -25,8 +25,8 @@ pub const CATEGORY: &str = "Flame model";
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(fit_desc(), cook_fit));
-    registry.add(FnNode::new(render_desc(), cook_render));
+    registry.add(FitModel::node());
+    registry.add(RenderModel::node());
 }
 
 /// Luma of an image as one gray plane (Rec. 601 weights for RGBA, as `imaging.to_gray`).
@@ -41,176 +41,129 @@ pub fn gray_plane(img: &Image) -> Vec<f32> {
 // flame_model.fit
 // ---------------------------------------------------------------------------------------------
 
-fn fit_desc() -> NodeDesc {
-    let d = FitSettings::default();
-    NodeDesc::new(
-        "flame_model.fit",
-        CATEGORY,
-        TimeDep::WholeClip,
-        "Fits Stich & Magnor's generic flame model to flame footage (Learning Flames §3, §3.1, §3.2).\n\n\
-         Each frame's gray intensity is thresholded and its geometric moments up to order 3 (eq. 1) give the \
-         centroid, the main axes and the flame height (height_sigmas × σ along the main axis). The clip's mean \
-         main axis and base point fix the normalization frame. Each flame is cut into n_s height slices whose own \
-         moments give the path (centre across the axis) and the width (σ across the axis), sampled at n_p and n_w \
-         equidistant heights. Slices are centred and scaled by the cubic splines through those samples, the \
-         height scaled to 1 and (optionally) the intensity to the clip's average; PCA of these normalized \
-         images gives the eigenflames and n_e appearance weights per frame (fewer if the frames do not vary \
-         that much). Frames with two or more disjoint plumes (and frames with no flame) are skipped, as in §5; \
-         `skipped` counts them. Parameter rows are [path_0.., width_0.., eig_0.., height] in pixels.",
-    )
-    .input(PortDesc::new(
-        "clip",
-        PortType::clip_of(PortType::Image),
-        "Flame frames on a dark background (gray or RGBA; RGBA uses luma).",
-    ))
-    .input(PortDesc::int("n_p", d.path_samples as i64, (1, 64), "Path samples N_p at equidistant heights (paper: 10)."))
-    .input(PortDesc::int("n_w", d.width_samples as i64, (1, 64), "Width samples N_w at equidistant heights (paper: 10)."))
-    .input(PortDesc::int("n_e", d.eigenflames as i64, (1, 1000), "Eigenflames N_e (paper: 5); at most frames − 1 are available."))
-    .input(PortDesc::int(
-        "n_s",
-        d.slices as i64,
-        (1, 512),
-        "Height slices N_s measured per frame before sampling path and width.",
-    ))
-    .input(PortDesc::int("norm_width", d.norm_size.0 as i64, (4, 1024), "Width of the normalized images (eigenflame size)."))
-    .input(PortDesc::int("norm_height", d.norm_size.1 as i64, (4, 1024), "Height of the normalized images (eigenflame size)."))
-    .input(PortDesc::float("threshold", f64::from(d.threshold), (0.0, 1.0), "Gray values at or below this are background."))
-    .input(PortDesc::float(
-        "min_plume",
-        d.min_plume,
-        (0.0, 1.0),
-        "Plumes under this fraction of a frame's intensity are specks (removed); two larger ones skip the frame.",
-    ))
-    .input(PortDesc::float(
-        "height_sigmas",
-        d.height_sigmas,
-        (0.5, 20.0),
-        "Flame height = this × σ along the main axis (second-order moment).",
-    ))
-    .input(PortDesc::float(
-        "base_sigmas",
-        d.base_sigmas,
-        (0.0, 10.0),
-        "The flame base lies this many σ below the centroid along the main axis.",
-    ))
-    .input(PortDesc::float(
-        "u_extent",
-        d.u_extent,
-        (0.5, 20.0),
-        "Half-width of the normalized image, in local widths (σ of a slice).",
-    ))
-    .input(PortDesc::float("v_below", d.v_below, (0.0, 2.0), "Normalized image margin below the base, in flame heights."))
-    .input(PortDesc::float("v_above", d.v_above, (0.0, 2.0), "Normalized image margin above the tip, in flame heights."))
-    .input(PortDesc::bool(
-        "normalize_intensity",
-        d.normalize_intensity,
-        "Scale every normalized image to the clip's average intensity (§3.1).",
-    ))
-    .output("model", PortType::FlameModel, "The generic flame model: normalization frame and eigenflames.")
-    .output("params", PortType::ParamSeries, "One parameter row per kept frame: path, width, eigenflame weights, height.")
-    .output("skipped", PortType::Int, "Frames skipped: two or more disjoint plumes, or no flame.")
-}
-
-fn fit_settings(i: &Inputs<'_>) -> Result<FitSettings, NodeError> {
-    Ok(FitSettings {
-        path_samples: i.usize("n_p")?,
-        width_samples: i.usize("n_w")?,
-        eigenflames: i.usize("n_e")?,
-        slices: i.usize("n_s")?,
-        norm_size: (i.usize("norm_width")? as u32, i.usize("norm_height")? as u32),
-        threshold: i.float("threshold")? as f32,
-        min_plume: i.float("min_plume")?,
-        height_sigmas: i.float("height_sigmas")?,
-        base_sigmas: i.float("base_sigmas")?,
-        u_extent: i.float("u_extent")?,
-        v_below: i.float("v_below")?,
-        v_above: i.float("v_above")?,
-        normalize_intensity: i.bool("normalize_intensity")?,
-    })
-}
-
-fn cook_fit(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let clip = i.clip("clip")?;
-    let s = fit_settings(i)?;
-    if clip.is_empty() {
-        return Err(NodeError::port("clip", "the clip has no frames"));
+pyrograph_core::node! {
+    /// Fits Stich & Magnor's generic flame model to flame footage (Learning Flames §3, §3.1, §3.2).
+    ///
+    /// Each frame's gray intensity is thresholded and its geometric moments up to order 3 (eq. 1) give the
+    /// centroid, the main axes and the flame height (height_sigmas × σ along the main axis). The clip's mean
+    /// main axis and base point fix the normalization frame. Each flame is cut into n_s height slices whose own
+    /// moments give the path (centre across the axis) and the width (σ across the axis), sampled at n_p and n_w
+    /// equidistant heights. Slices are centred and scaled by the cubic splines through those samples, the
+    /// height scaled to 1 and (optionally) the intensity to the clip's average; PCA of these normalized
+    /// images gives the eigenflames and n_e appearance weights per frame (fewer if the frames do not vary
+    /// that much). Frames with two or more disjoint plumes (and frames with no flame) are skipped, as in §5;
+    /// `skipped` counts them. Parameter rows are [path_0.., width_0.., eig_0.., height] in pixels.
+    #[node("flame_model.fit", "Flame model", WholeClip)]
+    pub struct FitModel {
+        /// Flame frames on a dark background (gray or RGBA; RGBA uses luma).
+        clip: ClipOf<Arc<Image>>,
+        /// The fit's settings.
+        settings: FitSettings,
     }
-    let size = clip.image(0, ctx).map_err(|e| NodeError::port("clip", e.to_string()))?.size();
-    let frames: Vec<fit::Frame> = (0..clip.len())
-        .into_par_iter()
-        .map(|f| {
-            ctx.check_cancel()?;
-            let img = clip.image(f, ctx).map_err(|e| NodeError::port("clip", e.to_string()))?;
-            if img.size() != size {
-                return Err(NodeError::port(
-                    "clip",
-                    format!(
-                        "frame {f} is {}x{} but frame 0 is {}x{}; every frame must be the same size",
-                        img.width(),
-                        img.height(),
-                        size.0,
-                        size.1
-                    ),
-                ));
-            }
-            let a = analyse_frame(&gray_plane(&img), size.0 as usize, size.1 as usize, &s);
-            ctx.frame_progress(f + 1, clip.len());
-            Ok(a)
-        })
-        .collect::<Result<_, NodeError>>()?;
-    let fit = fit_frames(&frames, size, &s, clip.fps()).map_err(|m| NodeError::port("clip", m))?;
-    let skipped = (fit.skipped_plumes.len() + fit.skipped_empty.len()) as i64;
-    Ok(vec![Value::FlameModel(Arc::new(fit.model)), Value::ParamSeries(Arc::new(fit.params)), Value::Int(skipped)])
+    pub struct FitModelOut {
+        /// The generic flame model: normalization frame and eigenflames.
+        model: Arc<FlameModel>,
+        /// One parameter row per kept frame: path, width, eigenflame weights, height.
+        params: Arc<ParamSeries>,
+        /// Frames skipped: two or more disjoint plumes, or no flame.
+        skipped: usize,
+    }
+}
+
+impl Cook for FitModel {
+    fn cook(self, ctx: &CookCtx) -> Result<FitModelOut, NodeError> {
+        let (clip, s) = (&*self.clip, &self.settings);
+        let port = port!(FitModel, clip);
+        if clip.is_empty() {
+            return Err(NodeError::port(port, "the clip has no frames"));
+        }
+        let size = clip.image(0, ctx).map_err(|e| NodeError::port(port, e.to_string()))?.size();
+        let frames: Vec<fit::Frame> = (0..clip.len())
+            .into_par_iter()
+            .map(|f| {
+                ctx.check_cancel()?;
+                let img = clip.image(f, ctx).map_err(|e| NodeError::port(port, e.to_string()))?;
+                if img.size() != size {
+                    return Err(NodeError::port(
+                        port,
+                        format!(
+                            "frame {f} is {}x{} but frame 0 is {}x{}; every frame must be the same size",
+                            img.width(),
+                            img.height(),
+                            size.0,
+                            size.1
+                        ),
+                    ));
+                }
+                let a = analyse_frame(&gray_plane(&img), size.0 as usize, size.1 as usize, s);
+                ctx.frame_progress(f + 1, clip.len());
+                Ok(a)
+            })
+            .collect::<Result<_, NodeError>>()?;
+        let fit = fit_frames(&frames, size, s, clip.fps()).map_err(|m| NodeError::port(port, m))?;
+        let skipped = fit.skipped_plumes.len() + fit.skipped_empty.len();
+        Ok(FitModelOut { model: Arc::new(fit.model), params: Arc::new(fit.params), skipped })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
 // flame_model.render
 // ---------------------------------------------------------------------------------------------
 
-fn render_desc() -> NodeDesc {
-    NodeDesc::new(
-        "flame_model.render",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Renders Stich & Magnor's generic flame model, one frame per parameter row (Learning Flames §3.1–3.2, §4.3, §5.1).\n\n\
-         The normalized appearance is the mean image plus the eigenflames weighted by the row's eig_k; the \
-         inverse normalization places it in the frame: the height scales the main axis from the base, and the \
-         path and width samples, interpolated by natural cubic splines, shift and stretch every height slice. \
-         Frames are computed lazily (rows in parallel). §5.1's controls: bend adds an offset to the path that \
-         grows with the square of the height (wind), ramped in over bend_ramp frames; height_scale, width_scale \
-         and scale change the flame's height, width and size. `color` maps intensity × exposure through a colour \
-         ramp (the intensity → colour transfer function of §5.1).",
-    )
-    .input(PortDesc::new("model", PortType::FlameModel, "The fitted generic flame model (flame_model.fit)."))
-    .input(PortDesc::new("params", PortType::ParamSeries, "Parameter rows (fitted or sampled by flame_model.arp_sample)."))
-    .input(PortDesc::int("width", 0, (0, 16384), "Output width in pixels; 0 = the fitted footage's width."))
-    .input(PortDesc::int(
-        "height",
-        0,
-        (0, 16384),
-        "Output height in pixels; 0 = the fitted footage's height (the base keeps its distance from the bottom).",
-    ))
-    .input(PortDesc::float("scale", 1.0, (0.01, 100.0), "Overall flame size about its base."))
-    .input(PortDesc::float(
-        "bend",
-        0.0,
-        (-10.0, 10.0),
-        "Path offset at the tip in flame heights, growing with height² (wind bends the flame; + = right).",
-    ))
-    .input(PortDesc::int("bend_ramp", 0, (0, 1_000_000), "Frames over which the bend ramps in from 0; 0 = from the first frame."))
-    .input(PortDesc::float("height_scale", 1.0, (0.01, 100.0), "Multiplies the height parameter."))
-    .input(PortDesc::float("width_scale", 1.0, (0.01, 100.0), "Multiplies the width parameters."))
-    .input(PortDesc::string("ramp", DEFAULT_RAMP, "Intensity → colour ramp of the color output: pos:r,g,b; …"))
-    .input(PortDesc::float("exposure", 1.0, (0.0, 100.0), "Intensity multiplier before the colour ramp."))
-    .input(PortDesc::choice(
-        "alpha",
-        &["opaque", "intensity"],
-        "opaque",
-        "Alpha of the color output: 1, or the clamped intensity.",
-    ))
-    .input(PortDesc::float("fps", 0.0, (0.0, 1000.0), "Frame rate of the clips; 0 = the parameter series' rate."))
-    .output("clip", PortType::clip_of(PortType::Image), "Gray flame frames, one per parameter row.")
-    .output("color", PortType::clip_of(PortType::Image), "RGBA frames coloured by the ramp.")
+pyrograph_core::node! {
+    /// Renders Stich & Magnor's generic flame model, one frame per parameter row (Learning Flames §3.1–3.2, §4.3, §5.1).
+    ///
+    /// The normalized appearance is the mean image plus the eigenflames weighted by the row's eig_k; the
+    /// inverse normalization places it in the frame: the height scales the main axis from the base, and the
+    /// path and width samples, interpolated by natural cubic splines, shift and stretch every height slice.
+    /// Frames are computed lazily (rows in parallel). §5.1's controls: bend adds an offset to the path that
+    /// grows with the square of the height (wind), ramped in over bend_ramp frames; height_scale, width_scale
+    /// and scale change the flame's height, width and size. `color` maps intensity × exposure through a colour
+    /// ramp (the intensity → colour transfer function of §5.1).
+    #[node("flame_model.render", "Flame model", PerFrame)]
+    pub struct RenderModel {
+        /// The fitted generic flame model (flame_model.fit).
+        model: Arc<FlameModel>,
+        /// Parameter rows (fitted or sampled by flame_model.arp_sample).
+        params: Arc<ParamSeries>,
+        /// Output width in pixels; 0 = the fitted footage's width.
+        #[range(0, 16384)]
+        width: u32 = 0,
+        /// Output height in pixels; 0 = the fitted footage's height (the base keeps its distance from the bottom).
+        #[range(0, 16384)]
+        height: u32 = 0,
+        /// Overall flame size about its base.
+        #[range(0.01, 100.0)]
+        scale: f64 = 1.0,
+        /// Path offset at the tip in flame heights, growing with height² (wind bends the flame; + = right).
+        #[range(-10.0, 10.0)]
+        bend: f64 = 0.0,
+        /// Frames over which the bend ramps in from 0; 0 = from the first frame.
+        #[range(0, 1_000_000)]
+        bend_ramp: usize = 0,
+        /// Multiplies the height parameter.
+        #[range(0.01, 100.0)]
+        height_scale: f64 = 1.0,
+        /// Multiplies the width parameters.
+        #[range(0.01, 100.0)]
+        width_scale: f64 = 1.0,
+        /// Intensity → colour ramp of the color output: pos:r,g,b; …
+        ramp: String = DEFAULT_RAMP.to_string(),
+        /// Intensity multiplier before the colour ramp.
+        #[range(0.0, 100.0)]
+        exposure: f32 = 1.0,
+        /// Alpha of the color output: 1, or the clamped intensity.
+        alpha: Alpha = Alpha::Opaque,
+        /// Frame rate of the clips; 0 = the parameter series' rate.
+        #[range(0.0, 1000.0)]
+        fps: f64 = 0.0,
+    }
+    pub struct RenderModelOut {
+        /// Gray flame frames, one per parameter row.
+        clip: ClipOf<Arc<Image>>,
+        /// RGBA frames coloured by the ramp.
+        color: ClipOf<Arc<Image>>,
+    }
 }
 
 struct RenderSource {
@@ -224,8 +177,9 @@ impl FrameSource for RenderSource {
         self.params.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        let row = self.params.row(index).ok_or_else(|| NodeError::port("params", format!("there is no row {index}")))?;
-        let img = render_frame(&self.model, row, &self.settings, index).map_err(|m| NodeError::port("params", m))?;
+        let port = port!(RenderModel, params);
+        let row = self.params.row(index).ok_or_else(|| NodeError::port(port, format!("there is no row {index}")))?;
+        let img = render_frame(&self.model, row, &self.settings, index).map_err(|m| NodeError::port(port, m))?;
         Ok(Value::Image(Arc::new(img)))
     }
 }
@@ -247,59 +201,62 @@ impl FrameSource for ColorSource {
     }
 }
 
-fn cook_render(i: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let model = i.flame_model("model")?.clone();
-    let params = i.param_series("params")?.clone();
-    if params.frames == 0 {
-        return Err(NodeError::port("params", "there are no parameter rows to render"));
+impl Cook for RenderModel {
+    fn cook(self, _: &CookCtx) -> Result<RenderModelOut, NodeError> {
+        let RenderModel {
+            model,
+            params,
+            width,
+            height,
+            scale,
+            bend,
+            bend_ramp,
+            height_scale,
+            width_scale,
+            ramp,
+            exposure,
+            alpha,
+            fps,
+        } = self;
+        if params.frames == 0 {
+            return Err(NodeError::port(port!(RenderModel, params), "there are no parameter rows to render"));
+        }
+        if params.dim() != model.dim() {
+            return Err(NodeError::port(
+                port!(RenderModel, params),
+                format!(
+                    "rows have {} parameters but the model needs {} (N_p {} + N_w {} + N_e {} + height); use the series of the same fit",
+                    params.dim(),
+                    model.dim(),
+                    model.path_samples,
+                    model.width_samples,
+                    model.eigenflames
+                ),
+            ));
+        }
+        let settings = RenderSettings { size: (width, height), scale, bend, bend_ramp, height_scale, width_scale };
+        if settings.size.0 == 0 && model.frame_size.0 == 0 || settings.size.1 == 0 && model.frame_size.1 == 0 {
+            return Err(NodeError::port(port!(RenderModel, width), "the model has no frame size; set width and height"));
+        }
+        let ramp = ColorRamp::parse(&ramp).map_err(|m| NodeError::port(port!(RenderModel, ramp), m))?;
+        let fps = match fps {
+            f if f > 0.0 => f,
+            _ if params.fps > 0.0 => params.fps,
+            _ => 30.0,
+        };
+        let mut h = Fingerprinter::new();
+        "flame_model.render".hash(&mut h);
+        model.hash_into(&mut h);
+        params.hash_into(&mut h);
+        format!("{settings:?}").hash(&mut h);
+        let gray_fp = h.finish();
+        format!("{ramp:?}{exposure}{alpha:?}").hash(&mut h);
+        let color_fp = h.finish();
+        let gray = Clip::new(PortType::Image, fps, gray_fp, Arc::new(RenderSource { model, params, settings }));
+        let color =
+            Clip::new(PortType::Image, fps, color_fp, Arc::new(ColorSource { gray: gray.clone(), ramp, exposure, alpha }));
+        Ok(RenderModelOut { clip: ClipOf::new(gray), color: ClipOf::new(color) })
     }
-    if params.dim() != model.dim() {
-        return Err(NodeError::port(
-            "params",
-            format!(
-                "rows have {} parameters but the model needs {} (N_p {} + N_w {} + N_e {} + height); use the series of the same fit",
-                params.dim(),
-                model.dim(),
-                model.path_samples,
-                model.width_samples,
-                model.eigenflames
-            ),
-        ));
-    }
-    let settings = RenderSettings {
-        size: (i.usize("width")? as u32, i.usize("height")? as u32),
-        scale: i.float("scale")?,
-        bend: i.float("bend")?,
-        bend_ramp: i.usize("bend_ramp")?,
-        height_scale: i.float("height_scale")?,
-        width_scale: i.float("width_scale")?,
-    };
-    if settings.size.0 == 0 && model.frame_size.0 == 0 || settings.size.1 == 0 && model.frame_size.1 == 0 {
-        return Err(NodeError::port("width", "the model has no frame size; set width and height"));
-    }
-    let ramp = ColorRamp::parse(i.string("ramp")?).map_err(|m| NodeError::port("ramp", m))?;
-    let exposure = i.float("exposure")? as f32;
-    let alpha = match i.choice("alpha")? {
-        "opaque" => Alpha::Opaque,
-        "intensity" => Alpha::Intensity,
-        other => return Err(NodeError::port("alpha", format!("unknown alpha mode '{other}' (opaque, intensity)"))),
-    };
-    let fps = match i.float("fps")? {
-        f if f > 0.0 => f,
-        _ if params.fps > 0.0 => params.fps,
-        _ => 30.0,
-    };
-    let mut h = Fingerprinter::new();
-    "flame_model.render".hash(&mut h);
-    model.hash_into(&mut h);
-    params.hash_into(&mut h);
-    format!("{settings:?}").hash(&mut h);
-    let gray_fp = h.finish();
-    format!("{ramp:?}{exposure}{alpha:?}").hash(&mut h);
-    let color_fp = h.finish();
-    let gray = Clip::new(PortType::Image, fps, gray_fp, Arc::new(RenderSource { model, params, settings }));
-    let color = Clip::new(PortType::Image, fps, color_fp, Arc::new(ColorSource { gray: gray.clone(), ramp, exposure, alpha }));
-    Ok(vec![Value::Clip(gray), Value::Clip(color)])
 }
 
 #[cfg(test)]
@@ -369,7 +326,7 @@ mod tests {
         let f0 = Frame0 { anchor: m.anchor, axis: m.axis };
         let shape = measure_shape(&plume, &f0, height, &s);
         let img = normalize(&plume, &f0, &shape, &s);
-        let (nw, nh) = (s.norm_size.0 as usize, s.norm_size.1 as usize);
+        let (nw, nh) = (s.norm_width as usize, s.norm_height as usize);
         let nm = Moments::of_image(&img, nw, nh);
         let (dir, major, minor) = nm.main_axes().unwrap();
         assert!(dir[0].abs() < 1e-3 && dir[1] < 0.0, "normalized main axis {dir:?}");
@@ -389,9 +346,10 @@ mod tests {
         let (w, h, m) = (96, 144, 12);
         let frames = flames(w, h, m);
         let s = FitSettings {
-            eigenflames: m,
+            n_e: m,
             normalize_intensity: false,
-            norm_size: (64, 128),
+            norm_width: 64,
+            norm_height: 128,
             threshold: 0.0,
             ..FitSettings::default()
         };
@@ -418,7 +376,7 @@ mod tests {
     fn fewer_eigenflames_cost_accuracy_but_keep_the_shape() {
         let (w, h, m) = (96, 144, 12);
         let frames = flames(w, h, m);
-        let s = FitSettings { eigenflames: 2, threshold: 0.0, ..FitSettings::default() };
+        let s = FitSettings { n_e: 2, threshold: 0.0, ..FitSettings::default() };
         let fit = fit_gray_frames(&frames, (w as u32, h as u32), &s, 24.0).unwrap();
         assert_eq!(fit.params.dim(), 23);
         let img = render_frame(&fit.model, fit.params.row(3).unwrap(), &RenderSettings::default(), 3).unwrap();
@@ -486,24 +444,26 @@ mod tests {
 
     #[test]
     fn nodes_cook_through_a_graph_of_clips() {
-        use pyrograph_core::PortType;
+        use pyrograph_core::Inputs;
         let (w, h) = (64, 96);
         let frames: Vec<Value> = (0..6)
             .map(|f| Value::Image(Arc::new(Image::from_vec(w, h, Channels::Gray, flame(w as usize, h as usize, f)).unwrap())))
             .collect();
         let clip = Clip::from_frames(PortType::Image, 24.0, frames);
         let ctx = CookCtx::new();
-        let desc = fit_desc();
+        let fit = FitModel::node();
+        let desc = fit.desc().clone();
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
         values[0] = Value::Clip(clip);
-        let out = cook_fit(&Inputs::new(&desc, &values), &ctx).unwrap();
+        let out = fit.cook(&Inputs::new(&desc, &values), &ctx).unwrap();
         let Value::Int(skipped) = out[2] else { panic!() };
         assert_eq!(skipped, 0);
-        let rdesc = render_desc();
+        let render = RenderModel::node();
+        let rdesc = render.desc().clone();
         let mut rvalues: Vec<Value> = rdesc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
         rvalues[0] = out[0].clone();
         rvalues[1] = out[1].clone();
-        let rendered = cook_render(&Inputs::new(&rdesc, &rvalues), &ctx).unwrap();
+        let rendered = render.cook(&Inputs::new(&rdesc, &rvalues), &ctx).unwrap();
         let Value::Clip(gray) = &rendered[0] else { panic!() };
         let Value::Clip(color) = &rendered[1] else { panic!() };
         assert_eq!(gray.len(), 6);

@@ -169,13 +169,14 @@ fn bilinear(img: &[f32], w: usize, h: usize, cf: f32, rf: f32) -> f32 {
     top + (bottom - top) * ty
 }
 
-/// How the alpha of the coloured output is set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Alpha {
-    /// Alpha 1 everywhere (the ramp's black background stays).
-    Opaque,
-    /// Alpha = clamped intensity (straight alpha), for compositing.
-    Intensity,
+pyrograph_core::choice! {
+    /// How the alpha of the coloured output is set.
+    pub enum Alpha {
+        /// Alpha 1 everywhere (the ramp's black background stays).
+        Opaque = "opaque",
+        /// Alpha = clamped intensity (straight alpha), for compositing.
+        Intensity = "intensity",
+    }
 }
 
 /// Colours a gray flame through an intensity → colour transfer function (§5.1).

@@ -25,11 +25,11 @@ fn path(p: &Path) -> ParamValue {
 /// Every producer is a registered node with the smallest parameters that still give data
 /// its consumers accept (a flame large enough to find, masks that select it).
 fn supply(doc: &mut GraphDoc, ty: &PortType, files: &Files) -> Option<String> {
-    let mut add = |id: &str, node: NodeDoc| {
+    fn add(doc: &mut GraphDoc, id: &str, node: NodeDoc) {
         if doc.node(id).is_none() {
             doc.add_node(id, node);
         }
-    };
+    }
     let flame = || {
         NodeDoc::new("imaging.turbulence_flame")
             .param("width", int(48))
@@ -38,12 +38,12 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, files: &Files) -> Option<String> {
     };
     let endpoint = match ty.to_string().as_str() {
         "Image" | "Clip<Image>" => {
-            add("s_flame", flame());
+            add(doc, "s_flame", flame());
             "s_flame.clip"
         }
         "Mask" => {
-            add("s_flame", flame());
-            add(
+            add(doc, "s_flame", flame());
+            add(doc, 
                 "s_mask",
                 NodeDoc::new("imaging.hsv_mask")
                     .param("layer1_enabled", ParamValue::Bool(false))
@@ -62,45 +62,45 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, files: &Files) -> Option<String> {
             "s_contours.contours"
         }
         "Basis" | "Weights" => {
-            add("s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
+            add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
             if ty.to_string() == "Basis" { "s_db.basis" } else { "s_db.weights" }
         }
         "FrameList" => {
-            add("s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
-            add("s_motion", NodeDoc::new("eigen.motion_list"));
+            add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
+            add(doc, "s_motion", NodeDoc::new("eigen.motion_list"));
             doc.connect("s_db.weights", "s_motion.weights");
             "s_motion.frames"
         }
         "FlameModel" | "ParamSeries" | "ArModel" => {
-            add("s_flame", flame());
-            add("s_fit", NodeDoc::new("flame_model.fit"));
+            add(doc, "s_flame", flame());
+            add(doc, "s_fit", NodeDoc::new("flame_model.fit"));
             doc.connect("s_flame.clip", "s_fit.clip");
             match ty.to_string().as_str() {
                 "FlameModel" => "s_fit.model",
                 "ParamSeries" => "s_fit.params",
                 _ => {
-                    add("s_learn", NodeDoc::new("flame_model.arp_learn"));
+                    add(doc, "s_learn", NodeDoc::new("flame_model.arp_learn"));
                     doc.connect("s_fit.params", "s_learn.params");
                     "s_learn.model"
                 }
             }
         }
         "Particles" => {
-            add("s_roots", NodeDoc::new("particles.roots"));
+            add(doc, "s_roots", NodeDoc::new("particles.roots"));
             "s_roots.roots"
         }
         "Mesh" => {
-            add("s_mesh", NodeDoc::new("particles.mesh_load"));
+            add(doc, "s_mesh", NodeDoc::new("particles.mesh_load"));
             "s_mesh.mesh"
         }
         "SpreadState" => {
-            add("s_mesh", NodeDoc::new("particles.mesh_load"));
-            add("s_spread", NodeDoc::new("particles.fire_spread").param("frames", int(12)));
+            add(doc, "s_mesh", NodeDoc::new("particles.mesh_load"));
+            add(doc, "s_spread", NodeDoc::new("particles.fire_spread").param("frames", int(12)));
             doc.connect("s_mesh.mesh", "s_spread.mesh");
             "s_spread.spread"
         }
         "ClothState" => {
-            add("s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
+            add(doc, "s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
             "s_cloth.cloth"
         }
         "Path" => return None,

@@ -349,7 +349,6 @@ pyrograph_core::node! {
         char: Arc<Particles> = no_particles(),
         /// The camera.
         camera: CameraPorts = CameraPorts {
-            camera_up: [0.0, 1.0, 0.0],
             near: 0.05,
             far: 100.0,
             ..CameraPorts::looking(640, 360, [2.2, 1.5, 2.6], [0.0, 0.2, 0.0])

@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod node;
 pub mod params;
 pub mod registry;
+pub mod stepping;
 pub mod value;
 
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};

@@ -28,7 +28,7 @@ fn peer_structural() -> ClothParams {
         bend: false,
         drag: 0.5,
         buoyancy: 0.5,
-        wind: Vec3::new(0.3, 0.0, 0.0),
+        wind: [0.3, 0.0, 0.0],
         dt: 1.0 / 120.0,
         fps: 24.0,
         ..ClothParams::default()

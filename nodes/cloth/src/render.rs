@@ -6,9 +6,9 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::{
-    ClothState, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{ClothState, CookCtx, Image, NodeError, Registry, port};
+use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, Camera, DrawList, TextureId, Vertex, View, render_image};
 use rayon::prelude::*;
 
@@ -16,19 +16,40 @@ use crate::textures::builtin_textures;
 
 /// Adds `cloth.cloth_render` and `cloth.cloth_render_textured`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(cloth_render_desc(false), cook_cloth_render));
-    registry.add(FnNode::new(cloth_render_desc(true), cook_cloth_render_textured));
+    registry.add(ClothRender::node());
+    registry.add(ClothRenderTextured::node());
 }
 
-/// How the cloths are drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// Textured, alpha-blended mesh (the flame).
-    Textured,
-    /// The structural springs as thin camera-facing strips.
-    Wireframe,
-    /// Plain shaded cloth, without a texture (Figure 4).
-    Cloth,
+pyrograph_core::choice! {
+    /// How the cloths are drawn.
+    pub enum Mode {
+        /// Textured, alpha-blended mesh (the flame).
+        Textured = "textured",
+        /// The structural springs as thin camera-facing strips.
+        Wireframe = "wireframe",
+        /// Plain shaded cloth, without a texture (Figure 4).
+        Cloth = "cloth",
+    }
+}
+
+pyrograph_core::choice! {
+    /// How textured and cloth meshes blend.
+    pub enum ClothBlend {
+        /// Alpha blending.
+        Over = "over",
+        /// Additive light.
+        Additive = "additive",
+    }
+}
+
+impl ClothBlend {
+    /// The rasterizer's blend mode.
+    pub fn blend(self) -> Blend {
+        match self {
+            ClothBlend::Over => Blend::Over,
+            ClothBlend::Additive => Blend::Additive,
+        }
+    }
 }
 
 /// Where the textures come from.
@@ -40,30 +61,27 @@ pub enum Textures<'a> {
     Single(&'a Arc<Image>),
 }
 
-/// Drawing parameters other than the view.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderParams {
-    /// Drawing mode.
-    pub mode: Mode,
-    /// Blending of textured and cloth meshes (`Over` or `Additive`).
-    pub blend: Blend,
-    /// Tint multiplied into the texture (straight RGBA); the colour of wireframe and cloth.
-    pub tint: [f32; 4],
-    /// Width of wireframe strips in pixels.
-    pub line_width: f32,
-    /// Background (straight RGBA).
-    pub background: [f32; 4],
+pyrograph_core::ports! {
+    /// Drawing parameters other than the view: the ports of the cloth renderers after the camera.
+    #[derive(PartialEq)]
+    pub struct RenderParams {
+        /// Textured flame, spring wireframe, or plain cloth.
+        mode: Mode = Mode::Textured,
+        /// Alpha blending (over) or additive light.
+        blend: ClothBlend = ClothBlend::Over,
+        /// Multiplies the texture; the colour of wireframe and cloth.
+        tint: [f32; 4] = [1.0, 1.0, 1.0, 1.0],
+        /// Width of wireframe strips in pixels.
+        #[range(0.0, 1e3)]
+        line_width: f32 = 1.5,
+        /// Background colour (straight RGBA).
+        background: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
+    }
 }
 
 impl Default for RenderParams {
     fn default() -> Self {
-        RenderParams {
-            mode: Mode::Textured,
-            blend: Blend::Over,
-            tint: [1.0; 4],
-            line_width: 1.5,
-            background: [0.0, 0.0, 0.0, 1.0],
-        }
+        pyrograph_render::ports::defaults()
     }
 }
 
@@ -135,7 +153,7 @@ fn draw_textured_flame(
     }
     verts.clear();
     verts.extend(masses.iter().zip(&mesh.uv).map(|(q, &uv)| Vertex { position: to_world(*q), color: p.tint, uv }));
-    list.mesh(verts, &mesh.triangles, Some(tex), p.blend);
+    list.mesh(verts, &mesh.triangles, Some(tex), p.blend.blend());
 }
 
 fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, p: &RenderParams) {
@@ -179,7 +197,7 @@ fn draw_flame(list: &mut DrawList, cloth: &ClothState, i: usize, p: &RenderParam
                         let centre = (tri[0] + tri[1] + tri[2]) / 3.0;
                         let lit = 0.3 + 0.7 * n.dot((eye - centre).normalize_or_zero()).abs();
                         let col = [p.tint[0] * lit, p.tint[1] * lit, p.tint[2] * lit, p.tint[3]];
-                        list.triangle(tri.map(|q| Vertex::new(q, col)), p.blend);
+                        list.triangle(tri.map(|q| Vertex::new(q, col)), p.blend.blend());
                     }
                 }
             }
@@ -218,102 +236,101 @@ pub fn render_cloth(view: &View, cloth: &ClothState, textures: Textures<'_>, p: 
     render_image(view, &lists, p.background)
 }
 
-fn cloth_render_desc(textured: bool) -> NodeDesc {
-    let (name, doc) = if textured {
-        (
-            "cloth.cloth_render_textured",
-            "Renders mass-spring flames with a texture from another node (mass-spring flame project 2019 \
-             §Textures): like cloth.cloth_render, but every cloth is textured with the required `texture` \
-             input. Connect an image, or a Clip<Image> (imaging.turbulence_flame, Eigenfires reconstructions) \
-             together with the cloth clip: the render is lifted over both and frame n uses texture frame n. \
-             A separate node because an optional texture input would need a default image.",
-        )
-    } else {
-        (
-            "cloth.cloth_render",
-            "Renders mass-spring flames (mass-spring flame project 2019 §Textures): each cloth is a mesh turned \
-             about the vertical to face the camera, textured with one of 8 built-in procedural flame textures \
-             (Figure 3; generated with gradient noise, chosen at random per flame by its seed) and alpha-blended \
-             far to near; or drawn as a wireframe of its springs, or as plain shaded cloth (Figure 4). Connect the \
-             Clip<ClothState> of cloth.mass_spring_flame to get a clip of frames (RGBA, straight alpha). Use \
-             cloth.cloth_render_textured to texture the cloth with another node's image or clip.",
-        )
-    };
-    let mut d = NodeDesc::new(name, "Cloth", TimeDep::PerFrame, doc).input(PortDesc::new(
-        "cloth",
-        PortType::ClothState,
-        "The cloths to draw (cloth.mass_spring_flame).",
-    ));
-    if textured {
-        d = d.input(PortDesc::new("texture", PortType::Image, "Texture for every cloth (top of the image at the flame's tip)."));
-    }
-    d.input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
-        .input(PortDesc::int("height", 480, (1, 16384), "Image height in pixels."))
-        .input(PortDesc::vec3("camera_position", [0.0, 2.5, 9.0], "Eye position."))
-        .input(PortDesc::vec3("camera_target", [0.0, 1.0, 0.0], "Point looked at."))
-        .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
-        .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
-        .input(PortDesc::float("near", 0.1, (0.0001, 1e6), "Near plane distance."))
-        .input(PortDesc::float("far", 1000.0, (0.001, 1e7), "Far plane distance."))
-        .input(PortDesc::choice(
-            "mode",
-            &["textured", "wireframe", "cloth"],
-            "textured",
-            "Textured flame, spring wireframe, or plain cloth.",
-        ))
-        .input(PortDesc::choice("blend", &["over", "additive"], "over", "Alpha blending (over) or additive light."))
-        .input(PortDesc::color("tint", [1.0, 1.0, 1.0, 1.0], "Multiplies the texture; the colour of wireframe and cloth."))
-        .input(PortDesc::float("line_width", 1.5, (0.0, 1e3), "Width of wireframe strips in pixels."))
-        .input(PortDesc::color("background", [0.0, 0.0, 0.0, 1.0], "Background colour (straight RGBA)."))
-        .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
+/// The camera of both cloth renderers: nine flames on a grid, seen from the front.
+fn cloth_camera() -> CameraPorts {
+    CameraPorts::looking(640, 480, [0.0, 2.5, 9.0], [0.0, 1.0, 0.0])
 }
 
-pub use pyrograph_render::ports::view_from_inputs;
+pyrograph_core::node! {
+    /// Renders mass-spring flames (mass-spring flame project 2019 §Textures): each cloth is a mesh turned
+    /// about the vertical to face the camera, textured with one of 8 built-in procedural flame textures
+    /// (Figure 3; generated with gradient noise, chosen at random per flame by its seed) and alpha-blended
+    /// far to near; or drawn as a wireframe of its springs, or as plain shaded cloth (Figure 4). Connect the
+    /// Clip<ClothState> of cloth.mass_spring_flame to get a clip of frames (RGBA, straight alpha). Use
+    /// cloth.cloth_render_textured to texture the cloth with another node's image or clip.
+    #[node("cloth.cloth_render", "Cloth", PerFrame)]
+    pub struct ClothRender {
+        /// The cloths to draw (cloth.mass_spring_flame).
+        cloth: Arc<ClothState>,
+        /// The camera.
+        camera: CameraPorts = cloth_camera(),
+        /// How the cloths are drawn.
+        params: RenderParams,
+    }
+    pub struct ClothRenderOut {
+        /// The rendered frame (RGBA, straight alpha).
+        image: Arc<Image>,
+    }
+}
 
-fn params_from_inputs(i: &Inputs<'_>) -> Result<RenderParams, NodeError> {
-    let mode = match i.choice("mode")? {
-        "wireframe" => Mode::Wireframe,
-        "cloth" => Mode::Cloth,
-        _ => Mode::Textured,
-    };
-    let blend = if i.choice("blend")? == "additive" { Blend::Additive } else { Blend::Over };
-    let line_width = i.float("line_width")? as f32;
+pyrograph_core::node! {
+    /// Renders mass-spring flames with a texture from another node (mass-spring flame project 2019
+    /// §Textures): like cloth.cloth_render, but every cloth is textured with the required `texture`
+    /// input. Connect an image, or a Clip<Image> (imaging.turbulence_flame, Eigenfires reconstructions)
+    /// together with the cloth clip: the render is lifted over both and frame n uses texture frame n.
+    /// A separate node because an optional texture input would need a default image.
+    #[node("cloth.cloth_render_textured", "Cloth", PerFrame)]
+    pub struct ClothRenderTextured {
+        /// The cloths to draw (cloth.mass_spring_flame).
+        cloth: Arc<ClothState>,
+        /// Texture for every cloth (top of the image at the flame's tip).
+        texture: Arc<Image>,
+        /// The camera.
+        camera: CameraPorts = cloth_camera(),
+        /// How the cloths are drawn.
+        params: RenderParams,
+    }
+    pub struct ClothRenderTexturedOut {
+        /// The rendered frame (RGBA, straight alpha).
+        image: Arc<Image>,
+    }
+}
+
+/// `p` when its line width is usable; the error names the port.
+fn checked_params(p: RenderParams) -> Result<RenderParams, NodeError> {
+    let line_width = p.line_width;
     if !line_width.is_finite() || line_width < 0.0 {
-        return Err(NodeError::port("line_width", format!("must be a finite non-negative width, got {line_width}")));
+        return Err(NodeError::port(
+            port!(RenderParams, line_width),
+            format!("must be a finite non-negative width, got {line_width}"),
+        ));
     }
-    Ok(RenderParams { mode, blend, tint: i.color("tint")?, line_width, background: i.color("background")? })
+    Ok(p)
 }
 
-fn checked_cloth<'a>(i: &Inputs<'a>) -> Result<&'a Arc<ClothState>, NodeError> {
-    let cloth = i.cloth_state("cloth")?;
+/// `cloth` when its arrays agree and its positions are finite; errors name `port`.
+fn checked_cloth<'a>(cloth: &'a Arc<ClothState>, port: &str) -> Result<&'a Arc<ClothState>, NodeError> {
     let n = cloth.width as usize * cloth.height as usize;
     if cloth.positions.len() != n * cloth.flames() || cloth.seeds.len() != cloth.flames() {
-        return Err(NodeError::port("cloth", "inconsistent cloth state: positions or seeds do not match the flame count"));
+        return Err(NodeError::port(port, "inconsistent cloth state: positions or seeds do not match the flame count"));
     }
     if !cloth.positions.iter().chain(&cloth.roots).all(|p| p.iter().all(|x| x.is_finite())) {
-        return Err(NodeError::port("cloth", "the cloth has non-finite positions"));
+        return Err(NodeError::port(port, "the cloth has non-finite positions"));
     }
     Ok(cloth)
 }
 
-fn cook_cloth_render(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let view = view_from_inputs(i)?;
-    let cloth = checked_cloth(i)?;
-    let p = params_from_inputs(i)?;
-    ctx.check_cancel()?;
-    Ok(vec![Value::Image(Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)))])
+impl Cook for ClothRender {
+    fn cook(self, ctx: &CookCtx) -> Result<ClothRenderOut, NodeError> {
+        let view = self.camera.view()?;
+        let cloth = checked_cloth(&self.cloth, port!(ClothRender, cloth))?;
+        let p = checked_params(self.params)?;
+        ctx.check_cancel()?;
+        Ok(ClothRenderOut { image: Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)) })
+    }
 }
 
-fn cook_cloth_render_textured(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let view = view_from_inputs(i)?;
-    let cloth = checked_cloth(i)?;
-    let texture = i.image("texture")?;
-    if texture.width() == 0 || texture.height() == 0 {
-        return Err(NodeError::port("texture", "is an empty image"));
+impl Cook for ClothRenderTextured {
+    fn cook(self, ctx: &CookCtx) -> Result<ClothRenderTexturedOut, NodeError> {
+        let view = self.camera.view()?;
+        let cloth = checked_cloth(&self.cloth, port!(ClothRenderTextured, cloth))?;
+        if self.texture.width() == 0 || self.texture.height() == 0 {
+            return Err(NodeError::port(port!(ClothRenderTextured, texture), "is an empty image"));
+        }
+        let p = checked_params(self.params)?;
+        ctx.check_cancel()?;
+        Ok(ClothRenderTexturedOut { image: Arc::new(render_cloth(&view, cloth, Textures::Single(&self.texture), &p)) })
     }
-    let p = params_from_inputs(i)?;
-    ctx.check_cancel()?;
-    Ok(vec![Value::Image(Arc::new(render_cloth(&view, cloth, Textures::Single(texture), &p)))])
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use pyrograph_core::{Particles, WindField};
-use pyrograph_nodes_particles::flame::{FlameParams, Root, layout_roots, simulate_frame};
+use pyrograph_nodes_particles::flame::{FlameParams, Layout, Root, layout_roots, simulate_frame};
 use pyrograph_nodes_particles::render::render_particles;
 use pyrograph_render::{Blend, Camera, View};
 
@@ -15,7 +15,7 @@ use pyrograph_render::{Blend, Camera, View};
 fn scene(n: usize) -> (Vec<Root>, FlameParams, View) {
     let cols = (n as f32).sqrt().ceil();
     let spacing = 2.0;
-    let roots = layout_roots("grid", n, Vec3::ZERO, spacing, 0.0, Vec3::Y, 0.0, 1);
+    let roots = layout_roots(Layout::Grid, n, Vec3::ZERO, spacing, 0.0, Vec3::Y, 0.0, 1);
     let extent = cols * spacing;
     let cam = Camera::new(
         Vec3::new(0.0, extent * 0.45 + 3.0, extent * 0.9 + 10.0),

@@ -110,7 +110,7 @@ fn big_spread(target: usize) -> Spread {
         })
         .collect();
     let params = SpreadParams { d_s: 0.02, ..SpreadParams::default() };
-    let mut spread = Spread::new(surface, ignitions, params).expect("valid spread");
+    let mut spread = Spread::new(surface, ignitions, params, 24.0).expect("valid spread");
     while spread.point_count() < target {
         spread.step(DT, &still);
         assert!(spread.time() < 60.0, "the spread stalled at {} points", spread.point_count());

@@ -5,53 +5,50 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::{
-    CookCtx, FnNode, Inputs, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, SpreadState, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, NodeError, Particle, Particles, Registry, SpreadState};
 
 use crate::flame::unit_random;
 
 /// Adds `particles.char`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(char_desc(), cook_char));
+    registry.add(Char::node());
 }
 
-/// Look of the char marks.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CharParams {
-    /// Disc radius in world units.
-    pub size: f32,
-    /// Random per-mark radius variation, 0..1.
-    pub size_jitter: f32,
-    /// Char colour (straight RGB) and opacity at the disc centre.
-    pub color: [f32; 4],
-    /// Start red-hot and fade to char (§4.6).
-    pub glow: bool,
-    /// Glow colour and opacity when the flame has just died.
-    pub glow_color: [f32; 4],
-    /// Seconds the glow takes to fade to char.
-    pub glow_time: f32,
-    /// Seconds over which a new mark fades in.
-    pub fade_in: f32,
-    /// Lift off the surface along the normal (avoids depth fighting).
-    pub offset: f32,
-    /// Seed of the size variation.
-    pub seed: u32,
+pyrograph_core::ports! {
+    /// Look of the char marks: the ports of `particles.char` after its input.
+    #[derive(PartialEq)]
+    pub struct CharParams {
+        /// Disc radius in world units.
+        #[range(0.0, 1e6)]
+        size: f32 = 0.05,
+        /// Random per-mark radius variation.
+        #[range(0.0, 1.0)]
+        size_jitter: f32 = 0.4,
+        /// Char colour and opacity.
+        color: [f32; 4] = [0.03, 0.02, 0.015, 0.8],
+        /// Start red-hot and fade to char (§4.6).
+        glow: bool = true,
+        /// Glow colour and opacity when the flame has just died.
+        glow_color: [f32; 4] = [1.0, 0.28, 0.04, 0.9],
+        /// Seconds for the glow to fade to char.
+        #[range(0.0, 1e4)]
+        glow_time: f32 = 1.5,
+        /// Seconds over which a new mark fades in.
+        #[range(0.0, 1e4)]
+        fade_in: f32 = 0.3,
+        /// Lift off the surface along the normal.
+        #[range(0.0, 1e3)]
+        offset: f32 = 0.002,
+        /// Seed of the size variation.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
 }
 
 impl Default for CharParams {
     fn default() -> Self {
-        CharParams {
-            size: 0.05,
-            size_jitter: 0.4,
-            color: [0.03, 0.02, 0.015, 0.8],
-            glow: true,
-            glow_color: [1.0, 0.28, 0.04, 0.9],
-            glow_time: 1.5,
-            fade_in: 0.3,
-            offset: 0.002,
-            seed: 0,
-        }
+        pyrograph_render::ports::defaults()
     }
 }
 
@@ -98,45 +95,29 @@ pub fn char_particles(state: &SpreadState, p: &CharParams) -> Particles {
     Particles { particles, sides: 12, time: state.time }
 }
 
-fn char_desc() -> NodeDesc {
-    let d = CharParams::default();
-    NodeDesc::new(
-        "particles.char",
-        "Particles",
-        TimeDep::PerFrame,
-        "Surface char (Perry 1994 §3.4.1) with optional glow (§4.6): a fuzzy, dark, translucent disc lies on the \
-         surface where each flame root died, blending with the shaded object beneath; with glow it starts red-hot \
-         and fades to char over glow_time. Output particles carry the surface normal in `velocity`; \
-         particles.render_fire draws them flat on the surface. Connect the Clip<SpreadState> of \
-         particles.fire_spread to get a clip.",
-    )
-    .input(PortDesc::new("spread", PortType::SpreadState, "Spread state (particles.fire_spread)."))
-    .input(PortDesc::float("size", d.size as f64, (0.0, 1e6), "Disc radius in world units."))
-    .input(PortDesc::float("size_jitter", d.size_jitter as f64, (0.0, 1.0), "Random per-mark radius variation."))
-    .input(PortDesc::color("color", d.color, "Char colour and opacity."))
-    .input(PortDesc::bool("glow", d.glow, "Start red-hot and fade to char (§4.6)."))
-    .input(PortDesc::color("glow_color", d.glow_color, "Glow colour and opacity when the flame has just died."))
-    .input(PortDesc::float("glow_time", d.glow_time as f64, (0.0, 1e4), "Seconds for the glow to fade to char."))
-    .input(PortDesc::float("fade_in", d.fade_in as f64, (0.0, 1e4), "Seconds over which a new mark fades in."))
-    .input(PortDesc::float("offset", d.offset as f64, (0.0, 1e3), "Lift off the surface along the normal."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the size variation."))
-    .output("char", PortType::Particles, "Char discs.")
+pyrograph_core::node! {
+    /// Surface char (Perry 1994 §3.4.1) with optional glow (§4.6): a fuzzy, dark, translucent disc lies on the
+    /// surface where each flame root died, blending with the shaded object beneath; with glow it starts red-hot
+    /// and fades to char over glow_time. Output particles carry the surface normal in `velocity`;
+    /// particles.render_fire draws them flat on the surface. Connect the Clip<SpreadState> of
+    /// particles.fire_spread to get a clip.
+    #[node("particles.char", "Particles", PerFrame)]
+    pub struct Char {
+        /// Spread state (particles.fire_spread).
+        spread: Arc<SpreadState>,
+        /// The look of the marks.
+        look: CharParams,
+    }
+    pub struct CharOut {
+        /// Char discs.
+        char: Arc<Particles>,
+    }
 }
 
-fn cook_char(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let seed = i.int("seed")?;
-    let p = CharParams {
-        size: i.float("size")? as f32,
-        size_jitter: i.float("size_jitter")? as f32,
-        color: i.color("color")?,
-        glow: i.bool("glow")?,
-        glow_color: i.color("glow_color")?,
-        glow_time: i.float("glow_time")? as f32,
-        fade_in: i.float("fade_in")? as f32,
-        offset: i.float("offset")? as f32,
-        seed: u32::try_from(seed).map_err(|_| NodeError::port("seed", format!("must be 0..=4294967295, got {seed}")))?,
-    };
-    Ok(vec![Value::Particles(Arc::new(char_particles(i.spread_state("spread")?, &p)))])
+impl Cook for Char {
+    fn cook(self, _: &CookCtx) -> Result<CharOut, NodeError> {
+        Ok(CharOut { char: Arc::new(char_particles(&self.spread, &self.look)) })
+    }
 }
 
 #[cfg(test)]

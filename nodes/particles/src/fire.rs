@@ -5,78 +5,119 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
-use pyrograph_core::{
-    CookCtx, FnNode, Image, Inputs, Mesh, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, SpreadState,
-    TimeDep, Value, WindField,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, Image, Mesh, NodeError, Particle, Particles, Registry, SpreadState, WindField, port};
+use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
-use crate::flame::{DEFAULT_CENTER, DEFAULT_EDGE, FlameParams, Ramp, Root, Shape, trace, validate_params};
-use crate::render::{LightParams, flame_lights, view_from_inputs};
+use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace, validate_params};
+use crate::render::{LightParams, flame_lights, no_particles};
 use crate::wind::{WindSampler, validate_wind};
 
 /// Adds `particles.render_fire`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(render_fire_desc(), cook_render_fire));
-}
-
-/// How a fire is drawn.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FireLook {
-    /// The flame grown at each root (its `lifetime`, `respawn` and `seed` are unused: roots carry their own).
-    pub flame: FlameParams,
-    /// Fraction of a root's life over which its flame grows in, and over which it dies out.
-    pub fade: (f32, f32),
-    /// Frames per second of the spread clip (the noise time of a flame is `time · fps`).
-    pub fps: f32,
-    /// Straight RGBA albedo of the mesh.
-    pub mesh_color: [f32; 4],
-    /// Light reaching the mesh from elsewhere.
-    pub ambient: f32,
-    /// Direction towards the key light.
-    pub sun: Vec3,
-    /// Key light strength.
-    pub sun_strength: f32,
-    /// Flame lights (§3.2.4); `None` for no flame light on the mesh.
-    pub lights: Option<LightParams>,
-    /// Background colour.
-    pub background: [f32; 4],
-}
-
-impl Default for FireLook {
-    fn default() -> Self {
-        FireLook {
-            flame: FlameParams {
-                steps: 14,
-                sides: 12,
-                dt: 0.03,
-                speed: 1.0,
-                normalize: true,
-                size: 0.06,
-                size_jitter: 0.3,
-                shape: default_shape(),
-                ..FlameParams::default()
-            },
-            fade: (0.15, 0.35),
-            fps: 24.0,
-            mesh_color: [0.62, 0.55, 0.45, 1.0],
-            ambient: 0.2,
-            sun: Vec3::new(0.4, 1.0, 0.7),
-            sun_strength: 0.55,
-            lights: Some(LightParams { intensity: 0.01, flicker: 0.35, rate: 0.35, seed: 0 }),
-            background: [0.02, 0.02, 0.03, 1.0],
-        }
-    }
+    registry.add(RenderFire::node());
 }
 
 const WIDTH_RAMP: &str = "0: 0.67; 0.5: 1.07; 1: 0.5";
 const HEIGHT_RAMP: &str = "0: 0.2; 1: 0.9";
 
-fn default_shape() -> Shape {
-    match (Ramp::parse(WIDTH_RAMP), Ramp::parse(HEIGHT_RAMP)) {
-        (Ok(width), Ok(height)) => Shape::Ramp { width, height },
-        _ => Shape::perry(),
+pyrograph_core::ports! {
+    /// How a fire is drawn: the ports of `particles.render_fire` after its inputs and camera.
+    #[derive(PartialEq)]
+    pub struct FireLook {
+        /// Background colour (straight RGBA).
+        background: [f32; 4] = [0.02, 0.02, 0.03, 1.0],
+        /// Mesh albedo.
+        mesh_color: [f32; 4] = [0.62, 0.55, 0.45, 1.0],
+        /// Ambient light on the mesh.
+        #[range(0.0, 1.0)]
+        ambient: f32 = 0.2,
+        /// Direction towards the key light.
+        sun_direction: [f32; 3] = [0.4, 1.0, 0.7],
+        /// Key light strength.
+        #[range(0.0, 10.0)]
+        sun: f32 = 0.55,
+        /// Frames per second of the spread (noise time = time · fps).
+        #[range(1.0, 240.0)]
+        fps: f32 = 24.0,
+        /// Particle steps per flame.
+        #[range(1, 1000)]
+        steps: usize = 14,
+        /// Triangles per particle.
+        #[range(3, 256)]
+        triangles: u32 = 12,
+        /// Time step of the flame trajectory integration.
+        #[range(0.001, 10.0)]
+        dt: f32 = 0.03,
+        /// Initial speed along the face normal.
+        #[range(0.0, 100.0)]
+        speed: f32 = 1.0,
+        /// Re-normalize |v_p| every step (§3.2.3).
+        normalize: bool = true,
+        /// Particle radius in world units.
+        #[range(0.0, 1000.0)]
+        flame_size: f32 = 0.06,
+        /// Random per-flame size variation.
+        #[range(0.0, 1.0)]
+        size_jitter: f32 = 0.3,
+        /// Particle width scale over normalized age.
+        width_ramp: Ramp<1> = Ramp::preset(WIDTH_RAMP),
+        /// Particle height scale over normalized age.
+        height_ramp: Ramp<1> = Ramp::preset(HEIGHT_RAMP),
+        /// The particles' colours.
+        colors: FlameColors,
+        /// Fraction of a root's life over which its flame grows in.
+        #[range(0.0, 1.0)]
+        grow: f32 = 0.15,
+        /// Fraction of a root's life over which its flame dies out.
+        #[range(0.0, 1.0)]
+        die: f32 = 0.35,
+        /// Light the mesh by a point light per flame (§3.2.4).
+        lights: bool = true,
+        /// Mean intensity of each flame light.
+        #[range(0.0, 1000.0)]
+        light_intensity: f32 = 0.01,
+        /// Relative flicker of the flame lights.
+        #[range(0.0, 1.0)]
+        flicker: f32 = 0.35,
+        /// Seed of the flame size variation and light flicker.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
+}
+
+impl Default for FireLook {
+    fn default() -> Self {
+        pyrograph_render::ports::defaults()
+    }
+}
+
+impl FireLook {
+    /// The flame grown at each root: ramp-shaped; its `lifetime`, `respawn` and `fade` are unused
+    /// (roots carry their own).
+    pub fn flame(&self) -> FlameParams {
+        FlameParams {
+            steps: self.steps,
+            triangles: self.triangles,
+            dt: self.dt,
+            speed: self.speed,
+            normalize: self.normalize,
+            size: self.flame_size,
+            size_jitter: self.size_jitter,
+            shape: Shape::Ramp,
+            width_ramp: self.width_ramp.clone(),
+            height_ramp: self.height_ramp.clone(),
+            colors: self.colors.clone(),
+            seed: self.seed,
+            ..FlameParams::default()
+        }
+    }
+
+    /// The flame lights on the mesh (§3.2.4), if any.
+    pub fn light_params(&self) -> Option<LightParams> {
+        self.lights.then_some(LightParams { intensity: self.light_intensity, flicker: self.flicker, rate: 0.35, seed: self.seed })
     }
 }
 
@@ -90,13 +131,13 @@ fn fade(age: f32, life: f32, (grow, die): (f32, f32)) -> f32 {
 /// A particle flame at every live root of `state` (Perry §3.4: the root is `p(0)`, the face normal
 /// the initial direction of `v_p`), faded in and out over the root's life. Group = root id.
 pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> Particles {
-    let p = &look.flame;
+    let p = &look.flame();
     let t = state.time * look.fps;
     let per_root: Vec<Vec<Particle>> = state
         .roots
         .par_iter()
         .map(|r| {
-            let f = fade(r.age, r.lifetime, look.fade);
+            let f = fade(r.age, r.lifetime, (look.grow, look.die));
             if f <= 0.0 {
                 return Vec::new();
             }
@@ -112,13 +153,13 @@ pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> 
                 .enumerate()
                 .map(|(s, (q, v))| {
                     let a = if n > 1 { s as f32 / (n - 1) as f32 } else { 0.0 };
-                    let (mut center, mut edge) = (p.center.eval(a), p.edge.eval(a));
+                    let (mut center, mut edge) = (p.colors.center_ramp.eval(a), p.colors.edge_ramp.eval(a));
                     center[3] *= f;
                     edge[3] *= f;
                     Particle {
                         position: q.to_array(),
                         velocity: v.to_array(),
-                        size: (p.shape.scale(s, n) * size).to_array(),
+                        size: (p.scale(s, n) * size).to_array(),
                         center,
                         edge,
                         weight: s as f32,
@@ -128,7 +169,7 @@ pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> 
                 .collect()
         })
         .collect();
-    Particles { particles: per_root.concat(), sides: p.sides, time: t }
+    Particles { particles: per_root.concat(), sides: p.triangles, time: t }
 }
 
 /// Flame lights as columns (position, and colour times intensity), so the sum over them in
@@ -183,7 +224,7 @@ fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) ->
         add(i - full, c.map(|col| col[i]));
     }
     let [r, g, b] = sums.map(|lanes| lanes.iter().sum::<f32>());
-    Vec3::splat(look.ambient + look.sun_strength * n.dot(sun).max(0.0)) + Vec3::new(r, g, b)
+    Vec3::splat(look.ambient + look.sun * n.dot(sun).max(0.0)) + Vec3::new(r, g, b)
 }
 
 /// A mesh corner's shading key: its position's and its face normal's bits (flat-shaded faces
@@ -192,7 +233,7 @@ fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) ->
 type CornerKey = ([u32; 3], [u32; 3]);
 
 fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> Vec<DrawList> {
-    let sun = look.sun.normalize_or_zero();
+    let sun = Vec3::from_array(look.sun_direction).normalize_or_zero();
     let albedo = Vec3::new(look.mesh_color[0], look.mesh_color[1], look.mesh_color[2]);
     let key =
         |t: usize, i: u32| -> CornerKey { (mesh.positions[i as usize].map(f32::to_bits), mesh.normals[t].map(f32::to_bits)) };
@@ -272,15 +313,15 @@ pub fn render_fire(
     chars: &Particles,
     look: &FireLook,
 ) -> Result<Image, NodeError> {
-    validate_params(&look.flame)?;
-    validate_wind(wind, "wind")?;
+    validate_params(&look.flame())?;
+    validate_wind(wind, port!(RenderFire, wind))?;
     if mesh.normals.len() != mesh.triangles.len() {
-        return Err(NodeError::port("mesh", "the mesh has no face normals: load it with particles.mesh_load"));
+        return Err(NodeError::port(port!(RenderFire, mesh), "the mesh has no face normals: load it with particles.mesh_load"));
     }
     let sampler = WindSampler::new(wind);
     let flames = root_flames(state, &sampler, look);
-    let lights = match &look.lights {
-        Some(lp) => flame_lights(&flames, lp),
+    let lights = match look.light_params() {
+        Some(lp) => flame_lights(&flames, &lp),
         None => Particles::default(),
     };
     let mut lists = draw_mesh(view, mesh, &lights, look);
@@ -289,109 +330,45 @@ pub fn render_fire(
     Ok(render_image(view, &lists, look.background))
 }
 
-fn render_fire_desc() -> NodeDesc {
-    let d = FireLook::default();
-    NodeDesc::new(
-        "particles.render_fire",
-        "Particles",
-        TimeDep::PerFrame,
-        "Renders a spreading fire (Perry 1994 §3.4): the mesh, Gouraud-shaded by a key light and by a point light \
-         per flame (§3.2.4); char discs laid flat on the surface (§3.4.1, connect particles.char); and at every \
-         live flame root of the spread a particle flame (§3.2.1–3.2.3) that starts along the face normal, moves \
-         through the wind field, grows in after the root is dropped and dies out at the end of its lifetime l_f. \
-         Flames blend additively to saturation. Connect the Clip<SpreadState> of particles.fire_spread to get a \
-         clip of frames.",
-    )
-    .input(PortDesc::new("spread", PortType::SpreadState, "Spread state (particles.fire_spread)."))
-    .input(PortDesc::new("mesh", PortType::Mesh, "The burning mesh (particles.mesh_load)."))
-    .input(PortDesc {
-        default: Some(Value::WindField(Arc::new(WindField::default()))),
-        ..PortDesc::new("wind", PortType::WindField, "Wind field the flames move in (particles.wind_field).")
-    })
-    .input(PortDesc {
-        default: Some(Value::Particles(Arc::new(Particles::default()))),
-        ..PortDesc::new("char", PortType::Particles, "Char discs (particles.char); default none.")
-    })
-    .input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
-    .input(PortDesc::int("height", 360, (1, 16384), "Image height in pixels."))
-    .input(PortDesc::vec3("camera_position", [2.2, 1.5, 2.6], "Eye position."))
-    .input(PortDesc::vec3("camera_target", [0.0, 0.2, 0.0], "Point looked at."))
-    .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
-    .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
-    .input(PortDesc::float("near", 0.05, (0.0001, 1e6), "Near plane distance."))
-    .input(PortDesc::float("far", 100.0, (0.001, 1e7), "Far plane distance."))
-    .input(PortDesc::color("background", d.background, "Background colour (straight RGBA)."))
-    .input(PortDesc::color("mesh_color", d.mesh_color, "Mesh albedo."))
-    .input(PortDesc::float("ambient", d.ambient as f64, (0.0, 1.0), "Ambient light on the mesh."))
-    .input(PortDesc::vec3("sun_direction", [0.4, 1.0, 0.7], "Direction towards the key light."))
-    .input(PortDesc::float("sun", d.sun_strength as f64, (0.0, 10.0), "Key light strength."))
-    .input(PortDesc::float("fps", 24.0, (1.0, 240.0), "Frames per second of the spread (noise time = time · fps)."))
-    .input(PortDesc::int("steps", d.flame.steps as i64, (1, 1000), "Particle steps per flame."))
-    .input(PortDesc::int("triangles", d.flame.sides as i64, (3, 256), "Triangles per particle."))
-    .input(PortDesc::float("dt", d.flame.dt as f64, (0.001, 10.0), "Time step of the flame trajectory integration."))
-    .input(PortDesc::float("speed", d.flame.speed as f64, (0.0, 100.0), "Initial speed along the face normal."))
-    .input(PortDesc::bool("normalize", d.flame.normalize, "Re-normalize |v_p| every step (§3.2.3)."))
-    .input(PortDesc::float("flame_size", d.flame.size as f64, (0.0, 1000.0), "Particle radius in world units."))
-    .input(PortDesc::float("size_jitter", d.flame.size_jitter as f64, (0.0, 1.0), "Random per-flame size variation."))
-    .input(PortDesc::string("width_ramp", WIDTH_RAMP, "Particle width scale over normalized age."))
-    .input(PortDesc::string("height_ramp", HEIGHT_RAMP, "Particle height scale over normalized age."))
-    .input(PortDesc::string("center_ramp", DEFAULT_CENTER, "Centre vertex RGBA over normalized age: `pos: r g b a; …`."))
-    .input(PortDesc::string("edge_ramp", DEFAULT_EDGE, "Rim vertex RGBA over normalized age: `pos: r g b a; …`."))
-    .input(PortDesc::float("grow", d.fade.0 as f64, (0.0, 1.0), "Fraction of a root's life over which its flame grows in."))
-    .input(PortDesc::float("die", d.fade.1 as f64, (0.0, 1.0), "Fraction of a root's life over which its flame dies out."))
-    .input(PortDesc::bool("lights", true, "Light the mesh by a point light per flame (§3.2.4)."))
-    .input(PortDesc::float("light_intensity", 0.01, (0.0, 1000.0), "Mean intensity of each flame light."))
-    .input(PortDesc::float("flicker", 0.35, (0.0, 1.0), "Relative flicker of the flame lights."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the flame size variation and light flicker."))
-    .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
+pyrograph_core::node! {
+    /// Renders a spreading fire (Perry 1994 §3.4): the mesh, Gouraud-shaded by a key light and by a point light
+    /// per flame (§3.2.4); char discs laid flat on the surface (§3.4.1, connect particles.char); and at every
+    /// live flame root of the spread a particle flame (§3.2.1–3.2.3) that starts along the face normal, moves
+    /// through the wind field, grows in after the root is dropped and dies out at the end of its lifetime l_f.
+    /// Flames blend additively to saturation. Connect the Clip<SpreadState> of particles.fire_spread to get a
+    /// clip of frames.
+    #[node("particles.render_fire", "Particles", PerFrame)]
+    pub struct RenderFire {
+        /// Spread state (particles.fire_spread).
+        spread: Arc<SpreadState>,
+        /// The burning mesh (particles.mesh_load).
+        mesh: Arc<Mesh>,
+        /// Wind field the flames move in (particles.wind_field).
+        wind: Arc<WindField> = Arc::new(WindField::default()),
+        /// Char discs (particles.char); default none.
+        char: Arc<Particles> = no_particles(),
+        /// The camera.
+        camera: CameraPorts = CameraPorts {
+            near: 0.05,
+            far: 100.0,
+            ..CameraPorts::looking(640, 360, [2.2, 1.5, 2.6], [0.0, 0.2, 0.0])
+        },
+        /// How the fire looks.
+        look: FireLook,
+    }
+    pub struct RenderFireOut {
+        /// The rendered frame (RGBA, straight alpha).
+        image: Arc<Image>,
+    }
 }
 
-fn ramp<const N: usize>(i: &Inputs<'_>, name: &str) -> Result<Ramp<N>, NodeError> {
-    Ramp::parse(i.string(name)?).map_err(|m| NodeError::port(name, m))
-}
-
-fn cook_render_fire(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let view = view_from_inputs(i)?;
-    let seed = i.int("seed")?;
-    let seed = u32::try_from(seed).map_err(|_| NodeError::port("seed", format!("must be 0..=4294967295, got {seed}")))?;
-    let sun = pyrograph_render::ports::vec3(i, "sun_direction")?;
-    let look = FireLook {
-        flame: FlameParams {
-            steps: i.usize("steps")?,
-            sides: u32::try_from(i.usize("triangles")?).map_err(|_| NodeError::port("triangles", "too large"))?,
-            dt: i.float("dt")? as f32,
-            speed: i.float("speed")? as f32,
-            normalize: i.bool("normalize")?,
-            size: i.float("flame_size")? as f32,
-            size_jitter: i.float("size_jitter")? as f32,
-            shape: Shape::Ramp { width: ramp(i, "width_ramp")?, height: ramp(i, "height_ramp")? },
-            center: ramp(i, "center_ramp")?,
-            edge: ramp(i, "edge_ramp")?,
-            seed,
-            ..FlameParams::default()
-        },
-        fade: (i.float("grow")? as f32, i.float("die")? as f32),
-        fps: i.float("fps")? as f32,
-        mesh_color: i.color("mesh_color")?,
-        ambient: i.float("ambient")? as f32,
-        sun,
-        sun_strength: i.float("sun")? as f32,
-        lights: if i.bool("lights")? {
-            Some(LightParams {
-                intensity: i.float("light_intensity")? as f32,
-                flicker: i.float("flicker")? as f32,
-                rate: 0.35,
-                seed,
-            })
-        } else {
-            None
-        },
-        background: i.color("background")?,
-    };
-    ctx.check_cancel()?;
-    let image =
-        render_fire(&view, i.mesh("mesh")?, i.spread_state("spread")?, i.wind_field("wind")?, i.particles("char")?, &look)?;
-    Ok(vec![Value::Image(Arc::new(image))])
+impl Cook for RenderFire {
+    fn cook(self, ctx: &CookCtx) -> Result<RenderFireOut, NodeError> {
+        let view = self.camera.view()?;
+        ctx.check_cancel()?;
+        let image = render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look)?;
+        Ok(RenderFireOut { image: Arc::new(image) })
+    }
 }
 
 #[cfg(test)]
@@ -406,8 +383,9 @@ mod tests {
         let mesh = build_mesh(&cube(1.0, 4), 0, true).unwrap();
         let surface = Arc::new(Surface::new(&mesh).unwrap());
         let (face, bary, _) = surface.nearest(Vec3::new(0.0, 0.5, 0.0));
-        let params = SpreadParams { lifetime: 0.6, ..SpreadParams::default() };
-        let mut s = Spread::new(surface, vec![Ignition { face, bary, time: 0.0 }], params).unwrap();
+        // l_f = 6 frames at 10 fps: 0.6 s.
+        let params = SpreadParams { lifetime: 6, ..SpreadParams::default() };
+        let mut s = Spread::new(surface, vec![Ignition { face, bary, time: 0.0 }], params, 10.0).unwrap();
         let wind = WindField::default();
         let w = spread_wind(&wind);
         for _ in 0..36 {

@@ -7,24 +7,27 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::params::{Cook, Port};
 use pyrograph_core::{
-    Clip, CookCtx, FnNode, FrameSource, Inputs, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, TimeDep,
-    Value, WindField,
+    Clip, ClipOf, CookCtx, FrameSource, NodeError, Particle, Particles, PortType, Registry, Value, WindField, port,
 };
 use rayon::prelude::*;
 
-use crate::wind::{WindSampler, validate_wind};
+use crate::wind::{WindSampler, finite3, validate_wind};
 
 /// Adds `particles.roots` and `particles.particle_flame`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(roots_desc(), cook_roots));
-    registry.add(FnNode::new(particle_flame_desc(), cook_particle_flame));
+    registry.add(Roots::node());
+    registry.add(ParticleFlame::node());
 }
 
-/// A piecewise-linear ramp over normalized age 0..1 with `N` components per key.
+/// A piecewise-linear ramp over normalized age 0..1 with `N` components per key; a String port
+/// written `pos: v…; pos: v…` (a bad text is an error naming the port).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ramp<const N: usize> {
     keys: Vec<(f32, [f32; N])>,
+    /// The text the ramp was written as: the port's value.
+    text: String,
 }
 
 impl<const N: usize> Ramp<N> {
@@ -34,7 +37,17 @@ impl<const N: usize> Ramp<N> {
             return None;
         }
         keys.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Some(Ramp { keys })
+        let text =
+            keys.iter().map(|(p, v)| format!("{p}: {}", v.map(|x| x.to_string()).join(" "))).collect::<Vec<_>>().join("; ");
+        Some(Ramp { keys, text })
+    }
+
+    /// A built-in ramp (a port default).
+    ///
+    /// # Panics
+    /// When `text` does not parse: a declaration error, caught by every test that builds a default.
+    pub fn preset(text: &str) -> Self {
+        Ramp::parse(text).unwrap_or_else(|e| panic!("built-in ramp '{text}': {e}"))
     }
 
     /// Parses `"pos: v…; pos: v…"`, e.g. `"0: 1 0.5 0 1; 1: 1 0 0 0"` (N = 4) or `"0: 1; 1: 0.5"`.
@@ -53,7 +66,9 @@ impl<const N: usize> Ramp<N> {
                 nums.try_into().map_err(|v: Vec<f32>| format!("key at {pos} has {} values, needs {N}", v.len()))?;
             keys.push((pos, vals));
         }
-        Ramp::new(keys).ok_or_else(|| "needs at least one key of finite numbers".to_string())
+        let mut ramp = Ramp::new(keys).ok_or_else(|| "needs at least one key of finite numbers".to_string())?;
+        ramp.text = text.to_string();
+        Ok(ramp)
     }
 
     /// The value at `t`, clamped to the first and last keys.
@@ -72,98 +87,112 @@ impl<const N: usize> Ramp<N> {
     }
 }
 
-/// How a particle's x/y scale changes with age.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
-    /// Perry's footnote 1: `x = x_base + x_amp·sin(π·age/max_age)`, `y = y_slope·age` (age in steps).
-    Perry {
-        /// 0.67 in Figure 3-3.
-        x_base: f32,
-        /// 0.4 in Figure 3-3.
-        x_amp: f32,
-        /// 0.032 in Figure 3-3.
-        y_slope: f32,
-    },
-    /// User ramps of the x and y scale over normalized age.
-    Ramp {
-        /// Width (x) scale.
-        width: Ramp<1>,
-        /// Height (y) scale.
-        height: Ramp<1>,
-    },
-}
-
-impl Shape {
-    /// Perry's Figure 3-3 constants.
-    pub fn perry() -> Self {
-        Shape::Perry { x_base: 0.67, x_amp: 0.4, y_slope: 0.032 }
+impl<const N: usize> Port for Ramp<N> {
+    fn port_type() -> PortType {
+        PortType::String
     }
-
-    /// The `(x, y)` scale of a particle of age `step` in a trajectory of `steps` steps.
-    pub fn scale(&self, step: usize, steps: usize) -> Vec2 {
-        let a = if steps > 1 { step as f32 / (steps - 1) as f32 } else { 0.0 };
-        match self {
-            Shape::Perry { x_base, x_amp, y_slope } => {
-                Vec2::new(x_base + x_amp * (std::f32::consts::PI * a).sin(), y_slope * step as f32)
-            }
-            Shape::Ramp { width, height } => Vec2::new(width.eval(a)[0], height.eval(a)[0]),
-        }
+    fn into_value(self) -> Value {
+        Value::String(self.text)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        Ramp::parse(&String::from_value(v)?)
     }
 }
 
-/// Everything about a flame but its root and its wind.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FlameParams {
-    /// Particle steps per flame (Figure 3-3: 25).
-    pub steps: usize,
-    /// Triangles per particle (Figure 3-3: 20).
-    pub sides: u32,
-    /// Time step of the finite-difference integration.
-    pub dt: f32,
-    /// Initial speed along the root's direction; with `normalize`, the speed kept at every step.
-    pub speed: f32,
-    /// Re-normalize the velocity magnitude every step (§3.2.3, used for intense winds).
-    pub normalize: bool,
-    /// Radius of the unit-circle particle in world units.
-    pub size: f32,
-    /// Per-flame random size variation, 0..1.
-    pub size_jitter: f32,
-    /// Particle shape over age.
-    pub shape: Shape,
-    /// Centre vertex RGBA over normalized age.
-    pub center: Ramp<4>,
-    /// Rim vertex RGBA over normalized age.
-    pub edge: Ramp<4>,
-    /// Flame lifetime l_f in frames (Table 3.1).
-    pub lifetime: u32,
-    /// Per-flame random lifetime variation, 0..1.
-    pub lifetime_jitter: f32,
-    /// A flame whose lifetime ends is reborn at its root (with a random phase per flame).
-    pub respawn: bool,
-    /// Frames over which a flame fades in after birth and out before death (0: no fade).
-    pub fade: u32,
-    /// Seed of the per-flame variations.
-    pub seed: u32,
+pyrograph_core::choice! {
+    /// How a particle's x/y scale changes with age.
+    pub enum Shape {
+        /// Perry's footnote 1: `x = x_base + x_amp·sin(π·age/max_age)`, `y = y_slope·age` (age in steps).
+        Perry = "perry",
+        /// User ramps of the x and y scale over normalized age.
+        Ramp = "ramp",
+    }
+}
+
+pyrograph_core::ports! {
+    /// The colours of a flame's particles over normalized age, shared by every node that grows
+    /// particle flames.
+    #[derive(PartialEq)]
+    pub struct FlameColors {
+        /// Centre vertex RGBA over normalized age: `pos: r g b a; …`.
+        center_ramp: Ramp<4> = Ramp::preset(DEFAULT_CENTER),
+        /// Rim vertex RGBA over normalized age: `pos: r g b a; …`.
+        edge_ramp: Ramp<4> = Ramp::preset(DEFAULT_EDGE),
+    }
+}
+
+pyrograph_core::ports! {
+    /// Everything about a flame but its root and its wind: the ports of `particles.particle_flame`
+    /// after roots, wind, frames and fps.
+    #[derive(PartialEq)]
+    pub struct FlameParams {
+        /// Particle steps per flame (Figure 3-3: 25).
+        #[range(1, 1000)]
+        steps: usize = 25,
+        /// Triangles per particle (Figure 3-3: 20).
+        #[range(3, 256)]
+        triangles: u32 = 20,
+        /// Time step of the trajectory integration.
+        #[range(0.001, 10.0)]
+        dt: f32 = 0.1,
+        /// Initial speed along the root direction; with normalize, the kept speed.
+        #[range(0.0, 100.0)]
+        speed: f32 = 1.0,
+        /// Re-normalize |v_p| every step (§3.2.3; for intense winds).
+        normalize: bool = false,
+        /// Particle radius in world units (footnote 1: unit circle).
+        #[range(0.0, 1000.0)]
+        size: f32 = 1.0,
+        /// Random per-flame size variation.
+        #[range(0.0, 1.0)]
+        size_jitter: f32 = 0.0,
+        /// Footnote 1's sine/linear shape, or the width/height ramps.
+        shape: Shape = Shape::Perry,
+        /// Footnote 1 width scale at the base (0.67).
+        #[range(0.0, 100.0)]
+        x_base: f32 = 0.67,
+        /// Footnote 1 width bulge amplitude (0.4).
+        #[range(-100.0, 100.0)]
+        x_amp: f32 = 0.4,
+        /// Footnote 1 height scale growth per step (0.032).
+        #[range(0.0, 10.0)]
+        y_slope: f32 = 0.032,
+        /// Width scale over normalized age (shape = ramp).
+        width_ramp: Ramp<1> = Ramp::preset("0: 0.67; 0.5: 1.07; 1: 0.67"),
+        /// Height scale over normalized age (shape = ramp).
+        height_ramp: Ramp<1> = Ramp::preset("0: 0; 1: 0.768"),
+        /// The particles' colours.
+        colors: FlameColors,
+        /// Flame lifetime l_f in frames (Table 3.1).
+        #[range(1, 1000)]
+        lifetime: u32 = 1000,
+        /// Random per-flame lifetime variation.
+        #[range(0.0, 1.0)]
+        lifetime_jitter: f32 = 0.0,
+        /// Rebirth a flame at its root when its lifetime ends.
+        respawn: bool = false,
+        /// Frames of fade-in after birth and fade-out before death.
+        #[range(0, 1000)]
+        fade: u32 = 0,
+        /// Seed of the per-flame variations.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
 }
 
 impl Default for FlameParams {
     fn default() -> Self {
-        FlameParams {
-            steps: 25,
-            sides: 20,
-            dt: 0.1,
-            speed: 1.0,
-            normalize: false,
-            size: 1.0,
-            size_jitter: 0.0,
-            shape: Shape::perry(),
-            center: Ramp::parse(DEFAULT_CENTER).unwrap_or(Ramp { keys: vec![(0.0, [1.0; 4])] }),
-            edge: Ramp::parse(DEFAULT_EDGE).unwrap_or(Ramp { keys: vec![(0.0, [1.0, 1.0, 1.0, 0.0])] }),
-            lifetime: 1000,
-            lifetime_jitter: 0.0,
-            respawn: false,
-            fade: 0,
-            seed: 0,
+        pyrograph_render::ports::defaults()
+    }
+}
+
+impl FlameParams {
+    /// The `(x, y)` scale of a particle of age `step` in a trajectory of `steps` steps.
+    pub fn scale(&self, step: usize, steps: usize) -> Vec2 {
+        let a = if steps > 1 { step as f32 / (steps - 1) as f32 } else { 0.0 };
+        match self.shape {
+            Shape::Perry => Vec2::new(self.x_base + self.x_amp * (std::f32::consts::PI * a).sin(), self.y_slope * step as f32),
+            Shape::Ramp => Vec2::new(self.width_ramp.eval(a)[0], self.height_ramp.eval(a)[0]),
         }
     }
 }
@@ -205,24 +234,30 @@ pub fn unit_random(seed: u32, flame: usize, salt: u64) -> f32 {
 /// Checks parameters that no port range can: errors name the port.
 pub fn validate_params(p: &FlameParams) -> Result<(), NodeError> {
     if p.steps == 0 {
-        return Err(NodeError::port("steps", "must be at least 1: a flame is the trajectory of at least one particle step"));
+        return Err(NodeError::port(
+            port!(FlameParams, steps),
+            "must be at least 1: a flame is the trajectory of at least one particle step",
+        ));
     }
-    if p.sides < 3 {
-        return Err(NodeError::port("triangles", format!("a particle needs at least 3 triangles, got {}", p.sides)));
+    if p.triangles < 3 {
+        return Err(NodeError::port(
+            port!(FlameParams, triangles),
+            format!("a particle needs at least 3 triangles, got {}", p.triangles),
+        ));
     }
     for (name, v) in [
-        ("dt", p.dt),
-        ("speed", p.speed),
-        ("size", p.size),
-        ("size_jitter", p.size_jitter),
-        ("lifetime_jitter", p.lifetime_jitter),
+        (port!(FlameParams, dt), p.dt),
+        (port!(FlameParams, speed), p.speed),
+        (port!(FlameParams, size), p.size),
+        (port!(FlameParams, size_jitter), p.size_jitter),
+        (port!(FlameParams, lifetime_jitter), p.lifetime_jitter),
     ] {
         if !v.is_finite() {
             return Err(NodeError::port(name, format!("must be finite, got {v}")));
         }
     }
     if p.lifetime == 0 {
-        return Err(NodeError::port("lifetime", "must be at least 1 frame"));
+        return Err(NodeError::port(port!(FlameParams, lifetime), "must be at least 1 frame"));
     }
     Ok(())
 }
@@ -251,7 +286,7 @@ pub fn trace(root: &Root, wind: &WindSampler, p: &FlameParams, t: f32) -> Vec<(V
 /// (group = flame index, weight = age in steps), in root order. Deterministic for given inputs.
 pub fn simulate_frame(roots: &[Root], wind: &WindField, p: &FlameParams, frame: usize) -> Result<Particles, NodeError> {
     validate_params(p)?;
-    validate_wind(wind, "wind")?;
+    validate_wind(wind, port!(ParticleFlame, wind))?;
     let sampler = WindSampler::new(wind);
     let t = frame as f32;
     let per_flame: Vec<Vec<Particle>> = roots
@@ -259,7 +294,7 @@ pub fn simulate_frame(roots: &[Root], wind: &WindField, p: &FlameParams, frame: 
         .enumerate()
         .map(|(i, root)| flame_particles(i, root, &sampler, p, frame, t))
         .collect::<Result<_, _>>()?;
-    Ok(Particles { particles: per_flame.concat(), sides: p.sides, time: t })
+    Ok(Particles { particles: per_flame.concat(), sides: p.triangles, time: t })
 }
 
 /// Lifetime of flame `i` and its age at `frame`, or `None` when it is not alive.
@@ -288,7 +323,10 @@ fn flame_particles(
     let size = p.size * (1.0 + p.size_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, i, 3) - 1.0));
     let path = trace(root, wind, p, t);
     if path.iter().any(|(q, v)| !q.is_finite() || !v.is_finite()) {
-        return Err(NodeError::port("wind", format!("flame {i}: the wind field drives the particle to a non-finite position")));
+        return Err(NodeError::port(
+            port!(ParticleFlame, wind),
+            format!("flame {i}: the wind field drives the particle to a non-finite position"),
+        ));
     }
     let n = path.len();
     Ok(path
@@ -296,11 +334,11 @@ fn flame_particles(
         .enumerate()
         .map(|(s, (q, v))| {
             let a = if n > 1 { s as f32 / (n - 1) as f32 } else { 0.0 };
-            let mut center = p.center.eval(a);
-            let mut edge = p.edge.eval(a);
+            let mut center = p.colors.center_ramp.eval(a);
+            let mut edge = p.colors.edge_ramp.eval(a);
             center[3] *= fade;
             edge[3] *= fade;
-            let half = p.shape.scale(s, n) * size;
+            let half = p.scale(s, n) * size;
             Particle {
                 position: q.to_array(),
                 velocity: v.to_array(),
@@ -314,30 +352,58 @@ fn flame_particles(
         .collect())
 }
 
-fn roots_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.roots",
-        "Particles",
-        TimeDep::Source,
-        "Flame roots: base points p(0) with initial directions of v_p (Perry 1994 §3.2.3, §3.4), laid out \
-         as a row (candles), a grid, a ring or a random disc (a campfire bed). Output particles carry the \
-         root in `position` and the direction in `velocity`.",
-    )
-    .input(PortDesc::choice("layout", &["row", "grid", "ring", "disc"], "row", "How the roots are placed."))
-    .input(PortDesc::int("count", 1, (1, 100_000), "Number of roots."))
-    .input(PortDesc::vec3("center", [0.0, 0.0, 0.0], "Centre of the layout."))
-    .input(PortDesc::float("spacing", 2.5, (0.0, 1000.0), "Distance between neighbours (row, grid)."))
-    .input(PortDesc::float("radius", 2.0, (0.0, 1000.0), "Radius (ring, disc)."))
-    .input(PortDesc::vec3("direction", [0.0, 1.0, 0.0], "Initial direction of every flame."))
-    .input(PortDesc::float("spread", 0.0, (0.0, 1.0), "Random tilt of each direction (0: all equal)."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of disc placement and tilt."))
-    .output("roots", PortType::Particles, "Root particles.")
+pyrograph_core::choice! {
+    /// How `particles.roots` places its roots.
+    pub enum Layout {
+        /// A row along x (candles).
+        Row = "row",
+        /// A square-ish grid in the ground plane.
+        Grid = "grid",
+        /// Evenly around a circle.
+        Ring = "ring",
+        /// At random in a disc (a campfire bed).
+        Disc = "disc",
+    }
+}
+
+pyrograph_core::node! {
+    /// Flame roots: base points p(0) with initial directions of v_p (Perry 1994 §3.2.3, §3.4), laid out
+    /// as a row (candles), a grid, a ring or a random disc (a campfire bed). Output particles carry the
+    /// root in `position` and the direction in `velocity`.
+    #[node("particles.roots", "Particles", Source)]
+    pub struct Roots {
+        /// How the roots are placed.
+        layout: Layout = Layout::Row,
+        /// Number of roots.
+        #[range(1, 100_000)]
+        count: usize = 1,
+        /// Centre of the layout.
+        center: [f32; 3] = [0.0, 0.0, 0.0],
+        /// Distance between neighbours (row, grid).
+        #[range(0.0, 1000.0)]
+        spacing: f32 = 2.5,
+        /// Radius (ring, disc).
+        #[range(0.0, 1000.0)]
+        radius: f32 = 2.0,
+        /// Initial direction of every flame.
+        direction: [f32; 3] = [0.0, 1.0, 0.0],
+        /// Random tilt of each direction (0: all equal).
+        #[range(0.0, 1.0)]
+        spread: f32 = 0.0,
+        /// Seed of disc placement and tilt.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
+    pub struct RootsOut {
+        /// Root particles.
+        roots: Arc<Particles>,
+    }
 }
 
 /// Root positions and directions for a layout (see `particles.roots`).
 #[allow(clippy::too_many_arguments)]
 pub fn layout_roots(
-    layout: &str,
+    layout: Layout,
     count: usize,
     center: Vec3,
     spacing: f32,
@@ -351,21 +417,21 @@ pub fn layout_roots(
     (0..count)
         .map(|i| {
             let offset = match layout {
-                "grid" => {
+                Layout::Grid => {
                     let (r, c) = ((i / cols) as f32, (i % cols) as f32);
                     let rows = count.div_ceil(cols) as f32;
                     Vec3::new((c - (cols as f32 - 1.0) / 2.0) * spacing, 0.0, (r - (rows - 1.0) / 2.0) * spacing)
                 }
-                "ring" => {
+                Layout::Ring => {
                     let a = std::f32::consts::TAU * i as f32 / count as f32;
                     Vec3::new(a.cos() * radius, 0.0, a.sin() * radius)
                 }
-                "disc" => {
+                Layout::Disc => {
                     let r = radius * unit_random(seed, i, 11).sqrt();
                     let a = std::f32::consts::TAU * unit_random(seed, i, 12);
                     Vec3::new(a.cos() * r, 0.0, a.sin() * r)
                 }
-                _ => Vec3::new((i as f32 - (count as f32 - 1.0) / 2.0) * spacing, 0.0, 0.0),
+                Layout::Row => Vec3::new((i as f32 - (count as f32 - 1.0) / 2.0) * spacing, 0.0, 0.0),
             };
             let tilt = Vec3::new(unit_random(seed, i, 13) - 0.5, unit_random(seed, i, 14) - 0.5, unit_random(seed, i, 15) - 0.5);
             let d = (dir + tilt * (2.0 * spread)).normalize_or_zero();
@@ -374,122 +440,60 @@ pub fn layout_roots(
         .collect()
 }
 
-fn finite_vec3(i: &Inputs<'_>, name: &str) -> Result<Vec3, NodeError> {
-    let v = i.vec3(name)?;
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
-    } else {
-        Err(NodeError::port(name, format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2])))
+impl Cook for Roots {
+    fn cook(self, _: &CookCtx) -> Result<RootsOut, NodeError> {
+        let roots = layout_roots(
+            self.layout,
+            self.count,
+            Vec3::from_array(finite3(self.center, port!(Roots, center))?),
+            self.spacing,
+            self.radius,
+            Vec3::from_array(finite3(self.direction, port!(Roots, direction))?),
+            self.spread,
+            self.seed,
+        );
+        let particles = roots
+            .iter()
+            .enumerate()
+            .map(|(k, r)| Particle {
+                position: r.position.to_array(),
+                velocity: r.direction.to_array(),
+                group: k as u32,
+                ..Particle::default()
+            })
+            .collect();
+        Ok(RootsOut { roots: Arc::new(Particles { particles, sides: 0, time: 0.0 }) })
     }
 }
 
-fn seed(i: &Inputs<'_>, name: &str) -> Result<u32, NodeError> {
-    let v = i.int(name)?;
-    u32::try_from(v).map_err(|_| NodeError::port(name, format!("must be 0..=4294967295, got {v}")))
-}
-
-fn cook_roots(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let roots = layout_roots(
-        i.choice("layout")?,
-        i.usize("count")?,
-        finite_vec3(i, "center")?,
-        i.float("spacing")? as f32,
-        i.float("radius")? as f32,
-        finite_vec3(i, "direction")?,
-        i.float("spread")? as f32,
-        seed(i, "seed")?,
-    );
-    let particles = roots
-        .iter()
-        .enumerate()
-        .map(|(k, r)| Particle {
-            position: r.position.to_array(),
-            velocity: r.direction.to_array(),
-            group: k as u32,
-            ..Particle::default()
-        })
-        .collect();
-    Ok(vec![Value::Particles(Arc::new(Particles { particles, sides: 0, time: 0.0 }))])
-}
-
-fn particle_flame_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.particle_flame",
-        "Particles",
-        TimeDep::Simulation,
-        "Perry's particle flames (Perry 1994 §3.2.1–3.2.3): each root grows a flame that is the long-exposure \
-         trajectory of one particle of `triangles` Gouraud triangles (a fuzzy N-gon: centre vertex with the \
-         centre RGBA, rim vertices with the edge RGBA) moved `steps` steps through the wind field by \
-         v(s+1) = v(s) + u∞·dt, optionally re-normalized. The particle's x/y scale follows footnote 1 \
-         (0.67 + 0.4 sin(π·age/24), y slope 0.032) or user ramps; colours follow centre and edge ramps over \
-         age (`pos: r g b a; …`). Each flame has a lifetime l_f (Table 3.1) with per-flame jitter from \
-         `seed`. Frame T samples the noise at k_p·p − k_s·T·ĵ, so frames are deterministic and independent. \
-         Render with particles.render_flames.",
-    )
-    .input(PortDesc::new("roots", PortType::Particles, "Flame roots (position, direction in velocity): particles.roots."))
-    .input(PortDesc {
-        default: Some(Value::WindField(Arc::new(WindField::default()))),
-        ..PortDesc::new("wind", PortType::WindField, "Wind field (particles.wind_field); default: Perry's candle wind.")
-    })
-    .input(PortDesc::int("frames", 48, (1, 100_000), "Number of frames."))
-    .input(PortDesc::float("fps", 24.0, (1.0, 240.0), "Frames per second."))
-    .input(PortDesc::int("steps", 25, (1, 1000), "Particle steps per flame (Figure 3-3: 25)."))
-    .input(PortDesc::int("triangles", 20, (3, 256), "Triangles per particle (Figure 3-3: 20)."))
-    .input(PortDesc::float("dt", 0.1, (0.001, 10.0), "Time step of the trajectory integration."))
-    .input(PortDesc::float("speed", 1.0, (0.0, 100.0), "Initial speed along the root direction; with normalize, the kept speed."))
-    .input(PortDesc::bool("normalize", false, "Re-normalize |v_p| every step (§3.2.3; for intense winds)."))
-    .input(PortDesc::float("size", 1.0, (0.0, 1000.0), "Particle radius in world units (footnote 1: unit circle)."))
-    .input(PortDesc::float("size_jitter", 0.0, (0.0, 1.0), "Random per-flame size variation."))
-    .input(PortDesc::choice("shape", &["perry", "ramp"], "perry", "Footnote 1's sine/linear shape, or the width/height ramps."))
-    .input(PortDesc::float("x_base", 0.67, (0.0, 100.0), "Footnote 1 width scale at the base (0.67)."))
-    .input(PortDesc::float("x_amp", 0.4, (-100.0, 100.0), "Footnote 1 width bulge amplitude (0.4)."))
-    .input(PortDesc::float("y_slope", 0.032, (0.0, 10.0), "Footnote 1 height scale growth per step (0.032)."))
-    .input(PortDesc::string("width_ramp", "0: 0.67; 0.5: 1.07; 1: 0.67", "Width scale over normalized age (shape = ramp)."))
-    .input(PortDesc::string("height_ramp", "0: 0; 1: 0.768", "Height scale over normalized age (shape = ramp)."))
-    .input(PortDesc::string("center_ramp", DEFAULT_CENTER, "Centre vertex RGBA over normalized age: `pos: r g b a; …`."))
-    .input(PortDesc::string("edge_ramp", DEFAULT_EDGE, "Rim vertex RGBA over normalized age: `pos: r g b a; …`."))
-    .input(PortDesc::int("lifetime", 1000, (1, 1000), "Flame lifetime l_f in frames (Table 3.1)."))
-    .input(PortDesc::float("lifetime_jitter", 0.0, (0.0, 1.0), "Random per-flame lifetime variation."))
-    .input(PortDesc::bool("respawn", false, "Rebirth a flame at its root when its lifetime ends."))
-    .input(PortDesc::int("fade", 0, (0, 1000), "Frames of fade-in after birth and fade-out before death."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the per-flame variations."))
-    .output("flames", PortType::clip_of(PortType::Particles), "Per frame, every live flame's particles.")
-}
-
-fn ramp<const N: usize>(i: &Inputs<'_>, name: &str) -> Result<Ramp<N>, NodeError> {
-    Ramp::parse(i.string(name)?).map_err(|m| NodeError::port(name, m))
-}
-
-/// Reads [`FlameParams`] from the node's inputs; errors name the port.
-pub fn params_from_inputs(i: &Inputs<'_>) -> Result<FlameParams, NodeError> {
-    let shape = match i.choice("shape")? {
-        "ramp" => Shape::Ramp { width: ramp(i, "width_ramp")?, height: ramp(i, "height_ramp")? },
-        _ => Shape::Perry {
-            x_base: i.float("x_base")? as f32,
-            x_amp: i.float("x_amp")? as f32,
-            y_slope: i.float("y_slope")? as f32,
-        },
-    };
-    let lifetime = i.usize("lifetime")?;
-    let p = FlameParams {
-        steps: i.usize("steps")?,
-        sides: u32::try_from(i.usize("triangles")?).map_err(|_| NodeError::port("triangles", "too large"))?,
-        dt: i.float("dt")? as f32,
-        speed: i.float("speed")? as f32,
-        normalize: i.bool("normalize")?,
-        size: i.float("size")? as f32,
-        size_jitter: i.float("size_jitter")? as f32,
-        shape,
-        center: ramp(i, "center_ramp")?,
-        edge: ramp(i, "edge_ramp")?,
-        lifetime: u32::try_from(lifetime).map_err(|_| NodeError::port("lifetime", "too large"))?,
-        lifetime_jitter: i.float("lifetime_jitter")? as f32,
-        respawn: i.bool("respawn")?,
-        fade: u32::try_from(i.usize("fade")?).map_err(|_| NodeError::port("fade", "too large"))?,
-        seed: seed(i, "seed")?,
-    };
-    validate_params(&p)?;
-    Ok(p)
+pyrograph_core::node! {
+    /// Perry's particle flames (Perry 1994 §3.2.1–3.2.3): each root grows a flame that is the long-exposure
+    /// trajectory of one particle of `triangles` Gouraud triangles (a fuzzy N-gon: centre vertex with the
+    /// centre RGBA, rim vertices with the edge RGBA) moved `steps` steps through the wind field by
+    /// v(s+1) = v(s) + u∞·dt, optionally re-normalized. The particle's x/y scale follows footnote 1
+    /// (0.67 + 0.4 sin(π·age/24), y slope 0.032) or user ramps; colours follow centre and edge ramps over
+    /// age (`pos: r g b a; …`). Each flame has a lifetime l_f (Table 3.1) with per-flame jitter from
+    /// `seed`. Frame T samples the noise at k_p·p − k_s·T·ĵ, so frames are deterministic and independent.
+    /// Render with particles.render_flames.
+    #[node("particles.particle_flame", "Particles", Simulation)]
+    pub struct ParticleFlame {
+        /// Flame roots (position, direction in velocity): particles.roots.
+        roots: Arc<Particles>,
+        /// Wind field (particles.wind_field); default: Perry's candle wind.
+        wind: Arc<WindField> = Arc::new(WindField::default()),
+        /// Number of frames.
+        #[range(1, 100_000)]
+        frames: usize = 48,
+        /// Frames per second.
+        #[range(1.0, 240.0)]
+        fps: f64 = 24.0,
+        /// The flames.
+        params: FlameParams,
+    }
+    pub struct ParticleFlameOut {
+        /// Per frame, every live flame's particles.
+        flames: ClipOf<Arc<Particles>>,
+    }
 }
 
 struct FlameSource {
@@ -508,32 +512,31 @@ impl FrameSource for FlameSource {
     }
 }
 
-fn cook_particle_flame(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let roots_value = i.get("roots")?;
-    let roots = Root::from_particles(i.particles("roots")?);
-    if let Some(k) = roots.iter().position(|r| !r.position.is_finite() || !r.direction.is_finite()) {
-        return Err(NodeError::port("roots", format!("root {k} has a non-finite position or direction")));
+impl Cook for ParticleFlame {
+    fn cook(self, _: &CookCtx) -> Result<ParticleFlameOut, NodeError> {
+        let roots = Root::from_particles(&self.roots);
+        if let Some(k) = roots.iter().position(|r| !r.position.is_finite() || !r.direction.is_finite()) {
+            return Err(NodeError::port(port!(ParticleFlame, roots), format!("root {k} has a non-finite position or direction")));
+        }
+        validate_wind(&self.wind, port!(ParticleFlame, wind))?;
+        validate_params(&self.params)?;
+        let mut h = Fingerprinter::new();
+        "particles.particle_flame".hash(&mut h);
+        Value::Particles(self.roots.clone()).hash_into(&mut h);
+        Value::WindField(self.wind.clone()).hash_into(&mut h);
+        format!("{:?}", self.params).hash(&mut h);
+        self.frames.hash(&mut h);
+        let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames: self.frames };
+        let clip = Clip::new(PortType::Particles, self.fps, h.finish(), Arc::new(source));
+        Ok(ParticleFlameOut { flames: ClipOf::new(clip) })
     }
-    let wind_value = i.get("wind")?;
-    let wind = (**i.wind_field("wind")?).clone();
-    validate_wind(&wind, "wind")?;
-    let params = params_from_inputs(i)?;
-    let frames = i.usize("frames")?;
-    let fps = i.float("fps")?;
-    let mut h = Fingerprinter::new();
-    "particles.particle_flame".hash(&mut h);
-    roots_value.hash_into(&mut h);
-    wind_value.hash_into(&mut h);
-    format!("{params:?}").hash(&mut h);
-    frames.hash(&mut h);
-    let clip = Clip::new(PortType::Particles, fps, h.finish(), Arc::new(FlameSource { roots, wind, params, frames }));
-    Ok(vec![Value::Clip(clip)])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pyrograph_core::LargeWind;
+    use pyrograph_core::params::Declared;
+    use pyrograph_core::{Inputs, LargeWind};
 
     fn up_root(x: f32, z: f32) -> Root {
         Root { position: Vec3::new(x, 0.0, z), direction: Vec3::Y }
@@ -616,7 +619,7 @@ mod tests {
 
     #[test]
     fn footnote_1_shape_and_lifetimes() {
-        let s = Shape::perry();
+        let s = FlameParams::default();
         assert_eq!(s.scale(0, 25), Vec2::new(0.67, 0.0));
         let mid = s.scale(12, 25);
         assert!((mid.x - 1.07).abs() < 1e-6 && (mid.y - 0.384).abs() < 1e-6);
@@ -639,15 +642,16 @@ mod tests {
 
     #[test]
     fn zero_steps_nan_wind_and_bad_ramps_are_errors_naming_the_port() {
-        let desc = particle_flame_desc();
+        let desc = ParticleFlame::desc();
         let mut values: Vec<Value> = desc
             .inputs
             .iter()
             .map(|p| p.default.clone().unwrap_or_else(|| Value::Particles(Arc::new(Particles::default()))))
             .collect();
-        let port_of = |values: &[Value]| match cook_particle_flame(&Inputs::new(&desc, values), &CookCtx::default()) {
+        let cook = |values: &[Value]| ParticleFlame::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
+        let port_of = |values: &[Value]| match cook(values) {
             Err(NodeError::Port { port, .. }) => port,
-            other => panic!("expected a port error, got {other:?}"),
+            other => panic!("expected a port error, got {:?}", other.err()),
         };
         let steps = desc.input_index("steps").unwrap();
         values[steps] = Value::Int(0);
@@ -663,7 +667,7 @@ mod tests {
 
     #[test]
     fn table_3_1_lifetime_range_is_the_port_range() {
-        let desc = particle_flame_desc();
+        let desc = ParticleFlame::desc();
         assert_eq!(desc.inputs[desc.input_index("lifetime").unwrap()].range, Some((1.0, 1000.0)));
     }
 }

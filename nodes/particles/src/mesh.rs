@@ -13,13 +13,12 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
-use pyrograph_core::{
-    CookCtx, FnNode, Inputs, Mesh, NO_NEIGHBOR, NodeDesc, NodeError, PathRole, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, InputPath, Mesh, NO_NEIGHBOR, NodeError, Registry, port};
 
 /// Adds `particles.mesh_load`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(mesh_load_desc(), cook_mesh_load));
+    registry.add(MeshLoad::node());
 }
 
 /// Polygons over shared vertex positions, before triangulation.
@@ -428,77 +427,90 @@ pub fn load_obj(path: &Path) -> Result<PolygonSoup, String> {
     Ok(soup)
 }
 
-fn mesh_load_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.mesh_load",
-        "Particles",
-        TimeDep::Source,
-        "A polygon mesh for fire spread (Perry 1994 §3.3.2): a Wavefront OBJ (through tobj; triangles and \
-         polygons, fan-triangulated) or a primitive (cube, plane grid, sphere, open cylinder, a house with a \
-         garage). Face normals are computed from the winding (an OBJ face wound against its vertex normals is \
-         flipped); the loader builds face adjacency and, per edge, the rotation that takes one face's normal to \
-         its neighbour's, which carries spread headings across edges. Degenerate faces and non-manifold or \
-         inconsistently wound edges are errors naming the face (strict), or are dropped / made boundaries.",
-    )
-    .input(PortDesc::choice(
-        "source",
-        &["obj", "cube", "plane", "sphere", "cylinder", "house"],
-        "cube",
-        "Where the mesh comes from.",
-    ))
-    .input(PortDesc::path("path", PathRole::Input, Some(""), "OBJ file (source = obj)."))
-    .input(PortDesc::float(
-        "size",
-        1.0,
-        (1e-6, 1e6),
-        "Primitive size: cube side, plane side, sphere radius, cylinder radius, house width.",
-    ))
-    .input(PortDesc::float("height", 2.0, (1e-6, 1e6), "Cylinder height."))
-    .input(PortDesc::int(
-        "divisions",
-        4,
-        (1, 512),
-        "Primitive resolution: quads per cube edge / plane side, sphere rings, cylinder rows.",
-    ))
-    .input(PortDesc::int("subdivide", 0, (0, 6), "Split every triangle into four this many times (smoother lighting)."))
-    .input(PortDesc::float("scale", 1.0, (1e-6, 1e6), "Uniform scale applied to the mesh."))
-    .input(PortDesc::vec3("translate", [0.0, 0.0, 0.0], "Offset applied after scaling."))
-    .input(PortDesc::bool("strict", true, "Degenerate faces and non-manifold edges are errors (off: dropped / boundaries)."))
-    .output("mesh", PortType::Mesh, "The triangle mesh with adjacency and edge rotations.")
+pyrograph_core::choice! {
+    /// Where `particles.mesh_load` takes its mesh from.
+    pub enum MeshSource {
+        /// A Wavefront OBJ file.
+        Obj = "obj",
+        /// [`cube`].
+        Cube = "cube",
+        /// [`plane`].
+        Plane = "plane",
+        /// [`sphere`].
+        Sphere = "sphere",
+        /// [`cylinder`].
+        Cylinder = "cylinder",
+        /// [`house`].
+        House = "house",
+    }
 }
 
-fn cook_mesh_load(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let size = i.float("size")? as f32;
-    let div = i.usize("divisions")?;
-    let source = i.choice("source")?;
-    let mut soup = match source {
-        "obj" => {
-            let path = i.path("path")?;
-            if path.as_os_str().is_empty() {
-                return Err(NodeError::port("path", "source is 'obj' but no OBJ file is set"));
-            }
-            load_obj(path).map_err(|m| NodeError::port("path", m))?
-        }
-        "plane" => plane(size, div),
-        "sphere" => sphere(size, div),
-        "cylinder" => cylinder(size, i.float("height")? as f32, 4 * div, div),
-        "house" => house(size),
-        _ => cube(size, div),
-    };
-    let scale = i.float("scale")? as f32;
-    let t = i.vec3("translate")?;
-    let t = Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32);
-    for p in &mut soup.positions {
-        *p = *p * scale + t;
+pyrograph_core::node! {
+    /// A polygon mesh for fire spread (Perry 1994 §3.3.2): a Wavefront OBJ (through tobj; triangles and
+    /// polygons, fan-triangulated) or a primitive (cube, plane grid, sphere, open cylinder, a house with a
+    /// garage). Face normals are computed from the winding (an OBJ face wound against its vertex normals is
+    /// flipped); the loader builds face adjacency and, per edge, the rotation that takes one face's normal to
+    /// its neighbour's, which carries spread headings across edges. Degenerate faces and non-manifold or
+    /// inconsistently wound edges are errors naming the face (strict), or are dropped / made boundaries.
+    #[node("particles.mesh_load", "Particles", Source)]
+    pub struct MeshLoad {
+        /// Where the mesh comes from.
+        source: MeshSource = MeshSource::Cube,
+        /// OBJ file (source = obj).
+        path: InputPath = "".into(),
+        /// Primitive size: cube side, plane side, sphere radius, cylinder radius, house width.
+        #[range(1e-6, 1e6)]
+        size: f32 = 1.0,
+        /// Cylinder height.
+        #[range(1e-6, 1e6)]
+        height: f32 = 2.0,
+        /// Primitive resolution: quads per cube edge / plane side, sphere rings, cylinder rows.
+        #[range(1, 512)]
+        divisions: usize = 4,
+        /// Split every triangle into four this many times (smoother lighting).
+        #[range(0, 6)]
+        subdivide: usize = 0,
+        /// Uniform scale applied to the mesh.
+        #[range(1e-6, 1e6)]
+        scale: f32 = 1.0,
+        /// Offset applied after scaling.
+        translate: [f32; 3] = [0.0, 0.0, 0.0],
+        /// Degenerate faces and non-manifold edges are errors (off: dropped / boundaries).
+        strict: bool = true,
     }
-    let mesh = build_mesh(&soup, i.usize("subdivide")?, i.bool("strict")?).map_err(|m| {
-        if source == "obj" {
-            NodeError::port("path", format!("{}: {m}", i.path("path").map(|p| p.display().to_string()).unwrap_or_default()))
-        } else {
-            NodeError::port("source", m)
+    pub struct MeshLoadOut {
+        /// The triangle mesh with adjacency and edge rotations.
+        mesh: Arc<Mesh>,
+    }
+}
+
+impl Cook for MeshLoad {
+    fn cook(self, _: &CookCtx) -> Result<MeshLoadOut, NodeError> {
+        let (size, div) = (self.size, self.divisions);
+        let path_port = port!(MeshLoad, path);
+        let mut soup = match self.source {
+            MeshSource::Obj => {
+                if self.path.as_os_str().is_empty() {
+                    return Err(NodeError::port(path_port, "source is 'obj' but no OBJ file is set"));
+                }
+                load_obj(&self.path).map_err(|m| NodeError::port(path_port, m))?
+            }
+            MeshSource::Plane => plane(size, div),
+            MeshSource::Sphere => sphere(size, div),
+            MeshSource::Cylinder => cylinder(size, self.height, 4 * div, div),
+            MeshSource::House => house(size),
+            MeshSource::Cube => cube(size, div),
+        };
+        let t = Vec3::from_array(self.translate);
+        for p in &mut soup.positions {
+            *p = *p * self.scale + t;
         }
-    })?;
-    Ok(vec![Value::Mesh(Arc::new(mesh))])
+        let mesh = build_mesh(&soup, self.subdivide, self.strict).map_err(|m| match self.source {
+            MeshSource::Obj => NodeError::port(path_port, format!("{}: {m}", self.path.display())),
+            _ => NodeError::port(port!(MeshLoad, source), m),
+        })?;
+        Ok(MeshLoadOut { mesh: Arc::new(mesh) })
+    }
 }
 
 #[cfg(test)]

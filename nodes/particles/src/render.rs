@@ -6,29 +6,34 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use noise::{NoiseFn, Perlin};
-use pyrograph_core::{
-    CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, Particle, Particles, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, Particle, Particles, Registry, port};
+use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 /// Adds `particles.render_flames` and `particles.flame_lights`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(render_flames_desc(), cook_render_flames));
-    registry.add(FnNode::new(flame_lights_desc(), cook_flame_lights));
+    registry.add(RenderFlames::node());
+    registry.add(FlameLights::node());
 }
 
-/// A ground plane (a horizontal square) lit by point lights.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Ground {
-    /// Height `y` of the plane.
-    pub height: f32,
-    /// Side length, centred under the camera target.
-    pub size: f32,
-    /// Straight RGBA albedo.
-    pub color: [f32; 4],
-    /// Light reaching the ground from elsewhere, 0..1.
-    pub ambient: f32,
+pyrograph_core::ports! {
+    /// A ground plane (a horizontal square) lit by point lights: ports of `particles.render_flames`.
+    #[derive(PartialEq)]
+    pub struct Ground {
+        /// Height of the ground plane.
+        #[range(-1e6, 1e6)]
+        ground_height: f32 = 0.0,
+        /// Side of the ground square, centred under the camera target.
+        #[range(0.0, 1e6)]
+        ground_size: f32 = 30.0,
+        /// Ground albedo.
+        ground_color: [f32; 4] = [0.35, 0.3, 0.26, 1.0],
+        /// Ambient light on the ground.
+        #[range(0.0, 1.0)]
+        ambient: f32 = 0.05,
+    }
 }
 
 /// Cells per side of the ground grid (lighting is evaluated at the vertices, Gouraud-shaded).
@@ -50,15 +55,15 @@ pub fn light_at(p: Vec3, lights: &Particles) -> Vec3 {
 
 fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Particles) {
     let n = GROUND_CELLS;
-    let half = ground.size * 0.5;
+    let half = ground.ground_size * 0.5;
     let at = |i: usize, j: usize| {
         Vec3::new(
-            center.x - half + ground.size * i as f32 / n as f32,
-            ground.height,
-            center.z - half + ground.size * j as f32 / n as f32,
+            center.x - half + ground.ground_size * i as f32 / n as f32,
+            ground.ground_height,
+            center.z - half + ground.ground_size * j as f32 / n as f32,
         )
     };
-    let albedo = Vec3::new(ground.color[0], ground.color[1], ground.color[2]);
+    let albedo = Vec3::new(ground.ground_color[0], ground.ground_color[1], ground.ground_color[2]);
     let vertex = |i: usize, j: usize| {
         let p = at(i, j);
         let lit = albedo * (light_at(p, lights) + Vec3::splat(ground.ambient));
@@ -109,79 +114,90 @@ pub fn render_particles(
     render_image(view, &lists, background)
 }
 
-fn empty_particles() -> Value {
-    Value::Particles(Arc::new(Particles::default()))
-}
-
-fn render_flames_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.render_flames",
-        "Particles",
-        TimeDep::PerFrame,
-        "Renders particle flames through a perspective camera (Perry 1994 §3.2.1–3.2.2): every particle is a \
-         camera-facing N-gon of Gouraud triangles, blended additively to saturation (as Perry's Figure 3-3) \
-         or with \"over\". An optional ground plane is lit by the flame lights of §3.2.4 (connect \
-         particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).",
-    )
-    .input(PortDesc::new("flames", PortType::Particles, "The particles to draw (particles.particle_flame)."))
-    .input(PortDesc {
-        default: Some(empty_particles()),
-        ..PortDesc::new("lights", PortType::Particles, "Point lights for the ground (particles.flame_lights); default none.")
-    })
-    .input(PortDesc::int("width", 640, (1, 16384), "Image width in pixels."))
-    .input(PortDesc::int("height", 480, (1, 16384), "Image height in pixels."))
-    .input(PortDesc::vec3("camera_position", [0.0, 3.0, 14.0], "Eye position."))
-    .input(PortDesc::vec3("camera_target", [0.0, 2.5, 0.0], "Point looked at."))
-    .input(PortDesc::vec3("camera_up", [0.0, 1.0, 0.0], "Up hint."))
-    .input(PortDesc::float("fov", 40.0, (1.0, 179.0), "Vertical field of view in degrees."))
-    .input(PortDesc::float("near", 0.1, (0.0001, 1e6), "Near plane distance."))
-    .input(PortDesc::float("far", 1000.0, (0.001, 1e7), "Far plane distance."))
-    .input(PortDesc::choice("blend", &["additive", "over"], "additive", "Additive to saturation (Perry) or over."))
-    .input(PortDesc::color("background", [0.0, 0.0, 0.0, 0.0], "Background colour (straight RGBA)."))
-    .input(PortDesc::bool("ground", false, "Draw a ground plane lit by `lights`."))
-    .input(PortDesc::float("ground_height", 0.0, (-1e6, 1e6), "Height of the ground plane."))
-    .input(PortDesc::float("ground_size", 30.0, (0.0, 1e6), "Side of the ground square, centred under the camera target."))
-    .input(PortDesc::color("ground_color", [0.35, 0.3, 0.26, 1.0], "Ground albedo."))
-    .input(PortDesc::float("ambient", 0.05, (0.0, 1.0), "Ambient light on the ground."))
-    .output("image", PortType::Image, "The rendered frame (RGBA, straight alpha).")
-}
-
-pub use pyrograph_render::ports::view_from_inputs;
-
-fn cook_render_flames(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let view = view_from_inputs(i)?;
-    let flames = i.particles("flames")?;
-    if let Some(k) = flames.particles.iter().position(|q| !q.position.iter().chain(&q.size).all(|x| x.is_finite())) {
-        return Err(NodeError::port("flames", format!("particle {k} has a non-finite position or size")));
+pyrograph_core::choice! {
+    /// How `particles.render_flames` blends particles.
+    pub enum FlameBlend {
+        /// Additive to saturation (Perry).
+        Additive = "additive",
+        /// Alpha "over".
+        Over = "over",
     }
-    let lights = i.particles("lights")?;
-    let blend = if i.choice("blend")? == "over" { Blend::Over } else { Blend::Additive };
-    let ground = if i.bool("ground")? {
-        Some(Ground {
-            height: i.float("ground_height")? as f32,
-            size: i.float("ground_size")? as f32,
-            color: i.color("ground_color")?,
-            ambient: i.float("ambient")? as f32,
-        })
-    } else {
-        None
-    };
-    ctx.check_cancel()?;
-    let image = render_particles(&view, flames, blend, i.color("background")?, ground.as_ref(), lights);
-    Ok(vec![Value::Image(Arc::new(image))])
 }
 
-/// Parameters of [`flame_lights`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct LightParams {
-    /// Mean intensity of each light.
-    pub intensity: f32,
-    /// Relative flicker amplitude, 0..1.
-    pub flicker: f32,
-    /// Flicker rate: noise cycles per frame.
-    pub rate: f32,
-    /// Flicker seed.
-    pub seed: u32,
+impl FlameBlend {
+    /// The rasterizer's blend mode.
+    pub fn blend(self) -> Blend {
+        match self {
+            FlameBlend::Additive => Blend::Additive,
+            FlameBlend::Over => Blend::Over,
+        }
+    }
+}
+
+/// No particles: the default of optional particle inputs (no lights, no char).
+pub(crate) fn no_particles() -> Arc<Particles> {
+    Arc::new(Particles::default())
+}
+
+pyrograph_core::node! {
+    /// Renders particle flames through a perspective camera (Perry 1994 §3.2.1–3.2.2): every particle is a
+    /// camera-facing N-gon of Gouraud triangles, blended additively to saturation (as Perry's Figure 3-3)
+    /// or with "over". An optional ground plane is lit by the flame lights of §3.2.4 (connect
+    /// particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).
+    #[node("particles.render_flames", "Particles", PerFrame)]
+    pub struct RenderFlames {
+        /// The particles to draw (particles.particle_flame).
+        flames: Arc<Particles>,
+        /// Point lights for the ground (particles.flame_lights); default none.
+        lights: Arc<Particles> = no_particles(),
+        /// The camera.
+        camera: CameraPorts = CameraPorts::looking(640, 480, [0.0, 3.0, 14.0], [0.0, 2.5, 0.0]),
+        /// Additive to saturation (Perry) or over.
+        blend: FlameBlend = FlameBlend::Additive,
+        /// Background colour (straight RGBA).
+        background: [f32; 4] = [0.0, 0.0, 0.0, 0.0],
+        /// Draw a ground plane lit by `lights`.
+        ground: bool = false,
+        /// The ground plane.
+        ground_plane: Ground,
+    }
+    pub struct RenderFlamesOut {
+        /// The rendered frame (RGBA, straight alpha).
+        image: Arc<Image>,
+    }
+}
+
+impl Cook for RenderFlames {
+    fn cook(self, ctx: &CookCtx) -> Result<RenderFlamesOut, NodeError> {
+        let view = self.camera.view()?;
+        let flames = &self.flames;
+        if let Some(k) = flames.particles.iter().position(|q| !q.position.iter().chain(&q.size).all(|x| x.is_finite())) {
+            return Err(NodeError::port(port!(RenderFlames, flames), format!("particle {k} has a non-finite position or size")));
+        }
+        let ground = self.ground.then_some(&self.ground_plane);
+        ctx.check_cancel()?;
+        let image = render_particles(&view, flames, self.blend.blend(), self.background, ground, &self.lights);
+        Ok(RenderFlamesOut { image: Arc::new(image) })
+    }
+}
+
+pyrograph_core::ports! {
+    /// Parameters of [`flame_lights`]: the ports of `particles.flame_lights` after its input.
+    #[derive(PartialEq)]
+    pub struct LightParams {
+        /// Mean light intensity.
+        #[range(0.0, 1000.0)]
+        intensity: f32 = 1.0,
+        /// Relative flicker amplitude.
+        #[range(0.0, 1.0)]
+        flicker: f32 = 0.3,
+        /// Flicker rate in noise cycles per frame.
+        #[range(0.0, 10.0)]
+        rate: f32 = 0.35,
+        /// Flicker seed.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
 }
 
 /// One point light per flame (Perry 1994 §3.2.4): at the mean position of the flame's particles,
@@ -222,32 +238,27 @@ pub fn flame_lights(flames: &Particles, p: &LightParams) -> Particles {
     Particles { particles, sides: 0, time: flames.time }
 }
 
-fn flame_lights_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.flame_lights",
-        "Particles",
-        TimeDep::PerFrame,
-        "A point light per flame (Perry 1994 §3.2.4) at the mean particle position, coloured by the flame, \
-         with an intensity that flickers with band-limited noise over time. Lights are particles (colour in \
-         `center`, intensity in `weight`); particles.render_flames uses them to light its ground plane.",
-    )
-    .input(PortDesc::new("flames", PortType::Particles, "Flame particles (particles.particle_flame)."))
-    .input(PortDesc::float("intensity", 1.0, (0.0, 1000.0), "Mean light intensity."))
-    .input(PortDesc::float("flicker", 0.3, (0.0, 1.0), "Relative flicker amplitude."))
-    .input(PortDesc::float("rate", 0.35, (0.0, 10.0), "Flicker rate in noise cycles per frame."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Flicker seed."))
-    .output("lights", PortType::Particles, "One light per flame.")
+pyrograph_core::node! {
+    /// A point light per flame (Perry 1994 §3.2.4) at the mean particle position, coloured by the flame,
+    /// with an intensity that flickers with band-limited noise over time. Lights are particles (colour in
+    /// `center`, intensity in `weight`); particles.render_flames uses them to light its ground plane.
+    #[node("particles.flame_lights", "Particles", PerFrame)]
+    pub struct FlameLights {
+        /// Flame particles (particles.particle_flame).
+        flames: Arc<Particles>,
+        /// The lights' intensity and flicker.
+        params: LightParams,
+    }
+    pub struct FlameLightsOut {
+        /// One light per flame.
+        lights: Arc<Particles>,
+    }
 }
 
-fn cook_flame_lights(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let seed = i.int("seed")?;
-    let p = LightParams {
-        intensity: i.float("intensity")? as f32,
-        flicker: i.float("flicker")? as f32,
-        rate: i.float("rate")? as f32,
-        seed: u32::try_from(seed).map_err(|_| NodeError::port("seed", format!("must be 0..=4294967295, got {seed}")))?,
-    };
-    Ok(vec![Value::Particles(Arc::new(flame_lights(i.particles("flames")?, &p)))])
+impl Cook for FlameLights {
+    fn cook(self, _: &CookCtx) -> Result<FlameLightsOut, NodeError> {
+        Ok(FlameLightsOut { lights: Arc::new(flame_lights(&self.flames, &self.params)) })
+    }
 }
 
 #[cfg(test)]
@@ -255,6 +266,8 @@ mod tests {
     use super::*;
     use crate::flame::{FlameParams, Root, simulate_frame};
     use pyrograph_core::WindField;
+    use pyrograph_core::params::Declared;
+    use pyrograph_core::{Inputs, Value};
     use pyrograph_render::Camera;
 
     fn view(w: u32, h: u32) -> View {
@@ -315,17 +328,19 @@ mod tests {
 
     #[test]
     fn a_camera_with_zero_near_is_an_error_naming_the_port() {
-        let desc = render_flames_desc();
-        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty_particles)).collect();
+        let desc = RenderFlames::desc();
+        let empty = || Value::Particles(no_particles());
+        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
+        let cook = |values: &[Value]| RenderFlames::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
         values[desc.input_index("near").unwrap()] = Value::Float(0.0);
-        match cook_render_flames(&Inputs::new(&desc, &values), &CookCtx::default()) {
+        match cook(&values) {
             Err(NodeError::Port { port, .. }) => assert_eq!(port, "near"),
-            other => panic!("{other:?}"),
+            other => panic!("{:?}", other.err()),
         }
         values[desc.input_index("near").unwrap()] = Value::Float(20.0);
-        match cook_render_flames(&Inputs::new(&desc, &values), &CookCtx::default()) {
+        match cook(&values) {
             Err(NodeError::Port { port, .. }) => assert_eq!(port, "camera_target", "target 11 units away, near 20"),
-            other => panic!("{other:?}"),
+            other => panic!("{:?}", other.err()),
         }
     }
 }

@@ -5,13 +5,12 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 use noise::permutationtable::{NoiseHasher, PermutationTable};
-use pyrograph_core::{
-    CookCtx, FnNode, Inputs, LargeWind, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value, WindField,
-};
+use pyrograph_core::params::Cook;
+use pyrograph_core::{CookCtx, LargeWind, NodeError, Registry, WindField, port};
 
 /// Adds `particles.wind_field`.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(wind_field_desc(), cook_wind_field));
+    registry.add(WindFieldNode::node());
 }
 
 /// The world's up axis `ĵ`, along which eq. 3.1 measures height and time scrolls the noise.
@@ -205,97 +204,123 @@ impl WindSampler {
     }
 }
 
-fn wind_field_desc() -> NodeDesc {
-    NodeDesc::new(
-        "particles.wind_field",
-        "Particles",
-        TimeDep::Source,
-        "The wind field flames move in (Perry 1994 §3.2.3): u∞(p, t) = −k_g g + w_L(p, t) + w_S(p, t). \
-         w_L is constant, a vortex, or the negative motion of a moving object (§3.4); w_S is eq. 3.1, \
-         the gradient of band-limited noise at k_p·p − k_s·T·ĵ scaled by C and by the height above the \
-         flame's base. Ranges of C, k_p and k_s are Perry's Table 3.1.",
-    )
-    .input(PortDesc::vec3("gravity", [0.0, -1.0, 0.0], "Gravity g (Perry: −ĵ)."))
-    .input(PortDesc::float("k_g", 1.0, (0.0, 10.0), "Convection coefficient k_g: flames rise against gravity (Perry: 1.0)."))
-    .input(PortDesc::choice(
-        "large_scale",
-        &["none", "constant", "vortex", "moving_object"],
-        "none",
-        "Large-scale wind w_L: none, the constant `wind`, a vortex, or −`object_velocity` (§3.4).",
-    ))
-    .input(PortDesc::vec3("wind", [0.0, 0.0, 0.0], "Constant wind vector (large_scale = constant)."))
-    .input(PortDesc::vec3("object_velocity", [0.0, 0.0, 0.0], "Velocity of the burning object (large_scale = moving_object)."))
-    .input(PortDesc::vec3("vortex_center", [0.0, 0.0, 0.0], "A point on the vertical vortex axis (large_scale = vortex)."))
-    .input(PortDesc::float("vortex_strength", 1.0, (-100.0, 100.0), "Tangential wind speed at the vortex radius."))
-    .input(PortDesc::float("vortex_radius", 1.0, (0.001, 1000.0), "Vortex core radius (Rankine vortex)."))
-    .input(PortDesc::float("noise_c", 0.04, (0.0, 0.04), "Flame noisiness C of eq. 3.1 (Table 3.1; footnote 5: 0.04)."))
-    .input(PortDesc::float(
-        "k_p",
-        1.0,
-        (0.1, 10.0),
-        "Inverse inter-flame cohesion k_p: position scale into the noise (Table 3.1).",
-    ))
-    .input(PortDesc::float("k_s", 0.1, (0.0, 1.0), "Flame sampling k_s: noise scroll per frame (Table 3.1)."))
-    .input(PortDesc::int("seed", 0, (0, u32::MAX as i64), "Seed of the noise field."))
-    .input(PortDesc::float(
-        "height_unit",
-        1.0,
-        (0.0001, 1000.0),
-        "World length of one unit of eq. 3.1's height factor (Perry counts integration steps); smaller bends more.",
-    ))
-    .output("wind", PortType::WindField, "The wind field, for particles.particle_flame.")
-}
-
-fn finite_vec3(i: &Inputs<'_>, name: &str) -> Result<[f32; 3], NodeError> {
-    let v = i.vec3(name)?;
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(v.map(|x| x as f32))
-    } else {
-        Err(NodeError::port(name, format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2])))
+pyrograph_core::choice! {
+    /// The large-scale wind `w_L` of a [`WindField`].
+    pub enum LargeScale {
+        /// No large-scale wind.
+        None = "none",
+        /// The constant `wind`.
+        Constant = "constant",
+        /// A vortex about a vertical axis.
+        Vortex = "vortex",
+        /// The negative velocity of a moving burning object (§3.4).
+        MovingObject = "moving_object",
     }
 }
 
-fn finite_float(i: &Inputs<'_>, name: &str) -> Result<f32, NodeError> {
-    let v = i.float(name)?;
-    if v.is_finite() { Ok(v as f32) } else { Err(NodeError::port(name, format!("must be finite, got {v}"))) }
+pyrograph_core::node! {
+    /// The wind field flames move in (Perry 1994 §3.2.3): u∞(p, t) = −k_g g + w_L(p, t) + w_S(p, t).
+    /// w_L is constant, a vortex, or the negative motion of a moving object (§3.4); w_S is eq. 3.1,
+    /// the gradient of band-limited noise at k_p·p − k_s·T·ĵ scaled by C and by the height above the
+    /// flame's base. Ranges of C, k_p and k_s are Perry's Table 3.1.
+    #[node("particles.wind_field", "Particles", Source)]
+    pub struct WindFieldNode {
+        /// Gravity g (Perry: −ĵ).
+        gravity: [f32; 3] = [0.0, -1.0, 0.0],
+        /// Convection coefficient k_g: flames rise against gravity (Perry: 1.0).
+        #[range(0.0, 10.0)]
+        k_g: f32 = 1.0,
+        /// Large-scale wind w_L: none, the constant `wind`, a vortex, or −`object_velocity` (§3.4).
+        large_scale: LargeScale = LargeScale::None,
+        /// Constant wind vector (large_scale = constant).
+        wind: [f32; 3] = [0.0, 0.0, 0.0],
+        /// Velocity of the burning object (large_scale = moving_object).
+        object_velocity: [f32; 3] = [0.0, 0.0, 0.0],
+        /// A point on the vertical vortex axis (large_scale = vortex).
+        vortex_center: [f32; 3] = [0.0, 0.0, 0.0],
+        /// Tangential wind speed at the vortex radius.
+        #[range(-100.0, 100.0)]
+        vortex_strength: f32 = 1.0,
+        /// Vortex core radius (Rankine vortex).
+        #[range(0.001, 1000.0)]
+        vortex_radius: f32 = 1.0,
+        /// Flame noisiness C of eq. 3.1 (Table 3.1; footnote 5: 0.04).
+        #[range(0.0, 0.04)]
+        noise_c: f32 = 0.04,
+        /// Inverse inter-flame cohesion k_p: position scale into the noise (Table 3.1).
+        #[range(0.1, 10.0)]
+        k_p: f32 = 1.0,
+        /// Flame sampling k_s: noise scroll per frame (Table 3.1).
+        #[range(0.0, 1.0)]
+        k_s: f32 = 0.1,
+        /// Seed of the noise field.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+        /// World length of one unit of eq. 3.1's height factor (Perry counts integration steps); smaller bends more.
+        #[range(0.0001, 1000.0)]
+        height_unit: f32 = 1.0,
+    }
+    pub struct WindFieldNodeOut {
+        /// The wind field, for particles.particle_flame.
+        wind: Arc<WindField>,
+    }
 }
 
-/// Builds the [`WindField`] described by the node's inputs; errors name the port.
-pub fn wind_from_inputs(i: &Inputs<'_>) -> Result<WindField, NodeError> {
-    let large = match i.choice("large_scale")? {
-        "none" => LargeWind::None,
-        "constant" => LargeWind::Constant(finite_vec3(i, "wind")?),
-        "moving_object" => LargeWind::MovingObject(finite_vec3(i, "object_velocity")?),
-        "vortex" => LargeWind::Vortex {
-            center: finite_vec3(i, "vortex_center")?,
-            strength: finite_float(i, "vortex_strength")?,
-            radius: finite_float(i, "vortex_radius")?,
-        },
-        other => return Err(NodeError::port("large_scale", format!("unknown option '{other}'"))),
-    };
-    let seed = i.int("seed")?;
-    Ok(WindField {
-        gravity: finite_vec3(i, "gravity")?,
-        k_g: finite_float(i, "k_g")?,
-        large,
-        noise_c: finite_float(i, "noise_c")?,
-        k_p: finite_float(i, "k_p")?,
-        k_s: finite_float(i, "k_s")?,
-        seed: u32::try_from(seed).map_err(|_| NodeError::port("seed", format!("must be 0..=4294967295, got {seed}")))?,
-        height_unit: match finite_float(i, "height_unit")? {
-            h if h > 0.0 => h,
-            h => return Err(NodeError::port("height_unit", format!("must be positive, got {h}"))),
-        },
-    })
+/// `v` when every component is finite, else an error naming `port`.
+pub(crate) fn finite3(v: [f32; 3], port: &str) -> Result<[f32; 3], NodeError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(v)
+    } else {
+        Err(NodeError::port(port, format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2])))
+    }
 }
 
-fn cook_wind_field(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::WindField(Arc::new(wind_from_inputs(i)?))])
+fn finite(v: f32, port: &str) -> Result<f32, NodeError> {
+    if v.is_finite() { Ok(v) } else { Err(NodeError::port(port, format!("must be finite, got {v}"))) }
+}
+
+impl WindFieldNode {
+    /// The [`WindField`] the ports describe; errors name the port.
+    pub fn field(&self) -> Result<WindField, NodeError> {
+        let large = match self.large_scale {
+            LargeScale::None => LargeWind::None,
+            LargeScale::Constant => LargeWind::Constant(finite3(self.wind, port!(WindFieldNode, wind))?),
+            LargeScale::MovingObject => {
+                LargeWind::MovingObject(finite3(self.object_velocity, port!(WindFieldNode, object_velocity))?)
+            }
+            LargeScale::Vortex => LargeWind::Vortex {
+                center: finite3(self.vortex_center, port!(WindFieldNode, vortex_center))?,
+                strength: finite(self.vortex_strength, port!(WindFieldNode, vortex_strength))?,
+                radius: finite(self.vortex_radius, port!(WindFieldNode, vortex_radius))?,
+            },
+        };
+        Ok(WindField {
+            gravity: finite3(self.gravity, port!(WindFieldNode, gravity))?,
+            k_g: finite(self.k_g, port!(WindFieldNode, k_g))?,
+            large,
+            noise_c: finite(self.noise_c, port!(WindFieldNode, noise_c))?,
+            k_p: finite(self.k_p, port!(WindFieldNode, k_p))?,
+            k_s: finite(self.k_s, port!(WindFieldNode, k_s))?,
+            seed: self.seed,
+            height_unit: match finite(self.height_unit, port!(WindFieldNode, height_unit))? {
+                h if h > 0.0 => h,
+                h => return Err(NodeError::port(port!(WindFieldNode, height_unit), format!("must be positive, got {h}"))),
+            },
+        })
+    }
+}
+
+impl Cook for WindFieldNode {
+    fn cook(self, _: &CookCtx) -> Result<WindFieldNodeOut, NodeError> {
+        Ok(WindFieldNodeOut { wind: Arc::new(self.field()?) })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pyrograph_core::params::Declared;
+    use pyrograph_core::{Inputs, Value};
 
     #[test]
     fn still_air_is_pure_convection() {
@@ -356,17 +381,17 @@ mod tests {
         let w = WindField { large: LargeWind::Constant([f32::NAN, 0.0, 0.0]), ..WindField::default() };
         let e = validate_wind(&w, "wind").unwrap_err();
         assert!(matches!(&e, NodeError::Port { port, .. } if port == "wind"), "{e}");
-        let desc = wind_field_desc();
+        let desc = WindFieldNode::desc();
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap()).collect();
         values[desc.input_index("large_scale").unwrap()] = Value::Enum("constant".into());
         values[desc.input_index("wind").unwrap()] = Value::Vec3([f64::NAN, 0.0, 0.0]);
-        let e = wind_from_inputs(&Inputs::new(&desc, &values)).unwrap_err();
+        let e = WindFieldNode::read(&Inputs::new(&desc, &values)).and_then(|n| n.field()).unwrap_err();
         assert!(matches!(&e, NodeError::Port { port, .. } if port == "wind"), "{e}");
     }
 
     #[test]
     fn table_3_1_ranges_are_the_port_ranges() {
-        let desc = wind_field_desc();
+        let desc = WindFieldNode::desc();
         let range = |n: &str| desc.inputs[desc.input_index(n).unwrap()].range;
         assert_eq!(range("k_p"), Some((0.1, 10.0)));
         assert_eq!(range("noise_c"), Some((0.0, 0.04)));

@@ -1,0 +1,202 @@
+//! The `particles.fire_spread` node: its ports (the [`SpreadParams`] group is the spread's
+//! parameters) and the `ignite` text.
+
+// The port `K` is Perry's global time scale K; the field carries its name.
+#![allow(non_snake_case)]
+
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
+
+use glam::Vec3;
+use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::params::Cook;
+use pyrograph_core::{Clip, ClipOf, CookCtx, Mesh, NodeError, PortType, SpreadState, Value, WindField, port};
+
+use super::cache::SpreadSource;
+use super::front::{Ignition, Spread, validate};
+use super::surface::Surface;
+use crate::wind::validate_wind;
+
+pyrograph_core::ports! {
+    /// Parameters of the spread (Perry 1994 §3.3–3.4, Table 3.1): the ports of
+    /// `particles.fire_spread` after its inputs, frames, fps and substeps.
+    #[derive(PartialEq)]
+    pub struct SpreadParams {
+        /// Opposed-flow heat flux q_o (footnote 10: 0.09).
+        #[range(0.0, 10.0)]
+        q_o: f32 = 0.09,
+        /// Concurrent-flow heat flux q_c (footnote 10: 0.13).
+        #[range(0.0, 10.0)]
+        q_c: f32 = 0.13,
+        /// Global time scale K of eq. 3.4 (Table 3.1).
+        #[range(0.004, 0.4)]
+        K: f32 = 0.4,
+        /// Curvature distance d_t (Table 3.1).
+        #[range(0.01, 0.5)]
+        d_t: f32 = 0.05,
+        /// Use the curvature ramp of eq. 3.4 (off: flat speed everywhere).
+        curvature: bool = true,
+        /// Control point separation d_s (Table 3.1).
+        #[range(0.01, 0.2)]
+        d_s: f32 = 0.05,
+        /// Flame drop distance d_d (Table 3.1).
+        #[range(0.01, 1.0)]
+        d_d: f32 = 0.05,
+        /// Flame lifetime l_f in frames (Table 3.1).
+        #[range(1, 1000)]
+        lifetime: u32 = 48,
+        /// Random per-flame lifetime variation.
+        #[range(0.0, 1.0)]
+        lifetime_jitter: f32 = 0.3,
+        /// Control points of each ignition ring (footnote 13: eight or more).
+        #[range(8, 4096)]
+        points: usize = 16,
+        /// No points are inserted beyond this many.
+        #[range(8, 10_000_000)]
+        max_points: usize = 200_000,
+        /// Prevent double burning by the segment test of Figure 3-9 (off for planar cases).
+        double_burn: bool = true,
+        /// Seed of the per-flame lifetime variation.
+        #[range(0, u32::MAX)]
+        seed: u32 = 0,
+    }
+}
+
+impl Default for SpreadParams {
+    fn default() -> Self {
+        pyrograph_render::ports::defaults()
+    }
+}
+
+pyrograph_core::node! {
+    /// Perry's fire spread over a polygon mesh (Perry 1994 §3.3–3.4): each ignition starts a
+    /// counter-clockwise ring of control points moving at v_s = (1 + κ)(A_o q_o + A_c q_c)/K (eq. 3.4;
+    /// A_o = 1, A_c = max(0, heading · wind projected on the face), κ the curvature ramp (1 − d/d_t)Θ/π near
+    /// edges, positive on convex edges) in the wind u∞ = −k_g g + w_L. Crossing an edge rotates the heading
+    /// into the next face by the mesh's stored rotation (§3.3.2); a boundary edge stops the point. A new
+    /// point is inserted where neighbours are more than d_s apart; with double_burn on, a point whose move
+    /// crosses the boundary (Figure 3-9) goes out. Every point drops a flame root each d_d travelled, with
+    /// the face normal as direction and lifetime l_f (§3.4); dead roots leave char marks (§3.4.1). Ranges
+    /// of K, d_d, d_s, d_t and l_f are Table 3.1. Deterministic for a seed; the clip steps a cache.
+    #[node("particles.fire_spread", "Particles", Simulation)]
+    pub struct FireSpread {
+        /// The mesh to burn (particles.mesh_load).
+        mesh: Arc<Mesh>,
+        /// External wind: convection −k_g g plus w_L (particles.wind_field).
+        wind: Arc<WindField> = Arc::new(WindField::default()),
+        /// Ignition points separated by ';': 'x y z' (nearest surface point) or 'face F [b0 b1 b2]', optional '@ seconds'.
+        ignite: String = "face 0".to_string(),
+        /// Largest distance from an ignition position to the surface.
+        #[range(0.0, 1e6)]
+        snap: f32 = 0.05,
+        /// Number of frames.
+        #[range(1, 100_000)]
+        frames: usize = 96,
+        /// Frames per second (speeds are per second).
+        #[range(1.0, 240.0)]
+        fps: f64 = 24.0,
+        /// Spread steps per frame.
+        #[range(1, 64)]
+        substeps: usize = 1,
+        /// The spread.
+        params: SpreadParams,
+    }
+    pub struct FireSpreadOut {
+        /// Per frame: boundary, live flame roots, extinguished points, char.
+        spread: ClipOf<Arc<SpreadState>>,
+    }
+}
+
+impl Cook for FireSpread {
+    fn cook(self, _: &CookCtx) -> Result<FireSpreadOut, NodeError> {
+        let surface = Arc::new(Surface::new(&self.mesh).map_err(|m| NodeError::port(port!(FireSpread, mesh), m))?);
+        validate_wind(&self.wind, port!(FireSpread, wind))?;
+        validate(&self.params, self.fps as f32)?;
+        let ignitions = parse_ignitions(&self.ignite, &surface, self.snap)?;
+        let (frames, fps, substeps) = (self.frames, self.fps, self.substeps);
+        let mut h = Fingerprinter::new();
+        "particles.fire_spread".hash(&mut h);
+        Value::Mesh(self.mesh.clone()).hash_into(&mut h);
+        Value::WindField(self.wind.clone()).hash_into(&mut h);
+        format!("{:?}{ignitions:?}", self.params).hash(&mut h);
+        (frames, fps.to_bits(), substeps).hash(&mut h);
+        let spread = Spread::new(surface, ignitions, self.params, fps as f32)?;
+        let source = SpreadSource::new(spread, (*self.wind).clone(), frames, fps as f32, substeps);
+        Ok(FireSpreadOut { spread: ClipOf::new(Clip::new(PortType::SpreadState, fps, h.finish(), Arc::new(source))) })
+    }
+}
+
+/// Parses the `ignite` text: entries separated by `;`, each `x y z` (the nearest surface point)
+/// or `face F b0 b1 b2` (a face and barycentric point), optionally followed by `@ T` (seconds).
+/// A position farther than `snap` from the surface is an error.
+pub fn parse_ignitions(text: &str, surface: &Surface, snap: f32) -> Result<Vec<Ignition>, NodeError> {
+    let err = |m: String| NodeError::port(port!(FireSpread, ignite), m);
+    let mut out = Vec::new();
+    for (k, entry) in text.split(';').map(str::trim).filter(|s| !s.is_empty()).enumerate() {
+        let (body, time) = match entry.split_once('@') {
+            Some((b, t)) => {
+                let t: f32 = t
+                    .trim()
+                    .parse()
+                    .map_err(|_| err(format!("ignition {} ('{entry}'): time '{}' is not a number", k + 1, t.trim())))?;
+                if !t.is_finite() || t < 0.0 {
+                    return Err(err(format!("ignition {} ('{entry}'): time must be ≥ 0", k + 1)));
+                }
+                (b.trim(), t)
+            }
+            None => (entry, 0.0),
+        };
+        let words: Vec<&str> = body.split([' ', ',', '\t']).filter(|w| !w.is_empty()).collect();
+        let nums = |ws: &[&str]| -> Result<Vec<f32>, NodeError> {
+            ws.iter()
+                .map(|w| {
+                    w.parse::<f32>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| err(format!("ignition {} ('{entry}'): '{w}' is not a finite number", k + 1)))
+                })
+                .collect()
+        };
+        if words.first() == Some(&"face") {
+            let face: u32 = words
+                .get(1)
+                .and_then(|w| w.parse().ok())
+                .ok_or_else(|| err(format!("ignition {} ('{entry}'): 'face' needs a face index", k + 1)))?;
+            let b = nums(&words[2..])?;
+            let bary = match b.len() {
+                0 => [1.0 / 3.0; 3],
+                2 => [1.0 - b[0] - b[1], b[0], b[1]],
+                3 => [b[0], b[1], b[2]],
+                m => {
+                    return Err(err(format!("ignition {} ('{entry}'): needs 0, 2 or 3 barycentric coordinates, got {m}", k + 1)));
+                }
+            };
+            if face as usize >= surface.len() {
+                return Err(err(format!("ignition {}: face {face} is past the mesh's {} faces", k + 1, surface.len())));
+            }
+            out.push(Ignition { face, bary, time });
+        } else {
+            let p = nums(&words)?;
+            if p.len() != 3 {
+                return Err(err(format!("ignition {} ('{entry}'): needs 'x y z' or 'face F [b0 b1 b2]'", k + 1)));
+            }
+            let p = Vec3::new(p[0], p[1], p[2]);
+            let (face, bary, dist) = surface.nearest(p);
+            if dist > snap {
+                return Err(err(format!(
+                    "ignition {} at ({}, {}, {}) is off the mesh: the nearest surface point (face {face}) is {dist:.4} away, \
+                     more than snap = {snap}; move it onto the surface or raise snap",
+                    k + 1,
+                    p.x,
+                    p.y,
+                    p.z
+                )));
+            }
+            out.push(Ignition { face, bary, time });
+        }
+    }
+    if out.is_empty() {
+        return Err(err("no ignition point: give 'x y z' or 'face F b0 b1 b2' (several separated by ';')".into()));
+    }
+    Ok(out)
+}

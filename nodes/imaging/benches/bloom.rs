@@ -30,7 +30,7 @@ fn flame_frame(w: u32, h: u32) -> Image {
 fn bench_bloom(c: &mut Criterion) {
     let (w, h) = (1280, 720);
     let frame = flame_frame(w, h);
-    let params = BloomParams { passes: 4, sigma: 32.0, shrink: 0.5, strength: 0.4, tint: None };
+    let params = BloomParams { passes: 4, sigma: 32.0, shrink: 0.5, strength: 0.4, ..BloomParams::default() };
     let mut g = c.benchmark_group("bloom");
     g.throughput(Throughput::Elements(u64::from(w * h)));
     g.bench_function("rgb_1280x720_4pass_32_16_8_4", |b| b.iter(|| bloom(black_box(&frame), black_box(&params))));

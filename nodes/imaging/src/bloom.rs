@@ -7,16 +7,14 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{
-    Channels, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, Registry};
 use rayon::prelude::*;
 
-use crate::color::{CATEGORY, hls_transfer};
+use crate::color::{declared_defaults, hls_transfer};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(bloom_desc(), cook_bloom));
+    registry.add(BloomNode::node());
 }
 
 /// Smallest sigma (in level pixels) blurred on a pyramid level; below it the next finer level is used.
@@ -178,24 +176,32 @@ pub fn fast_gaussian(p: &Plane, sigma: f32) -> Plane {
     gaussian_sum(p, &[sigma], 1.0)
 }
 
-/// Bloom settings (§6.2).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BloomParams {
-    /// Number of bloom passes.
-    pub passes: usize,
-    /// Sigma of the first (largest) blur, in pixels.
-    pub sigma: f32,
-    /// Factor applied to sigma after each pass (0.5: 32, 16, 8, 4).
-    pub shrink: f32,
-    /// Weight of every blurred pass (the thesis's 0.4).
-    pub strength: f32,
-    /// Colour whose hue and saturation tint the result (HLS transfer, §6.1.2); `None` keeps the colours.
-    pub tint: Option<[f32; 3]>,
+pyrograph_core::ports! {
+    /// Bloom settings (§6.2): the ports of `imaging.bloom` after its image.
+    #[derive(PartialEq)]
+    pub struct BloomParams {
+        /// Number of bloom passes
+        #[range(1, 16)]
+        passes: usize = 4,
+        /// Sigma of the first (largest) blur, in pixels
+        #[range(0.1, 512.0)]
+        sigma: f32 = 32.0,
+        /// Sigma factor from one pass to the next
+        #[range(0.05, 1.0)]
+        shrink: f32 = 0.5,
+        /// Weight of each blurred pass (the thesis's 0.4)
+        #[range(0.0, 4.0)]
+        strength: f32 = 0.4,
+        /// Colour the bloom by HLS transfer with tint_color
+        tint: bool = false,
+        /// Tint colour (hue and saturation are used)
+        tint_color: [f32; 4] = [1.0, 0.45, 0.1, 1.0],
+    }
 }
 
 impl Default for BloomParams {
     fn default() -> Self {
-        BloomParams { passes: 4, sigma: 32.0, shrink: 0.5, strength: 0.4, tint: None }
+        declared_defaults()
     }
 }
 
@@ -247,7 +253,8 @@ pub fn bloom(source: &Image, params: &BloomParams) -> Result<Bloom, NodeError> {
     let src_data: Vec<Vec<f32>> = src_planes.into_iter().map(|p| p.data).collect();
     let matte: Vec<f32> = (0..n).into_par_iter().map(|i| (luma(&lit, i) + luma(&src_data, i)).min(1.0)).collect();
     let alpha = |i: usize| if source.channels() == Channels::Rgba { source.data()[4 * i + 3] } else { 1.0 };
-    let image = match (params.tint, lit.len()) {
+    let c = params.tint_color;
+    let image = match (params.tint.then_some([c[0], c[1], c[2]]), lit.len()) {
         (None, 1) => Image::from_vec(w, h, Channels::Gray, lit[0].clone()),
         (None, _) => {
             let mut data = vec![0.0f32; 4 * n];
@@ -273,40 +280,34 @@ pub fn bloom(source: &Image, params: &BloomParams) -> Result<Bloom, NodeError> {
     Ok(Bloom { image, matte })
 }
 
-fn bloom_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.bloom",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Glow around bright regions (Eigenfires thesis §6.2): strength × the sum of Gaussian blurs over the passes, lighten-blended with the source.\n\
-         Pass k blurs with sigma × shrink^k (defaults 32, 16, 8, 4); the sum is scaled by strength (0.4) and \
-         each pixel keeps the lighter of it and the source, so the flame's interior stays unchanged and nothing \
-         gets darker. With tint on, the result is coloured by HLS transfer (§6.1.2). The matte output is the \
-         thesis's alpha matte: bloom + source intensity, saturated at 1. Blurs run on an image pyramid, so large \
-         radii cost about as much as small ones.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "Source (gray flame or RGBA)"))
-    .input(PortDesc::int("passes", 4, (1, 16), "Number of bloom passes"))
-    .input(PortDesc::float("sigma", 32.0, (0.1, 512.0), "Sigma of the first (largest) blur, in pixels"))
-    .input(PortDesc::float("shrink", 0.5, (0.05, 1.0), "Sigma factor from one pass to the next"))
-    .input(PortDesc::float("strength", 0.4, (0.0, 4.0), "Weight of each blurred pass (the thesis's 0.4)"))
-    .input(PortDesc::bool("tint", false, "Colour the bloom by HLS transfer with tint_color"))
-    .input(PortDesc::color("tint_color", [1.0, 0.45, 0.1, 1.0], "Tint colour (hue and saturation are used)"))
-    .output("image", PortType::Image, "Bloomed image")
-    .output("matte", PortType::Image, "Alpha matte: bloom + source, saturated (gray)")
+pyrograph_core::node! {
+    /// Glow around bright regions (Eigenfires thesis §6.2): strength × the sum of Gaussian blurs over the passes, lighten-blended with the source.
+    ///
+    /// Pass k blurs with sigma × shrink^k (defaults 32, 16, 8, 4); the sum is scaled by strength (0.4) and
+    /// each pixel keeps the lighter of it and the source, so the flame's interior stays unchanged and nothing
+    /// gets darker. With tint on, the result is coloured by HLS transfer (§6.1.2). The matte output is the
+    /// thesis's alpha matte: bloom + source intensity, saturated at 1. Blurs run on an image pyramid, so large
+    /// radii cost about as much as small ones.
+    #[node("imaging.bloom", "Color & Post", PerFrame)]
+    pub struct BloomNode {
+        /// Source (gray flame or RGBA)
+        image: Arc<Image>,
+        /// The bloom settings.
+        params: BloomParams,
+    }
+    pub struct BloomNodeOut {
+        /// Bloomed image
+        image: Arc<Image>,
+        /// Alpha matte: bloom + source, saturated (gray)
+        matte: Arc<Image>,
+    }
 }
 
-fn cook_bloom(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let tint = i.color("tint_color")?;
-    let params = BloomParams {
-        passes: i.usize("passes")?,
-        sigma: i.float("sigma")? as f32,
-        shrink: i.float("shrink")? as f32,
-        strength: i.float("strength")? as f32,
-        tint: i.bool("tint")?.then_some([tint[0], tint[1], tint[2]]),
-    };
-    let b = bloom(i.image("image")?, &params)?;
-    Ok(vec![Value::Image(Arc::new(b.image)), Value::Image(Arc::new(b.matte))])
+impl Cook for BloomNode {
+    fn cook(self, _: &CookCtx) -> Result<BloomNodeOut, NodeError> {
+        let b = bloom(&self.image, &self.params)?;
+        Ok(BloomNodeOut { image: Arc::new(b.image), matte: Arc::new(b.matte) })
+    }
 }
 
 #[cfg(test)]
@@ -385,7 +386,7 @@ mod tests {
     #[test]
     fn tint_and_matte() {
         let img = pattern(64, 64);
-        let params = BloomParams { tint: Some([1.0, 0.5, 0.0]), ..Default::default() };
+        let params = BloomParams { tint: true, tint_color: [1.0, 0.5, 0.0, 1.0], ..Default::default() };
         let b = bloom(&img, &params).unwrap();
         assert_eq!(b.image.channels(), Channels::Rgba);
         assert!(b.matte.data().iter().all(|&v| (0.0..=1.0).contains(&v)));

@@ -8,45 +8,49 @@ use std::sync::Arc;
 
 use image::imageops::FilterType;
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{
-    Channels, CookCtx, FnNode, Image, Inputs, NodeDesc, NodeError, PathRole, PortDesc, PortType, Registry, TimeDep, Value,
-};
+use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, Registry, port};
 use rayon::prelude::*;
 
 use crate::basic::resize;
 use crate::bloom::{Plane, convolve_separable, gaussian_kernel};
-use crate::color::{AlphaMode, CATEGORY};
+use crate::color::{AlphaMode, declared_defaults};
 use crate::io::{OutputFormat, output_format, write_image};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(flipbook_desc(), cook_flipbook));
-    registry.add(FnNode::new(write_flipbook_desc(), cook_write_flipbook));
+    registry.add(FlipbookNode::node());
+    registry.add(WriteFlipbook::node());
 }
 
 /// Largest number of rows or columns.
 pub const MAX_CELLS_PER_SIDE: i64 = 64;
 
-/// How a flipbook is laid out.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FlipbookOptions {
-    /// Rows of cells.
-    pub rows: usize,
-    /// Columns of cells.
-    pub cols: usize,
-    /// Transparent pixels around each frame inside its cell.
-    pub padding: u32,
-    /// Scale the cells so both sheet sides are powers of two (the nearest, ties up).
-    pub power_of_two: bool,
-    /// Alpha convention of the colour sheet.
-    pub alpha: AlphaMode,
-    /// Motion (pixels of the source frame) that maps to 0 or 1 in the motion sheet; 0 = automatic ([`auto_range`]).
-    pub motion_range: f32,
+pyrograph_core::ports! {
+    /// How a flipbook is laid out: the ports of both flipbook nodes after their clip.
+    #[derive(Copy, PartialEq)]
+    pub struct FlipbookOptions {
+        /// Rows of cells
+        #[range(1, MAX_CELLS_PER_SIDE)]
+        rows: usize = 8,
+        /// Columns of cells
+        #[range(1, MAX_CELLS_PER_SIDE)]
+        cols: usize = 8,
+        /// Transparent pixels around each frame inside its cell
+        #[range(0, 256)]
+        padding: u32 = 0,
+        /// Scale cells so both sheet sides are the nearest power of two
+        power_of_two: bool = false,
+        /// Alpha convention of the colour sheet
+        alpha: AlphaMode = AlphaMode::Straight,
+        /// Motion in frame pixels mapped to 0/1 in the motion sheet; 0 = automatic (99th percentile)
+        #[range(0.0, 1024.0)]
+        motion_range: f32 = 0.0,
+    }
 }
 
 impl Default for FlipbookOptions {
     fn default() -> Self {
-        FlipbookOptions { rows: 8, cols: 8, padding: 0, power_of_two: false, alpha: AlphaMode::Straight, motion_range: 0.0 }
+        declared_defaults()
     }
 }
 
@@ -68,20 +72,21 @@ pub struct Flipbook {
 /// Checks that `rows × cols` cells hold exactly `frames` frames.
 pub fn check_cells(frames: usize, rows: usize, cols: usize) -> Result<(), NodeError> {
     if rows == 0 || cols == 0 {
-        return Err(NodeError::port(if rows == 0 { "rows" } else { "cols" }, "a flipbook needs at least one row and one column"));
+        let port = if rows == 0 { port!(FlipbookOptions, rows) } else { port!(FlipbookOptions, cols) };
+        return Err(NodeError::port(port, "a flipbook needs at least one row and one column"));
     }
     let cells = rows * cols;
     match cells.cmp(&frames) {
         std::cmp::Ordering::Equal => Ok(()),
         std::cmp::Ordering::Greater => Err(NodeError::port(
-            "rows",
+            port!(FlipbookOptions, rows),
             format!(
                 "{rows}x{cols} = {cells} cells but the clip has only {frames} frames; lower rows/cols or give a longer clip \
                  (every cell must hold a frame)"
             ),
         )),
         std::cmp::Ordering::Less => Err(NodeError::port(
-            "rows",
+            port!(FlipbookOptions, rows),
             format!(
                 "{rows}x{cols} = {cells} cells cannot hold the clip's {frames} frames; raise rows/cols or trim the clip \
                  with imaging.time_range"
@@ -131,12 +136,12 @@ pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<F
     let (w, h) = frames[0].size();
     if let Some((i, f)) = frames.iter().enumerate().find(|(_, f)| f.size() != (w, h)) {
         return Err(NodeError::port(
-            "clip",
+            port!(FlipbookInputs, clip),
             format!("frame {i} is {}x{} but frame 0 is {w}x{h}; flipbook frames must share one size", f.width(), f.height()),
         ));
     }
     if !opts.motion_range.is_finite() || opts.motion_range < 0.0 {
-        return Err(NodeError::port("motion_range", "must be a non-negative number (0 = automatic)"));
+        return Err(NodeError::port(port!(FlipbookOptions, motion_range), "must be a non-negative number (0 = automatic)"));
     }
     let p = opts.padding;
     let mut cell = (w + 2 * p, h + 2 * p);
@@ -145,7 +150,10 @@ pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<F
         let target = (nearest_power_of_two(sheet_size.0), nearest_power_of_two(sheet_size.1));
         cell = (target.0 / opts.cols as u32, target.1 / opts.rows as u32);
         if cell.0 <= 2 * p || cell.1 <= 2 * p {
-            return Err(NodeError::port("power_of_two", "the power-of-two sheet leaves no room for the frames; lower padding"));
+            return Err(NodeError::port(
+                port!(FlipbookOptions, power_of_two),
+                "the power-of-two sheet leaves no room for the frames; lower padding",
+            ));
         }
         sheet_size = target;
     }
@@ -338,76 +346,76 @@ pub fn optical_flow(a: &Image, b: &Image) -> (Plane, Plane) {
 // Nodes
 // ---------------------------------------------------------------------------------------------
 
-fn layout_ports(d: NodeDesc) -> NodeDesc {
-    d.input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "Frames; exactly rows × cols of them"))
-        .input(PortDesc::int("rows", 8, (1, MAX_CELLS_PER_SIDE), "Rows of cells"))
-        .input(PortDesc::int("cols", 8, (1, MAX_CELLS_PER_SIDE), "Columns of cells"))
-        .input(PortDesc::int("padding", 0, (0, 256), "Transparent pixels around each frame inside its cell"))
-        .input(PortDesc::bool("power_of_two", false, "Scale cells so both sheet sides are the nearest power of two"))
-        .input(PortDesc::choice("alpha", &["straight", "premultiplied"], "straight", "Alpha convention of the colour sheet"))
-        .input(PortDesc::float(
-            "motion_range",
-            0.0,
-            (0.0, 1024.0),
-            "Motion in frame pixels mapped to 0/1 in the motion sheet; 0 = automatic (99th percentile)",
-        ))
+pyrograph_core::ports! {
+    /// The clip and layout of both flipbook nodes.
+    pub struct FlipbookInputs {
+        /// Frames; exactly rows × cols of them
+        clip: ClipOf<Arc<Image>>,
+        /// The layout.
+        layout: FlipbookOptions,
+    }
 }
 
-fn options(i: &Inputs<'_>) -> Result<FlipbookOptions, NodeError> {
-    Ok(FlipbookOptions {
-        rows: i.usize("rows")?,
-        cols: i.usize("cols")?,
-        padding: u32::try_from(i.usize("padding")?).map_err(|_| NodeError::port("padding", "too large"))?,
-        power_of_two: i.bool("power_of_two")?,
-        alpha: AlphaMode::parse(i.choice("alpha")?, "alpha")?,
-        motion_range: i.float("motion_range")? as f32,
-    })
+impl FlipbookInputs {
+    /// Checks the cell count, then pulls every frame of the clip (in parallel).
+    fn frames(&self, ctx: &CookCtx) -> Result<Vec<Arc<Image>>, NodeError> {
+        check_cells(self.clip.len(), self.layout.rows, self.layout.cols)?;
+        (0..self.clip.len()).into_par_iter().map(|k| self.clip.image(k, ctx)).collect()
+    }
 }
 
-fn frames_of(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Arc<Image>>, NodeError> {
-    let clip = i.clip("clip")?;
-    (0..clip.len()).into_par_iter().map(|k| clip.image(k, ctx)).collect()
+pyrograph_core::node! {
+    /// Lays a clip out as a flipbook sheet with a matching motion-vector sheet (post-processing output of the Eigenfires thesis ch. 6 for game engines).
+    ///
+    /// Cells run left to right, then top to bottom, from the top-left corner; rows × cols must equal the number
+    /// of frames. The motion sheet holds a Lucas–Kanade optical flow from each frame to the next: R = 0.5 +
+    /// dx / (2·range), G = 0.5 + dy / (2·range) (x right, y down, frame pixels; 0.5 = no motion). Write both with
+    /// imaging.write_flipbook.
+    #[node("imaging.flipbook", "Color & Post", WholeClip)]
+    pub struct FlipbookNode {
+        /// The clip and layout.
+        inputs: FlipbookInputs,
+    }
+    pub struct FlipbookNodeOut {
+        /// Colour sheet (RGBA)
+        sheet: Arc<Image>,
+        /// Motion-vector sheet (RGBA)
+        motion: Arc<Image>,
+        /// Motion range used, in frame pixels
+        motion_range: f64,
+    }
 }
 
-fn flipbook_desc() -> NodeDesc {
-    layout_ports(NodeDesc::new(
-        "imaging.flipbook",
-        CATEGORY,
-        TimeDep::WholeClip,
-        "Lays a clip out as a flipbook sheet with a matching motion-vector sheet (post-processing output of the Eigenfires thesis ch. 6 for game engines).\n\
-         Cells run left to right, then top to bottom, from the top-left corner; rows × cols must equal the number \
-         of frames. The motion sheet holds a Lucas–Kanade optical flow from each frame to the next: R = 0.5 + \
-         dx / (2·range), G = 0.5 + dy / (2·range) (x right, y down, frame pixels; 0.5 = no motion). Write both with \
-         imaging.write_flipbook.",
-    ))
-    .output("sheet", PortType::Image, "Colour sheet (RGBA)")
-    .output("motion", PortType::Image, "Motion-vector sheet (RGBA)")
-    .output("motion_range", PortType::Float, "Motion range used, in frame pixels")
+impl Cook for FlipbookNode {
+    fn cook(self, ctx: &CookCtx) -> Result<FlipbookNodeOut, NodeError> {
+        let fb = build_flipbook(&self.inputs.frames(ctx)?, &self.inputs.layout)?;
+        Ok(FlipbookNodeOut { sheet: Arc::new(fb.sheet), motion: Arc::new(fb.motion), motion_range: f64::from(fb.motion_range) })
+    }
 }
 
-fn cook_flipbook(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let opts = options(i)?;
-    let clip = i.clip("clip")?;
-    check_cells(clip.len(), opts.rows, opts.cols)?;
-    let fb = build_flipbook(&frames_of(i, ctx)?, &opts)?;
-    Ok(vec![Value::Image(Arc::new(fb.sheet)), Value::Image(Arc::new(fb.motion)), Value::Float(f64::from(fb.motion_range))])
-}
-
-fn write_flipbook_desc() -> NodeDesc {
-    layout_ports(NodeDesc::new(
-        "imaging.write_flipbook",
-        CATEGORY,
-        TimeDep::Sink,
-        "Writes a flipbook sheet, its motion-vector sheet and a JSON side-car (layout of imaging.flipbook).\n\
-         `fire.png` with 8 rows and 8 columns writes fire_8x8.png, fire_8x8_mv.png and fire_8x8.json (rows, cols, \
-         frames, fps, cell and frame size, alpha mode, motion range and encoding). The extension picks PNG (8-bit) \
-         or EXR (half).",
-    ))
-    .input(PortDesc::path("path", PathRole::Output, Some("flipbook.png"), "Base file; _RxC is added to its name"))
-    .input(PortDesc::bool("motion", true, "Also write the motion-vector sheet"))
-    .input(PortDesc::bool("overwrite", false, "Replace files that already exist"))
-    .output("path", PortType::Path, "The colour sheet written")
-    .output("frames", PortType::Int, "Frames in the sheet")
+pyrograph_core::node! {
+    /// Writes a flipbook sheet, its motion-vector sheet and a JSON side-car (layout of imaging.flipbook).
+    ///
+    /// `fire.png` with 8 rows and 8 columns writes fire_8x8.png, fire_8x8_mv.png and fire_8x8.json (rows, cols,
+    /// frames, fps, cell and frame size, alpha mode, motion range and encoding). The extension picks PNG (8-bit)
+    /// or EXR (half).
+    #[node("imaging.write_flipbook", "Color & Post", Sink)]
+    pub struct WriteFlipbook {
+        /// The clip and layout.
+        inputs: FlipbookInputs,
+        /// Base file; _RxC is added to its name
+        path: OutputPath = "flipbook.png".into(),
+        /// Also write the motion-vector sheet
+        motion: bool = true,
+        /// Replace files that already exist
+        overwrite: bool = false,
+    }
+    pub struct WriteFlipbookOut {
+        /// The colour sheet written
+        path: OutputPath,
+        /// Frames in the sheet
+        frames: usize,
+    }
 }
 
 /// The JSON side-car describing a written flipbook.
@@ -437,41 +445,47 @@ pub fn sidecar_json(fb: &Flipbook, opts: &FlipbookOptions, frames: usize, fps: f
     )
 }
 
-fn cook_write_flipbook(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let opts = options(i)?;
-    let clip = i.clip("clip")?;
-    check_cells(clip.len(), opts.rows, opts.cols)?;
-    let base = i.path("path")?;
-    let ext = base.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    let format: OutputFormat = output_format(base, crate::io::BitDepth::Eight, crate::io::ExrType::Half)
-        .map_err(|e| if let NodeError::Port { message, .. } = e { NodeError::port("path", message) } else { e })?;
-    let overwrite = i.bool("overwrite")? || ctx.settings().overwrite;
-    let fb = build_flipbook(&frames_of(i, ctx)?, &opts)?;
-    let sheet_file = sheet_path(base, opts.rows, opts.cols, "", &ext);
-    let motion_path = i.bool("motion")?.then(|| sheet_path(base, opts.rows, opts.cols, "_mv", &ext));
-    let json_path = sheet_path(base, opts.rows, opts.cols, "", "json");
-    for p in [Some(&sheet_file), motion_path.as_ref(), Some(&json_path)].into_iter().flatten() {
-        if !overwrite && p.exists() {
-            return Err(NodeError::port(
-                "overwrite",
-                format!("{} already exists; nothing was written. Set overwrite to true or render with --overwrite", p.display()),
-            ));
+impl Cook for WriteFlipbook {
+    fn cook(self, ctx: &CookCtx) -> Result<WriteFlipbookOut, NodeError> {
+        let (opts, clip, base) = (&self.inputs.layout, &self.inputs.clip, &*self.path);
+        check_cells(clip.len(), opts.rows, opts.cols)?;
+        let ext = base.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        let path_port = port!(WriteFlipbook, path);
+        let format: OutputFormat = output_format(base, crate::io::BitDepth::Eight, crate::io::ExrType::Half)
+            .map_err(|e| if let NodeError::Port { message, .. } = e { NodeError::port(path_port, message) } else { e })?;
+        let overwrite = self.overwrite || ctx.settings().overwrite;
+        let fb = build_flipbook(&self.inputs.frames(ctx)?, opts)?;
+        let sheet_file = sheet_path(base, opts.rows, opts.cols, "", &ext);
+        let motion_path = self.motion.then(|| sheet_path(base, opts.rows, opts.cols, "_mv", &ext));
+        let json_path = sheet_path(base, opts.rows, opts.cols, "", "json");
+        for p in [Some(&sheet_file), motion_path.as_ref(), Some(&json_path)].into_iter().flatten() {
+            if !overwrite && p.exists() {
+                return Err(NodeError::port(
+                    port!(WriteFlipbook, overwrite),
+                    format!(
+                        "{} already exists; nothing was written. Set overwrite to true or render with --overwrite",
+                        p.display()
+                    ),
+                ));
+            }
         }
+        write_image(&fb.sheet, &sheet_file, format, overwrite)?;
+        if let Some(mp) = &motion_path {
+            write_image(&fb.motion, mp, format, overwrite)?;
+        }
+        let name = |p: &Path| p.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_string();
+        let json =
+            sidecar_json(&fb, opts, clip.len(), clip.fps(), &name(&sheet_file), motion_path.as_deref().map(name).as_deref());
+        write_atomic(&json_path, json.as_bytes(), overwrite)
+            .map_err(|e| NodeError::port(path_port, format!("writing {}: {e}", json_path.display())))?;
+        Ok(WriteFlipbookOut { path: OutputPath(sheet_file), frames: clip.len() })
     }
-    write_image(&fb.sheet, &sheet_file, format, overwrite)?;
-    if let Some(mp) = &motion_path {
-        write_image(&fb.motion, mp, format, overwrite)?;
-    }
-    let name = |p: &Path| p.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_string();
-    let json = sidecar_json(&fb, &opts, clip.len(), clip.fps(), &name(&sheet_file), motion_path.as_deref().map(name).as_deref());
-    write_atomic(&json_path, json.as_bytes(), overwrite)
-        .map_err(|e| NodeError::port("path", format!("writing {}: {e}", json_path.display())))?;
-    Ok(vec![Value::Path(sheet_file), Value::Int(clip.len() as i64)])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pyrograph_core::{Inputs, PortType, Value};
 
     fn numbered(n: usize, w: u32, h: u32) -> Vec<Arc<Image>> {
         (0..n)

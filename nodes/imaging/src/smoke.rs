@@ -6,36 +6,47 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{
-    Channels, Clip, CookCtx, FnNode, FrameSource, Image, Inputs, NodeDesc, NodeError, PortDesc, PortType, Registry, TimeDep,
-    Value,
-};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
 
 use crate::basic::{GrayMode, to_gray};
-use crate::color::{CATEGORY, check_size, check_threshold};
+use crate::color::{check_size, check_threshold, declared_defaults};
 use crate::preprocess::morphology::gaussian_blur;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(FnNode::new(smoke_desc(), cook_smoke));
+    registry.add(Smoke::node());
 }
 
-/// Smoke settings (§6.3).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SmokeParams {
-    /// Use |current − next| instead of the saturated signed difference current − next.
-    pub absolute: bool,
-    /// Differences below this (0–255 scale) are removed.
-    pub threshold: f64,
-    /// Sigma of the small Gaussian blur, in pixels (0: none).
-    pub blur: f32,
-    /// Multiply colour (e.g. dark gray).
-    pub color: [f32; 3],
+pyrograph_core::choice! {
+    /// Which difference of consecutive frames the smoke is made of.
+    pub enum Difference {
+        /// The saturated signed difference current − next (clamped at 0).
+        Signed = "signed",
+        /// |current − next|.
+        Absolute = "absolute",
+    }
+}
+
+pyrograph_core::ports! {
+    /// Smoke settings (§6.3): the ports of `imaging.smoke` after its clip.
+    #[derive(Copy, PartialEq)]
+    pub struct SmokeParams {
+        /// current − next clamped at 0, or |current − next|
+        difference: Difference = Difference::Signed,
+        /// Differences below this (0–255) are removed
+        #[range(0.0, 255.0)]
+        threshold: f64 = 8.0,
+        /// Sigma of the small Gaussian blur, in pixels
+        #[range(0.0, 20.0)]
+        blur: f32 = 1.5,
+        /// Multiply colour (dark gray)
+        color: [f32; 4] = [0.45, 0.45, 0.45, 1.0],
+    }
 }
 
 impl Default for SmokeParams {
     fn default() -> Self {
-        SmokeParams { absolute: false, threshold: 8.0, blur: 1.5, color: [0.45, 0.45, 0.45] }
+        declared_defaults()
     }
 }
 
@@ -49,15 +60,15 @@ pub fn partner_frame(index: usize, len: usize) -> usize {
 /// gray difference (signed, clamped to 0..1, or absolute), threshold, blur, colour multiply.
 /// The result is opaque RGBA.
 pub fn smoke_frame(current: &Image, next: &Image, params: &SmokeParams) -> Result<Image, NodeError> {
-    check_size(current, next, "clip")?;
-    let t = check_threshold(params.threshold)? / 255.0;
+    check_size(current, next, port!(Smoke, clip))?;
+    let t = check_threshold(params.threshold, port!(SmokeParams, threshold))? / 255.0;
     let (a, b) = (to_gray(current, GrayMode::Rec601), to_gray(next, GrayMode::Rec601));
     let diff: Vec<f32> = a
         .data()
         .iter()
         .zip(b.data())
         .map(|(&x, &y)| {
-            let d = if params.absolute { (x - y).abs() } else { (x - y).max(0.0) };
+            let d = if params.difference == Difference::Absolute { (x - y).abs() } else { (x - y).max(0.0) };
             let d = d.min(1.0);
             if d < t { 0.0 } else { d }
         })
@@ -89,48 +100,42 @@ impl FrameSource for SmokeSource {
 
 /// The smoke clip of an original clip, lazily per frame.
 pub fn smoke_clip(clip: &Clip, params: SmokeParams) -> Result<Clip, NodeError> {
-    check_threshold(params.threshold)?;
+    check_threshold(params.threshold, port!(SmokeParams, threshold))?;
     if !params.blur.is_finite() {
-        return Err(NodeError::port("blur", "must be a finite number"));
+        return Err(NodeError::port(port!(SmokeParams, blur), "must be a finite number"));
     }
     let mut h = Fingerprinter::new();
-    ("imaging.smoke", clip.fingerprint(), params.absolute, params.threshold.to_bits(), params.blur.to_bits()).hash(&mut h);
-    params.color.iter().for_each(|c| c.to_bits().hash(&mut h));
+    let absolute = params.difference == Difference::Absolute;
+    ("imaging.smoke", clip.fingerprint(), absolute, params.threshold.to_bits(), params.blur.to_bits()).hash(&mut h);
+    // The colour's alpha is not used, so it is not hashed.
+    params.color[..3].iter().for_each(|c| c.to_bits().hash(&mut h));
     Ok(Clip::new(PortType::Image, clip.fps(), h.finish(), Arc::new(SmokeSource { clip: clip.clone(), params })))
 }
 
-fn smoke_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.smoke",
-        CATEGORY,
-        TimeDep::WholeClip,
-        "Synthetic smoke from the original video (Eigenfires thesis §6.3): the difference of consecutive frames, thresholded, blurred and colour-multiplied.\n\
-         Each frame is current − next in gray (signed and clamped at 0, or absolute), differences below the \
-         threshold (0–255) are removed, a small Gaussian blur softens the rest and the colour multiplies it. The \
-         last frame is compared with the previous one. Frames are computed lazily; feed the result to the smoke \
-         input of imaging.original_coloring_layered.",
-    )
-    .input(PortDesc::new("clip", PortType::clip_of(PortType::Image), "Original colour frames, the same pose as the coloured flame"))
-    .input(PortDesc::choice("difference", &["signed", "absolute"], "signed", "current − next clamped at 0, or |current − next|"))
-    .input(PortDesc::float("threshold", 8.0, (0.0, 255.0), "Differences below this (0–255) are removed"))
-    .input(PortDesc::float("blur", 1.5, (0.0, 20.0), "Sigma of the small Gaussian blur, in pixels"))
-    .input(PortDesc::color("color", [0.45, 0.45, 0.45, 1.0], "Multiply colour (dark gray)"))
-    .output("clip", PortType::clip_of(PortType::Image), "Smoke frames (RGBA)")
+pyrograph_core::node! {
+    /// Synthetic smoke from the original video (Eigenfires thesis §6.3): the difference of consecutive frames, thresholded, blurred and colour-multiplied.
+    ///
+    /// Each frame is current − next in gray (signed and clamped at 0, or absolute), differences below the
+    /// threshold (0–255) are removed, a small Gaussian blur softens the rest and the colour multiplies it. The
+    /// last frame is compared with the previous one. Frames are computed lazily; feed the result to the smoke
+    /// input of imaging.original_coloring_layered.
+    #[node("imaging.smoke", "Color & Post", WholeClip)]
+    pub struct Smoke {
+        /// Original colour frames, the same pose as the coloured flame
+        clip: ClipOf<Arc<Image>>,
+        /// The smoke settings.
+        params: SmokeParams,
+    }
+    pub struct SmokeOut {
+        /// Smoke frames (RGBA)
+        clip: ClipOf<Arc<Image>>,
+    }
 }
 
-fn cook_smoke(i: &Inputs<'_>, _: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let c = i.color("color")?;
-    let params = SmokeParams {
-        absolute: match i.choice("difference")? {
-            "signed" => false,
-            "absolute" => true,
-            other => return Err(NodeError::port("difference", format!("unknown difference '{other}' (signed, absolute)"))),
-        },
-        threshold: i.float("threshold")?,
-        blur: i.float("blur")? as f32,
-        color: [c[0], c[1], c[2]],
-    };
-    Ok(vec![Value::Clip(smoke_clip(i.clip("clip")?, params)?)])
+impl Cook for Smoke {
+    fn cook(self, _: &CookCtx) -> Result<SmokeOut, NodeError> {
+        Ok(SmokeOut { clip: ClipOf::new(smoke_clip(&self.clip, self.params)?) })
+    }
 }
 
 #[cfg(test)]
@@ -146,7 +151,8 @@ mod tests {
     }
 
     fn no_blur(absolute: bool) -> SmokeParams {
-        SmokeParams { absolute, threshold: 25.5, blur: 0.0, color: [0.5, 0.5, 1.0] }
+        let difference = if absolute { Difference::Absolute } else { Difference::Signed };
+        SmokeParams { difference, threshold: 25.5, blur: 0.0, color: [0.5, 0.5, 1.0, 1.0] }
     }
 
     #[test]

@@ -3,8 +3,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::params::Port;
-use pyrograph_core::{ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, PortType, Registry, Value};
+use pyrograph_core::{ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, Registry};
 
 use super::files::{load_image, output_format, write_image};
 use super::sequence::{WriteOptions, load_sequence, write_sequence};
@@ -35,31 +34,6 @@ pyrograph_core::choice! {
         Half = "half",
         /// 32-bit floats.
         Float = "float",
-    }
-}
-
-// The `alpha` port of the sequence writer. `AlphaMode` is color.rs's (the flipbook writer and the
-// colour nodes share it); this impl makes it a port until that file declares it with `choice!`,
-// which then replaces this impl.
-impl Port for AlphaMode {
-    fn port_type() -> PortType {
-        PortType::Enum
-    }
-    fn into_value(self) -> Value {
-        Value::Enum(self.name().to_string())
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        const ALL: [AlphaMode; 2] = [AlphaMode::Straight, AlphaMode::Premultiplied];
-        match v {
-            Value::Enum(text) => ALL
-                .into_iter()
-                .find(|m| m.name() == text)
-                .ok_or_else(|| format!("unknown option '{text}' ({})", ALL.map(AlphaMode::name).join(", "))),
-            other => Err(format!("needs Enum, got {}", other.type_name())),
-        }
-    }
-    fn options() -> Vec<String> {
-        [AlphaMode::Straight, AlphaMode::Premultiplied].map(|m| m.name().to_string()).to_vec()
     }
 }
 

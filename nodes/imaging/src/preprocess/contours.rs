@@ -8,13 +8,9 @@ use image::{GrayImage, Luma, Rgba};
 use imageproc::drawing::{draw_hollow_polygon_mut, draw_polygon_mut};
 use imageproc::geometry::contour_area;
 use imageproc::point::Point;
-use pyrograph_core::{
-    Contour, Contours, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
-};
+use pyrograph_core::{Contour, Contours, Cook, CookCtx, Image, Mask, NodeError};
 
 use crate::convert::{from_rgba32f, gray8_to_mask, to_rgba32f};
-
-const CATEGORY: &str = "Pre-processing";
 
 /// Shoelace area of a closed polygon (always positive), via imageproc.
 pub fn polygon_area(points: &[[f32; 2]]) -> f64 {
@@ -356,133 +352,132 @@ pub fn overlay_contours(image: &Image, contours: &Contours, outer: [f32; 4], hol
     from_rgba32f(canvas)
 }
 
-fn contours_value(c: Contours) -> Vec<Value> {
-    vec![Value::Contours(Arc::new(c))]
+pyrograph_core::node! {
+    /// Traces the borders of a mask with their hierarchy depth and area (Eigenfires thesis §3.2.1, border following).
+    ///
+    /// Depth 0 is an outermost border, 1 a hole in it, 2 an island in that hole; area is the shoelace area of
+    /// the pixel-centre polygon. An empty mask gives no contours (not an error).
+    #[node("imaging.contours", "Pre-processing", PerFrame)]
+    pub struct TraceContours {
+        /// Binary mask to trace
+        mask: Arc<Mask>,
+    }
+    pub struct TraceContoursOut {
+        /// Every border, parents before children
+        contours: Arc<Contours>,
+    }
 }
 
-/// Description of `imaging.contours`.
-pub fn contours_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.contours",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Traces the borders of a mask with their hierarchy depth and area (Eigenfires thesis §3.2.1, border following).\n\
-         Depth 0 is an outermost border, 1 a hole in it, 2 an island in that hole; area is the shoelace area of \
-         the pixel-centre polygon. An empty mask gives no contours (not an error).",
-    )
-    .input(PortDesc::new("mask", PortType::Mask, "Binary mask to trace"))
-    .output("contours", PortType::Contours, "Every border, parents before children")
+impl Cook for TraceContours {
+    fn cook(self, _: &CookCtx) -> Result<TraceContoursOut, NodeError> {
+        Ok(TraceContoursOut { contours: Arc::new(trace_contours(&self.mask)) })
+    }
 }
 
-fn contours_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(contours_value(trace_contours(inputs.mask("mask")?)))
+pyrograph_core::node! {
+    /// Depth- and area-based Hole Removal (Eigenfires thesis §3.2.2).
+    ///
+    /// Keeps contours with depth ≤ max_depth and area ≥ min_area; children of a dropped contour are dropped too.
+    /// max_depth 0 keeps only outer flame borders; max_depth 1 on a dark-background mask whose HSV ranges take
+    /// in the smoke keeps two nested contours in one step: the outer one bounds the smoke or soot and the inner
+    /// one the bright flame.
+    #[node("imaging.hole_removal", "Pre-processing", PerFrame)]
+    pub struct HoleRemoval {
+        /// Traced contours
+        contours: Arc<Contours>,
+        /// Deepest nesting level kept (0 = outer borders only)
+        #[range(0, 1000)]
+        max_depth: u32 = 0,
+        /// Smallest area kept, in square pixels
+        #[range(0.0, 1.0e9)]
+        min_area: f64 = 100.0,
+        /// Then keep only this many largest outer contours with their holes (0 = all); drops reflections and glow blobs
+        #[range(0, 1_000_000)]
+        keep_largest: usize = 0,
+    }
+    pub struct HoleRemovalOut {
+        /// Kept contours, parents re-indexed
+        contours: Arc<Contours>,
+    }
 }
 
-/// Description of `imaging.hole_removal`.
-pub fn hole_removal_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.hole_removal",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Depth- and area-based Hole Removal (Eigenfires thesis §3.2.2).\n\
-         Keeps contours with depth ≤ max_depth and area ≥ min_area; children of a dropped contour are dropped too. \
-         max_depth 0 keeps only outer flame borders; max_depth 1 on a dark-background mask whose HSV ranges take \
-         in the smoke keeps two nested contours in one step: the outer one bounds the smoke or soot and the inner \
-         one the bright flame.",
-    )
-    .input(PortDesc::new("contours", PortType::Contours, "Traced contours"))
-    .input(PortDesc::int("max_depth", 0, (0, 1000), "Deepest nesting level kept (0 = outer borders only)"))
-    .input(PortDesc::float("min_area", 100.0, (0.0, 1.0e9), "Smallest area kept, in square pixels"))
-    .input(PortDesc::int(
-        "keep_largest",
-        0,
-        (0, 1_000_000),
-        "Then keep only this many largest outer contours with their holes (0 = all); drops reflections and glow blobs",
-    ))
-    .output("contours", PortType::Contours, "Kept contours, parents re-indexed")
+impl Cook for HoleRemoval {
+    fn cook(self, _: &CookCtx) -> Result<HoleRemovalOut, NodeError> {
+        let kept = remove_holes(&self.contours, self.max_depth, self.min_area);
+        Ok(HoleRemovalOut { contours: Arc::new(keep_largest(&kept, self.keep_largest)) })
+    }
 }
 
-fn hole_removal_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let contours = inputs.contours("contours")?;
-    let max_depth = u32::try_from(inputs.int("max_depth")?).map_err(|_| NodeError::port("max_depth", "must be in 0..=1000"))?;
-    let min_area = inputs.float("min_area")?;
-    let largest = inputs.usize("keep_largest")?;
-    Ok(contours_value(keep_largest(&remove_holes(contours, max_depth, min_area), largest)))
+pyrograph_core::node! {
+    /// Contour optimization with the Douglas–Peucker algorithm on closed curves (Eigenfires thesis §3.2.3).
+    ///
+    /// Every removed point lies within `tolerance` pixels of the simplified polygon; areas are recomputed.
+    #[node("imaging.simplify_contours", "Pre-processing", PerFrame)]
+    pub struct SimplifyContours {
+        /// Contours to simplify
+        contours: Arc<Contours>,
+        /// Largest distance in pixels a removed point may lie from the result; 0 keeps all
+        #[range(0.0, 1000.0)]
+        tolerance: f64 = 2.0,
+    }
+    pub struct SimplifyContoursOut {
+        /// Simplified contours
+        contours: Arc<Contours>,
+    }
 }
 
-/// Description of `imaging.simplify_contours`.
-pub fn simplify_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.simplify_contours",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Contour optimization with the Douglas–Peucker algorithm on closed curves (Eigenfires thesis §3.2.3).\n\
-         Every removed point lies within `tolerance` pixels of the simplified polygon; areas are recomputed.",
-    )
-    .input(PortDesc::new("contours", PortType::Contours, "Contours to simplify"))
-    .input(PortDesc::float(
-        "tolerance",
-        2.0,
-        (0.0, 1000.0),
-        "Largest distance in pixels a removed point may lie from the result; 0 keeps all",
-    ))
-    .output("contours", PortType::Contours, "Simplified contours")
+impl Cook for SimplifyContours {
+    fn cook(self, _: &CookCtx) -> Result<SimplifyContoursOut, NodeError> {
+        Ok(SimplifyContoursOut { contours: Arc::new(simplify_contours(&self.contours, self.tolerance)) })
+    }
 }
 
-fn simplify_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let contours = inputs.contours("contours")?;
-    Ok(contours_value(simplify_contours(contours, inputs.float("tolerance")?)))
+pyrograph_core::node! {
+    /// Fills contours into a mask of the traced image's size, holes cut by depth parity (Eigenfires thesis §3.3.1, Fig. 20d).
+    ///
+    /// Even depths fill, odd depths cut; the result protects the flame in Hermite background removal.
+    #[node("imaging.contour_mask", "Pre-processing", PerFrame)]
+    pub struct ContourMask {
+        /// Contours to fill
+        contours: Arc<Contours>,
+    }
+    pub struct ContourMaskOut {
+        /// Filled mask
+        mask: Arc<Mask>,
+    }
 }
 
-/// Description of `imaging.contour_mask`.
-pub fn contour_mask_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.contour_mask",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Fills contours into a mask of the traced image's size, holes cut by depth parity (Eigenfires thesis §3.3.1, Fig. 20d).\n\
-         Even depths fill, odd depths cut; the result protects the flame in Hermite background removal.",
-    )
-    .input(PortDesc::new("contours", PortType::Contours, "Contours to fill"))
-    .output("mask", PortType::Mask, "Filled mask")
+impl Cook for ContourMask {
+    fn cook(self, _: &CookCtx) -> Result<ContourMaskOut, NodeError> {
+        Ok(ContourMaskOut { mask: Arc::new(fill_contours(&self.contours)) })
+    }
 }
 
-fn contour_mask_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    Ok(vec![Value::Mask(Arc::new(fill_contours(inputs.contours("contours")?)))])
+pyrograph_core::node! {
+    /// Draws contours over an image for previews (Eigenfires thesis §3.2, Fig. 18).
+    ///
+    /// Outer borders and holes get different colours; the output is RGBA.
+    #[node("imaging.contour_overlay", "Pre-processing", PerFrame)]
+    pub struct ContourOverlay {
+        /// Background image (gray or RGBA)
+        image: Arc<Image>,
+        /// Contours to draw
+        contours: Arc<Contours>,
+        /// Colour of outer borders (even depth)
+        color: [f32; 4] = [0.0, 1.0, 0.0, 1.0],
+        /// Colour of hole borders (odd depth)
+        hole_color: [f32; 4] = [1.0, 0.0, 1.0, 1.0],
+    }
+    pub struct ContourOverlayOut {
+        /// RGBA preview
+        image: Arc<Image>,
+    }
 }
 
-/// Description of `imaging.contour_overlay`.
-pub fn overlay_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.contour_overlay",
-        CATEGORY,
-        TimeDep::PerFrame,
-        "Draws contours over an image for previews (Eigenfires thesis §3.2, Fig. 18).\n\
-         Outer borders and holes get different colours; the output is RGBA.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "Background image (gray or RGBA)"))
-    .input(PortDesc::new("contours", PortType::Contours, "Contours to draw"))
-    .input(PortDesc::color("color", [0.0, 1.0, 0.0, 1.0], "Colour of outer borders (even depth)"))
-    .input(PortDesc::color("hole_color", [1.0, 0.0, 1.0, 1.0], "Colour of hole borders (odd depth)"))
-    .output("image", PortType::Image, "RGBA preview")
-}
-
-fn overlay_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let image = inputs.image("image")?;
-    let contours = inputs.contours("contours")?;
-    let out = overlay_contours(image, contours, inputs.color("color")?, inputs.color("hole_color")?);
-    Ok(vec![Value::Image(Arc::new(out))])
-}
-
-/// The contour node types of this module.
-pub fn nodes() -> Vec<Arc<dyn Node>> {
-    vec![
-        FnNode::new(contours_desc(), contours_cook),
-        FnNode::new(hole_removal_desc(), hole_removal_cook),
-        FnNode::new(simplify_desc(), simplify_cook),
-        FnNode::new(contour_mask_desc(), contour_mask_cook),
-        FnNode::new(overlay_desc(), overlay_cook),
-    ]
+impl Cook for ContourOverlay {
+    fn cook(self, _: &CookCtx) -> Result<ContourOverlayOut, NodeError> {
+        Ok(ContourOverlayOut { image: Arc::new(overlay_contours(&self.image, &self.contours, self.color, self.hole_color)) })
+    }
 }
 
 #[cfg(test)]

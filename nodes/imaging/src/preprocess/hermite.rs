@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value};
+use pyrograph_core::{Cook, CookCtx, Image, Mask, NodeError, port};
 use rayon::prelude::*;
 
 use crate::convert::{from_gray32f, to_gray32f};
@@ -38,7 +38,10 @@ pub fn hermite_pixel(p: f32, i_min: f32, i_max: f32) -> f32 {
 /// naming `i_min`; a protect mask of another size is an error naming `protect`.
 pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option<&Mask>) -> Result<Image, NodeError> {
     if i_min.is_nan() || i_max.is_nan() || i_min >= i_max {
-        return Err(NodeError::port("i_min", format!("must be below i_max, got i_min {i_min} and i_max {i_max}")));
+        return Err(NodeError::port(
+            port!(HermiteInputs, i_min),
+            format!("must be below i_max, got i_min {i_min} and i_max {i_max}"),
+        ));
     }
     let mut gray = to_gray32f(image);
     let w = gray.width().max(1) as usize;
@@ -46,7 +49,7 @@ pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option
         && (m.width(), m.height()) != gray.dimensions()
     {
         return Err(NodeError::port(
-            "protect",
+            port!(HermiteBackgroundMasked, protect),
             format!("mask is {}×{} but the image is {}×{}", m.width(), m.height(), gray.width(), gray.height()),
         ));
     }
@@ -65,53 +68,66 @@ pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option
     Ok(from_gray32f(gray))
 }
 
-const DOC_TAIL: &str = "Converts to gray (Rec.601), leaves pixels brighter than i_max unchanged, blacks out pixels darker than \
-     i_min and multiplies those between by -2S³+3S² with S = (p − i_min)/(i_max − i_min), all on the 0–255 scale.";
-
-fn base_desc(type_name: &str, summary: &str) -> NodeDesc {
-    NodeDesc::new(type_name, "Pre-processing", TimeDep::PerFrame, &format!("{summary}\n{DOC_TAIL}"))
-        .input(PortDesc::new("image", PortType::Image, "Frame, gray or RGBA"))
-        .input(PortDesc::float("i_min", 110.0, (0.0, 255.0), "Below this intensity (0–255) pixels become black"))
-        .input(PortDesc::float("i_max", 220.0, (0.0, 255.0), "Above this intensity (0–255) pixels are unchanged"))
+pyrograph_core::ports! {
+    /// The frame and thresholds of both Hermite nodes.
+    pub struct HermiteInputs {
+        /// Frame, gray or RGBA
+        image: Arc<Image>,
+        /// Below this intensity (0–255) pixels become black
+        #[range(0.0, 255.0)]
+        i_min: f32 = 110.0,
+        /// Above this intensity (0–255) pixels are unchanged
+        #[range(0.0, 255.0)]
+        i_max: f32 = 220.0,
+    }
 }
 
-/// Description of `imaging.hermite_background`.
-pub fn desc() -> NodeDesc {
-    base_desc(
-        "imaging.hermite_background",
-        "Hermite background and smoke removal (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20b–c).",
-    )
-    .output("image", PortType::Image, "Gray image with the background darkened")
+pyrograph_core::node! {
+    /// Hermite background and smoke removal (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20b–c).
+    ///
+    /// Converts to gray (Rec.601), leaves pixels brighter than i_max unchanged, blacks out pixels darker than
+    /// i_min and multiplies those between by -2S³+3S² with S = (p − i_min)/(i_max − i_min), all on the 0–255 scale.
+    #[node("imaging.hermite_background", "Pre-processing", PerFrame)]
+    pub struct HermiteBackground {
+        /// The frame and thresholds.
+        inputs: HermiteInputs,
+    }
+    pub struct HermiteBackgroundOut {
+        /// Gray image with the background darkened
+        image: Arc<Image>,
+    }
 }
 
-/// Description of `imaging.hermite_background_masked`.
-pub fn masked_desc() -> NodeDesc {
-    base_desc(
-        "imaging.hermite_background_masked",
-        "Hermite background removal that leaves the flame's interior untouched (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20d–e).",
-    )
-    .input(PortDesc::new("protect", PortType::Mask, "Pixels inside this mask (the filled flame contour) keep their gray value"))
-    .output("image", PortType::Image, "Gray image with the background darkened")
+impl Cook for HermiteBackground {
+    fn cook(self, _: &CookCtx) -> Result<HermiteBackgroundOut, NodeError> {
+        let HermiteInputs { image, i_min, i_max } = self.inputs;
+        Ok(HermiteBackgroundOut { image: Arc::new(hermite_background(&image, i_min, i_max, None)?) })
+    }
 }
 
-fn thresholds(inputs: &Inputs<'_>) -> Result<(f32, f32), NodeError> {
-    Ok((inputs.float("i_min")? as f32, inputs.float("i_max")? as f32))
+pyrograph_core::node! {
+    /// Hermite background removal that leaves the flame's interior untouched (Eigenfires thesis §3.3.1, eq. 5–6, Fig. 20d–e).
+    ///
+    /// Converts to gray (Rec.601), leaves pixels brighter than i_max unchanged, blacks out pixels darker than
+    /// i_min and multiplies those between by -2S³+3S² with S = (p − i_min)/(i_max − i_min), all on the 0–255 scale.
+    #[node("imaging.hermite_background_masked", "Pre-processing", PerFrame)]
+    pub struct HermiteBackgroundMasked {
+        /// The frame and thresholds.
+        inputs: HermiteInputs,
+        /// Pixels inside this mask (the filled flame contour) keep their gray value
+        protect: Arc<Mask>,
+    }
+    pub struct HermiteBackgroundMaskedOut {
+        /// Gray image with the background darkened
+        image: Arc<Image>,
+    }
 }
 
-fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let (lo, hi) = thresholds(inputs)?;
-    Ok(vec![Value::Image(Arc::new(hermite_background(inputs.image("image")?, lo, hi, None)?))])
-}
-
-fn masked_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let (lo, hi) = thresholds(inputs)?;
-    let protect = inputs.mask("protect")?;
-    Ok(vec![Value::Image(Arc::new(hermite_background(inputs.image("image")?, lo, hi, Some(protect))?))])
-}
-
-/// The two Hermite node types.
-pub fn nodes() -> Vec<Arc<dyn Node>> {
-    vec![FnNode::new(desc(), cook), FnNode::new(masked_desc(), masked_cook)]
+impl Cook for HermiteBackgroundMasked {
+    fn cook(self, _: &CookCtx) -> Result<HermiteBackgroundMaskedOut, NodeError> {
+        let HermiteInputs { image, i_min, i_max } = self.inputs;
+        Ok(HermiteBackgroundMaskedOut { image: Arc::new(hermite_background(&image, i_min, i_max, Some(&self.protect))?) })
+    }
 }
 
 #[cfg(test)]

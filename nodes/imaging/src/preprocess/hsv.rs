@@ -1,41 +1,27 @@
 //! `imaging.hsv_mask`: the multi-layer HSV colour mask of the Eigenfires thesis (§3.2, eq. 3–4, Fig. 17).
 
-use pyrograph_core::{
-    Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
-};
+use pyrograph_core::params::Field;
+use pyrograph_core::{Channels, Cook, CookCtx, Image, Inputs, Mask, NodeError, PortDesc, port};
 use rayon::prelude::*;
 use std::sync::Arc;
 
 use crate::convert::unit_to_u8;
 
-/// How one layer's mask combines with the masks of the layers above it (thesis Fig. 17).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Blend {
-    /// Union: inside if inside either.
-    Add,
-    /// Removes this layer's pixels from the running mask.
-    Subtract,
-    /// Symmetric difference (exclusive or).
-    Difference,
-    /// Intersection: inside only if inside both.
-    Intersect,
+pyrograph_core::choice! {
+    /// How one layer's mask combines with the masks of the layers above it (thesis Fig. 17).
+    pub enum Blend {
+        /// Union: inside if inside either.
+        Add = "add",
+        /// Removes this layer's pixels from the running mask.
+        Subtract = "subtract",
+        /// Symmetric difference (exclusive or).
+        Difference = "difference",
+        /// Intersection: inside only if inside both.
+        Intersect = "intersect",
+    }
 }
 
 impl Blend {
-    /// Names used by the `blend` parameters, in the order the editor lists them.
-    pub const NAMES: [&'static str; 4] = ["add", "subtract", "difference", "intersect"];
-
-    /// Parses a parameter value.
-    pub fn parse(name: &str) -> Option<Blend> {
-        match name {
-            "add" => Some(Blend::Add),
-            "subtract" => Some(Blend::Subtract),
-            "difference" => Some(Blend::Difference),
-            "intersect" => Some(Blend::Intersect),
-            _ => None,
-        }
-    }
-
     /// Combines the running mask bit `acc` with this layer's bit `layer`.
     #[inline]
     pub fn apply(self, acc: bool, layer: bool) -> bool {
@@ -258,7 +244,7 @@ const ROWS_PER_TASK: usize = 8;
 /// that definition on a grid of colours, random colours and random layers.
 pub fn hsv_mask(image: &Image, layers: &[HsvLayer]) -> Result<Mask, NodeError> {
     if image.channels() != Channels::Rgba {
-        return Err(NodeError::port("image", "needs an RGBA image: hue is undefined for a gray image"));
+        return Err(NodeError::port(port!(HsvMask, image), "needs an RGBA image: hue is undefined for a gray image"));
     }
     let (w, h) = image.size();
     let mut out = vec![0u8; w as usize * h as usize];
@@ -288,100 +274,156 @@ pub fn hsv_mask(image: &Image, layers: &[HsvLayer]) -> Result<Mask, NodeError> {
     Mask::from_vec(w, h, out).ok_or_else(|| NodeError::msg("internal: mask size mismatch"))
 }
 
-/// Default layers, converted from the OpenCV peer's half-hue ranges (×2):
-/// blue (100,80,60)–(130,255,255), red (0,100,80)–(15,255,255), yellow (15,80,100)–(35,255,255).
-const DEFAULTS: [(&str, bool, HsvRange); 3] = [
-    ("blue", true, HsvRange { h_min: 200.0, h_max: 260.0, s_min: 80.0, s_max: 255.0, v_min: 60.0, v_max: 255.0 }),
-    ("red", false, HsvRange { h_min: 0.0, h_max: 30.0, s_min: 100.0, s_max: 255.0, v_min: 80.0, v_max: 255.0 }),
-    ("yellow", false, HsvRange { h_min: 30.0, h_max: 70.0, s_min: 80.0, s_max: 255.0, v_min: 100.0, v_max: 255.0 }),
+/// The ports of one layer, `{prefix}_enabled`, `{prefix}_h_min` … `{prefix}_v_max`, `{prefix}_blend`:
+/// declared once by its [`Field`] impl and used three times by [`HsvMask`], whose field name is the
+/// prefix, whose `= default` the layer's defaults and whose doc the start of every port's doc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HsvLayerPorts {
+    /// Whether this layer contributes.
+    pub enabled: bool,
+    /// The colour range.
+    pub range: HsvRange,
+    /// How it combines with the layers above.
+    pub blend: Blend,
+}
+
+impl HsvLayerPorts {
+    /// The layer if it is enabled. A saturation or value minimum above its maximum is an error
+    /// naming the `{prefix}_…_min` port: only hue ranges wrap.
+    pub fn layer(&self, prefix: &str) -> Result<Option<HsvLayer>, NodeError> {
+        if !self.enabled {
+            return Ok(None);
+        }
+        let r = self.range;
+        for (what, lo, hi) in [("s", r.s_min, r.s_max), ("v", r.v_min, r.v_max)] {
+            if lo > hi {
+                return Err(NodeError::port(
+                    format!("{prefix}_{what}_min"),
+                    format!("{lo} is above {prefix}_{what}_max {hi}; only hue ranges wrap"),
+                ));
+            }
+        }
+        Ok(Some(HsvLayer { range: r, blend: self.blend }))
+    }
+}
+
+/// The field of an [`HsvRange`] that a port sets.
+type RangeField = fn(&mut HsvRange) -> &mut f32;
+
+/// The range ports of a layer in port order: name suffix, upper bound (the lower is 0), doc and
+/// the range's field.
+const RANGE_PORTS: [(&str, f64, &str, RangeField); 6] = [
+    ("h_min", 360.0, "lowest hue in degrees; above h_max wraps past red", |r| &mut r.h_min),
+    ("h_max", 360.0, "highest hue in degrees", |r| &mut r.h_max),
+    ("s_min", 255.0, "lowest saturation (0–255)", |r| &mut r.s_min),
+    ("s_max", 255.0, "highest saturation (0–255)", |r| &mut r.s_max),
+    ("v_min", 255.0, "lowest value (0–255)", |r| &mut r.v_min),
+    ("v_max", 255.0, "highest value (0–255)", |r| &mut r.v_max),
 ];
 
-fn layer_ports(desc: NodeDesc, n: usize, colour: &str, enabled: bool, r: &HsvRange) -> NodeDesc {
-    let p = |s: &str| format!("layer{n}_{s}");
-    let doc = |s: &str| format!("Layer {n} ({colour} by default): {s}");
-    desc.input(PortDesc::bool(&p("enabled"), enabled, &doc("whether this layer contributes")))
-        .input(PortDesc::float(
-            &p("h_min"),
-            f64::from(r.h_min),
-            (0.0, 360.0),
-            &doc("lowest hue in degrees; above h_max wraps past red"),
-        ))
-        .input(PortDesc::float(&p("h_max"), f64::from(r.h_max), (0.0, 360.0), &doc("highest hue in degrees")))
-        .input(PortDesc::float(&p("s_min"), f64::from(r.s_min), (0.0, 255.0), &doc("lowest saturation (0–255)")))
-        .input(PortDesc::float(&p("s_max"), f64::from(r.s_max), (0.0, 255.0), &doc("highest saturation (0–255)")))
-        .input(PortDesc::float(&p("v_min"), f64::from(r.v_min), (0.0, 255.0), &doc("lowest value (0–255)")))
-        .input(PortDesc::float(&p("v_max"), f64::from(r.v_max), (0.0, 255.0), &doc("highest value (0–255)")))
-        .input(PortDesc::choice(&p("blend"), &Blend::NAMES, "add", &doc("how it combines with the layers above: add = union")))
-}
-
-/// Description of `imaging.hsv_mask`.
-pub fn desc() -> NodeDesc {
-    let d = NodeDesc::new(
-        "imaging.hsv_mask",
-        "Pre-processing",
-        TimeDep::PerFrame,
-        "Binary mask of up to three HSV colour ranges blended in order (Eigenfires thesis §3.2, eq. 3–4, Fig. 17).\n\
-         Each enabled layer selects pixels whose hue (0–360°), saturation and value (0–255) lie in its inclusive \
-         ranges and combines them into the running mask (starting empty) by add (union), subtract, difference or \
-         intersect. A hue range with min > max wraps past red. Defaults are the OpenCV peer's blue, red and yellow \
-         flame ranges (half-hues ×2); the image must be RGBA.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "RGBA frame to segment"));
-    let d = DEFAULTS.iter().enumerate().fold(d, |d, (i, (colour, on, r))| layer_ports(d, i + 1, colour, *on, r));
-    d.output("mask", PortType::Mask, "255 where the blended layers select the pixel")
-}
-
-fn read_range(inputs: &Inputs<'_>, n: usize) -> Result<HsvRange, NodeError> {
-    let get = |s: &str| inputs.float(&format!("layer{n}_{s}")).map(|v| v as f32);
-    let r = HsvRange {
-        h_min: get("h_min")?,
-        h_max: get("h_max")?,
-        s_min: get("s_min")?,
-        s_max: get("s_max")?,
-        v_min: get("v_min")?,
-        v_max: get("v_max")?,
-    };
-    for (what, lo, hi) in [("s", r.s_min, r.s_max), ("v", r.v_min, r.v_max)] {
-        if lo > hi {
-            return Err(NodeError::port(
-                format!("layer{n}_{what}_min"),
-                format!("{lo} is above layer{n}_{what}_max {hi}; only hue ranges wrap"),
-            ));
+impl Field for HsvLayerPorts {
+    fn describe(name: &str, doc: &str, default: Option<Self>, _: Option<(f64, f64)>, out: &mut Vec<PortDesc>) {
+        let port = |suffix: &str| format!("{name}_{suffix}");
+        let doc = |text: &str| format!("{doc}: {text}");
+        <bool as Field>::describe(
+            &port("enabled"),
+            &doc("whether this layer contributes"),
+            default.map(|d| d.enabled),
+            None,
+            out,
+        );
+        for (suffix, hi, text, field) in RANGE_PORTS {
+            let value = default.map(|mut d| *field(&mut d.range));
+            <f32 as Field>::describe(&port(suffix), &doc(text), value, Some((0.0, hi)), out);
         }
+        let blend_doc = doc("how it combines with the layers above: add = union");
+        <Blend as Field>::describe(&port("blend"), &blend_doc, default.map(|d| d.blend), None, out);
     }
-    Ok(r)
-}
 
-/// Reads the enabled layers from the node's parameters.
-pub fn read_layers(inputs: &Inputs<'_>) -> Result<Vec<HsvLayer>, NodeError> {
-    let mut layers = Vec::with_capacity(DEFAULTS.len());
-    for n in 1..=DEFAULTS.len() {
-        if !inputs.bool(&format!("layer{n}_enabled"))? {
-            continue;
+    fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> {
+        let mut range = HsvRange { h_min: 0.0, h_max: 0.0, s_min: 0.0, s_max: 0.0, v_min: 0.0, v_max: 0.0 };
+        for (suffix, _, _, field) in RANGE_PORTS {
+            *field(&mut range) = <f32 as Field>::read(inputs, &format!("{name}_{suffix}"))?;
         }
-        let port = format!("layer{n}_blend");
-        let name = inputs.choice(&port)?;
-        let blend = Blend::parse(name).ok_or_else(|| NodeError::port(&port, format!("unknown blend mode '{name}'")))?;
-        layers.push(HsvLayer { range: read_range(inputs, n)?, blend });
+        Ok(HsvLayerPorts {
+            enabled: <bool as Field>::read(inputs, &format!("{name}_enabled"))?,
+            range,
+            blend: <Blend as Field>::read(inputs, &format!("{name}_blend"))?,
+        })
     }
-    Ok(layers)
 }
 
-fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let image = inputs.image("image")?;
-    let layers = read_layers(inputs)?;
-    Ok(vec![Value::Mask(Arc::new(hsv_mask(image, &layers)?))])
+// Default layers, converted from the OpenCV peer's half-hue ranges (×2):
+// blue (100,80,60)–(130,255,255), red (0,100,80)–(15,255,255), yellow (15,80,100)–(35,255,255).
+
+/// Layer 1's defaults: the OpenCV peer's blue range, on.
+pub const BLUE_DEFAULTS: HsvLayerPorts = HsvLayerPorts {
+    enabled: true,
+    range: HsvRange { h_min: 200.0, h_max: 260.0, s_min: 80.0, s_max: 255.0, v_min: 60.0, v_max: 255.0 },
+    blend: Blend::Add,
+};
+/// Layer 2's defaults: the OpenCV peer's red range, off.
+pub const RED_DEFAULTS: HsvLayerPorts = HsvLayerPorts {
+    enabled: false,
+    range: HsvRange { h_min: 0.0, h_max: 30.0, s_min: 100.0, s_max: 255.0, v_min: 80.0, v_max: 255.0 },
+    blend: Blend::Add,
+};
+/// Layer 3's defaults: the OpenCV peer's yellow range, off.
+pub const YELLOW_DEFAULTS: HsvLayerPorts = HsvLayerPorts {
+    enabled: false,
+    range: HsvRange { h_min: 30.0, h_max: 70.0, s_min: 80.0, s_max: 255.0, v_min: 100.0, v_max: 255.0 },
+    blend: Blend::Add,
+};
+
+pyrograph_core::node! {
+    /// Binary mask of up to three HSV colour ranges blended in order (Eigenfires thesis §3.2, eq. 3–4, Fig. 17).
+    ///
+    /// Each enabled layer selects pixels whose hue (0–360°), saturation and value (0–255) lie in its inclusive
+    /// ranges and combines them into the running mask (starting empty) by add (union), subtract, difference or
+    /// intersect. A hue range with min > max wraps past red. Defaults are the OpenCV peer's blue, red and yellow
+    /// flame ranges (half-hues ×2); the image must be RGBA.
+    #[node("imaging.hsv_mask", "Pre-processing", PerFrame)]
+    pub struct HsvMask {
+        /// RGBA frame to segment
+        image: Arc<Image>,
+        /// Layer 1 (blue by default)
+        layer1: HsvLayerPorts = BLUE_DEFAULTS,
+        /// Layer 2 (red by default)
+        layer2: HsvLayerPorts = RED_DEFAULTS,
+        /// Layer 3 (yellow by default)
+        layer3: HsvLayerPorts = YELLOW_DEFAULTS,
+    }
+    pub struct HsvMaskOut {
+        /// 255 where the blended layers select the pixel
+        mask: Arc<Mask>,
+    }
 }
 
-/// The `imaging.hsv_mask` node.
-pub fn node() -> Arc<dyn Node> {
-    FnNode::new(desc(), cook)
+impl HsvMask {
+    /// The enabled layers, in order.
+    pub fn layers(&self) -> Result<Vec<HsvLayer>, NodeError> {
+        let layers = [
+            (&self.layer1, port!(HsvMask, layer1)),
+            (&self.layer2, port!(HsvMask, layer2)),
+            (&self.layer3, port!(HsvMask, layer3)),
+        ];
+        layers.into_iter().filter_map(|(ports, prefix)| ports.layer(prefix).transpose()).collect()
+    }
+}
+
+impl Cook for HsvMask {
+    fn cook(self, _: &CookCtx) -> Result<HsvMaskOut, NodeError> {
+        let layers = self.layers()?;
+        Ok(HsvMaskOut { mask: Arc::new(hsv_mask(&self.image, &layers)?) })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use pyrograph_core::params::Declared;
+    use pyrograph_core::{NodeDesc, Value};
 
     fn rgba(pixels: &[[f32; 3]]) -> Image {
         let data = pixels.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
@@ -447,7 +489,10 @@ mod tests {
     fn default_layers_match_the_opencv_peer_ranges() {
         // Deep blue (h 240), orange-red (h 20), yellow-orange (h 50), dim grey: the peer keeps the first three.
         let img = rgba(&[[0.1, 0.2, 0.9], [1.0, 0.33, 0.0], [1.0, 0.83, 0.0], [0.2, 0.2, 0.2]]);
-        let layers: Vec<HsvLayer> = DEFAULTS.iter().map(|(_, _, r)| HsvLayer { range: *r, blend: Blend::Add }).collect();
+        let layers: Vec<HsvLayer> = [BLUE_DEFAULTS, RED_DEFAULTS, YELLOW_DEFAULTS]
+            .iter()
+            .map(|d| HsvLayer { range: d.range, blend: Blend::Add })
+            .collect();
         assert_eq!(bits(&hsv_mask(&img, &layers).unwrap()), [1, 1, 1, 0]);
     }
 
@@ -525,7 +570,10 @@ mod tests {
             }
         }
         let img = rgba(&pixels);
-        let layers: Vec<HsvLayer> = DEFAULTS.iter().map(|(_, _, r)| HsvLayer { range: *r, blend: Blend::Add }).collect();
+        let layers: Vec<HsvLayer> = [BLUE_DEFAULTS, RED_DEFAULTS, YELLOW_DEFAULTS]
+            .iter()
+            .map(|d| HsvLayer { range: d.range, blend: Blend::Add })
+            .collect();
         let odd = [
             HsvLayer { range: range(290.0, 20.0), blend: Blend::Add },
             HsvLayer {
@@ -548,7 +596,7 @@ mod tests {
     }
 
     fn node_inputs(overrides: &[(&str, Value)]) -> (NodeDesc, Vec<Value>) {
-        let d = desc();
+        let d = HsvMask::desc();
         let mut values: Vec<Value> =
             d.inputs.iter().map(|p| p.default.clone().unwrap_or_else(|| Value::Image(Arc::new(rgba(&[RED]))))).collect();
         for (name, v) in overrides {
@@ -565,14 +613,14 @@ mod tests {
             ("layer2_s_min", Value::Float(200.0)),
             ("layer2_s_max", Value::Float(100.0)),
         ]);
-        let err = cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap_err();
+        let err = HsvMask::node().cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap_err();
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "layer2_s_min"), "{err}");
     }
 
     #[test]
     fn node_with_all_layers_keeps_red() {
         let (d, values) = node_inputs(&[("layer2_enabled", Value::Bool(true)), ("layer3_enabled", Value::Bool(true))]);
-        let out = cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap();
+        let out = HsvMask::node().cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap();
         let Value::Mask(m) = &out[0] else { panic!("not a mask") };
         assert_eq!(bits(m), [1]);
     }

@@ -10,20 +10,21 @@ pub mod hsv;
 pub mod morphology;
 pub mod pose;
 
-use pyrograph_core::Registry;
+use pyrograph_core::{Cook, Registry};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
-    registry.add(hsv::node());
-    registry.add(morphology::node());
-    registry.add(morphology::blur_node());
-    for node in contours::nodes() {
-        registry.add(node);
-    }
-    for node in hermite::nodes() {
-        registry.add(node);
-    }
-    registry.add(pose::node());
+    registry.add(hsv::HsvMask::node());
+    registry.add(morphology::Morphology::node());
+    registry.add(morphology::GaussianBlur::node());
+    registry.add(contours::TraceContours::node());
+    registry.add(contours::HoleRemoval::node());
+    registry.add(contours::SimplifyContours::node());
+    registry.add(contours::ContourMask::node());
+    registry.add(contours::ContourOverlay::node());
+    registry.add(hermite::HermiteBackground::node());
+    registry.add(hermite::HermiteBackgroundMasked::node());
+    registry.add(pose::PoseNormalize::node());
 }
 
 #[cfg(test)]

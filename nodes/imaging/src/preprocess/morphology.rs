@@ -5,68 +5,38 @@ use std::sync::Arc;
 
 use image::{GrayImage, Luma};
 use imageproc::morphology::Mask as ImageprocElement;
-use pyrograph_core::{
-    Channels, CookCtx, FnNode, Image, Inputs, Mask, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
-};
-
+use pyrograph_core::{Channels, Cook, CookCtx, Image, Mask, NodeError, port};
 use rayon::prelude::*;
 
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
 
-/// A morphological operation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MorphOp {
-    /// Grows the mask.
-    Dilate,
-    /// Shrinks the mask.
-    Erode,
-    /// Erode then dilate: removes specks smaller than the element.
-    Open,
-    /// Dilate then erode: fills gaps smaller than the element.
-    Close,
-}
-
-impl MorphOp {
-    /// Parameter names.
-    pub const NAMES: [&'static str; 4] = ["dilate", "erode", "open", "close"];
-
-    /// Parses a parameter value.
-    pub fn parse(name: &str) -> Option<MorphOp> {
-        match name {
-            "dilate" => Some(MorphOp::Dilate),
-            "erode" => Some(MorphOp::Erode),
-            "open" => Some(MorphOp::Open),
-            "close" => Some(MorphOp::Close),
-            _ => None,
-        }
+pyrograph_core::choice! {
+    /// A morphological operation.
+    pub enum MorphOp {
+        /// Grows the mask.
+        Dilate = "dilate",
+        /// Shrinks the mask.
+        Erode = "erode",
+        /// Erode then dilate: removes specks smaller than the element.
+        Open = "open",
+        /// Dilate then erode: fills gaps smaller than the element.
+        Close = "close",
     }
 }
 
-/// Shape of the structuring element.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum KernelShape {
-    /// A full `size × size` square.
-    Rect,
-    /// The ellipse inscribed in the square, as OpenCV's `MORPH_ELLIPSE`.
-    Ellipse,
-    /// The centre row and column.
-    Cross,
+pyrograph_core::choice! {
+    /// Shape of the structuring element.
+    pub enum KernelShape {
+        /// A full `size × size` square.
+        Rect = "rect",
+        /// The ellipse inscribed in the square, as OpenCV's `MORPH_ELLIPSE`.
+        Ellipse = "ellipse",
+        /// The centre row and column.
+        Cross = "cross",
+    }
 }
 
 impl KernelShape {
-    /// Parameter names.
-    pub const NAMES: [&'static str; 3] = ["rect", "ellipse", "cross"];
-
-    /// Parses a parameter value.
-    pub fn parse(name: &str) -> Option<KernelShape> {
-        match name {
-            "rect" => Some(KernelShape::Rect),
-            "ellipse" => Some(KernelShape::Ellipse),
-            "cross" => Some(KernelShape::Cross),
-            _ => None,
-        }
-    }
-
     /// Whether cell `(x, y)` of a `size × size` element (size odd) is set.
     ///
     /// The ellipse follows OpenCV's `getStructuringElement` rounding so a 5×5 ellipse is the
@@ -122,7 +92,7 @@ impl Element {
 /// The structuring element of `shape` and odd `size` (1..=99).
 pub fn structuring_element(shape: KernelShape, size: u32) -> Result<Element, NodeError> {
     if size % 2 == 0 || !(1..=99).contains(&size) {
-        return Err(NodeError::port("size", format!("must be odd and in 1..=99, got {size}")));
+        return Err(NodeError::port(port!(Morphology, size), format!("must be odd and in 1..=99, got {size}")));
     }
     let r = size / 2;
     // Every shape is symmetric about the centre column and each row is one contiguous span
@@ -375,38 +345,33 @@ pub fn morphology(mask: &Mask, op: MorphOp, element: &Element) -> Mask {
     Mask::from_vec(w, h, out.unpack()).unwrap_or_else(|| Mask::new(w, h))
 }
 
-/// Description of `imaging.morphology`.
-pub fn desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.morphology",
-        "Pre-processing",
-        TimeDep::PerFrame,
-        "Dilates, erodes, opens or closes a mask to filter noise (Eigenfires thesis §3.2.1).\n\
-         The structuring element is a rect, ellipse (OpenCV MORPH_ELLIPSE) or cross of odd size.",
-    )
-    .input(PortDesc::new("mask", PortType::Mask, "Mask to filter"))
-    .input(PortDesc::choice("op", &MorphOp::NAMES, "open", "Operation: open removes specks, close fills gaps"))
-    .input(PortDesc::choice("shape", &KernelShape::NAMES, "ellipse", "Structuring element shape"))
-    .input(PortDesc::int("size", 5, (1, 99), "Element width and height in pixels; must be odd"))
-    .output("mask", PortType::Mask, "Filtered mask")
+pyrograph_core::node! {
+    /// Dilates, erodes, opens or closes a mask to filter noise (Eigenfires thesis §3.2.1).
+    ///
+    /// The structuring element is a rect, ellipse (OpenCV MORPH_ELLIPSE) or cross of odd size.
+    #[node("imaging.morphology", "Pre-processing", PerFrame)]
+    pub struct Morphology {
+        /// Mask to filter
+        mask: Arc<Mask>,
+        /// Operation: open removes specks, close fills gaps
+        op: MorphOp = MorphOp::Open,
+        /// Structuring element shape
+        shape: KernelShape = KernelShape::Ellipse,
+        /// Element width and height in pixels; must be odd
+        #[range(1, 99)]
+        size: u32 = 5,
+    }
+    pub struct MorphologyOut {
+        /// Filtered mask
+        mask: Arc<Mask>,
+    }
 }
 
-fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let mask = inputs.mask("mask")?;
-    let op_name = inputs.choice("op")?;
-    let op = MorphOp::parse(op_name).ok_or_else(|| NodeError::port("op", format!("unknown operation '{op_name}'")))?;
-    let shape_name = inputs.choice("shape")?;
-    let shape =
-        KernelShape::parse(shape_name).ok_or_else(|| NodeError::port("shape", format!("unknown shape '{shape_name}'")))?;
-    let size = inputs.int("size")?;
-    let size = u32::try_from(size).map_err(|_| NodeError::port("size", format!("must be odd and in 1..=99, got {size}")))?;
-    let element = structuring_element(shape, size)?;
-    Ok(vec![Value::Mask(Arc::new(morphology(mask, op, &element)))])
-}
-
-/// The `imaging.morphology` node.
-pub fn node() -> Arc<dyn Node> {
-    FnNode::new(desc(), cook)
+impl Cook for Morphology {
+    fn cook(self, _: &CookCtx) -> Result<MorphologyOut, NodeError> {
+        let element = structuring_element(self.shape, self.size)?;
+        Ok(MorphologyOut { mask: Arc::new(morphology(&self.mask, self.op, &element)) })
+    }
 }
 
 /// Gaussian blur of a gray or RGBA image; `sigma <= 0` returns the image unchanged.
@@ -420,30 +385,28 @@ pub fn gaussian_blur(image: &Image, sigma: f32) -> Image {
     }
 }
 
-/// Description of `imaging.gaussian_blur`.
-pub fn blur_desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.gaussian_blur",
-        "Pre-processing",
-        TimeDep::PerFrame,
-        "Gaussian smoothing of a gray or RGBA image (Eigenfires thesis §3.2.1); sigma 0 passes the image through.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "Image to blur"))
-    .input(PortDesc::float("sigma", 0.0, (0.0, 100.0), "Standard deviation in pixels; 0 is the identity"))
-    .output("image", PortType::Image, "Blurred image")
+pyrograph_core::node! {
+    /// Gaussian smoothing of a gray or RGBA image (Eigenfires thesis §3.2.1); sigma 0 passes the image through.
+    #[node("imaging.gaussian_blur", "Pre-processing", PerFrame)]
+    pub struct GaussianBlur {
+        /// Image to blur
+        image: Arc<Image>,
+        /// Standard deviation in pixels; 0 is the identity
+        #[range(0.0, 100.0)]
+        sigma: f32 = 0.0,
+    }
+    pub struct GaussianBlurOut {
+        /// Blurred image
+        image: Arc<Image>,
+    }
 }
 
-fn blur_cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let image = inputs.image("image")?;
-    let sigma = inputs.float("sigma")? as f32;
-    // Sigma 0 is the common case in presets (a fan-out point), so keep the same Arc and skip the copy.
-    let out = if sigma > 0.0 { Arc::new(gaussian_blur(image, sigma)) } else { Arc::clone(image) };
-    Ok(vec![Value::Image(out)])
-}
-
-/// The `imaging.gaussian_blur` node.
-pub fn blur_node() -> Arc<dyn Node> {
-    FnNode::new(blur_desc(), blur_cook)
+impl Cook for GaussianBlur {
+    fn cook(self, _: &CookCtx) -> Result<GaussianBlurOut, NodeError> {
+        // Sigma 0 is the common case in presets (a fan-out point), so keep the same Arc and skip the copy.
+        let image = if self.sigma > 0.0 { Arc::new(gaussian_blur(&self.image, self.sigma)) } else { self.image };
+        Ok(GaussianBlurOut { image })
+    }
 }
 
 #[cfg(test)]

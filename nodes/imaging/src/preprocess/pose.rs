@@ -5,9 +5,7 @@ use std::sync::Arc;
 
 use image::{Luma, Rgba};
 use imageproc::geometric_transformations::{Border, Interpolation, Projection, warp};
-use pyrograph_core::{
-    Channels, Contour, Contours, CookCtx, FnNode, Image, Inputs, Node, NodeDesc, NodeError, PortDesc, PortType, TimeDep, Value,
-};
+use pyrograph_core::{Channels, Contour, Contours, Cook, CookCtx, Image, NodeError, port};
 
 use super::contours::simplify_closed;
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
@@ -215,65 +213,93 @@ pub fn pose_normalize(image: &Image, contours: &Contours, mode: PoseMode, weight
     Pose { image, axis }
 }
 
-/// Description of `imaging.pose_normalize`.
-pub fn desc() -> NodeDesc {
-    NodeDesc::new(
-        "imaging.pose_normalize",
-        "Pre-processing",
-        TimeDep::PerFrame,
-        "Removes the flame's direction with a weighted least-squares line through its contour (Eigenfires thesis §3.4, eq. 7–11).\n\
-         The line is fitted to the largest outermost contour (weights: uniform; root = remedy 3, more weight near the \
-         bottom; lowpoly = remedy 1, Douglas–Peucker first), trimmed at the extreme projections of the contour points, \
-         and the image is rotated about the lower end so the flame stands vertical. Mode center_scale instead moves the \
-         flame's bounding box to the centre and scales it to target_height of the frame (angle and end points are \
-         still reported). With no contours the image passes through and angle is 0.",
-    )
-    .input(PortDesc::new("image", PortType::Image, "Frame to normalize (gray or RGBA)"))
-    .input(PortDesc::new("contours", PortType::Contours, "Flame contours traced from this frame"))
-    .input(PortDesc::choice("mode", &["rotate", "center_scale"], "rotate", "rotate: stand the flame upright; center_scale: centre and scale it"))
-    .input(PortDesc::choice("weights", &["uniform", "root", "lowpoly"], "uniform", "Point weighting of the line fit (remedies 3 and 1)"))
-    .input(PortDesc::float("lowpoly_tolerance", 8.0, (0.1, 1000.0), "Douglas–Peucker tolerance in pixels for weights = lowpoly"))
-    .input(PortDesc::float("target_height", 0.8, (0.01, 4.0), "Flame height as a fraction of the frame height in center_scale mode"))
-    .output("image", PortType::Image, "Normalized frame")
-    .output("angle", PortType::Float, "Lean of the flame from vertical in degrees, positive to the right; 0 without contours")
-    .output("root", PortType::Vec2, "Lower end of the fitted line (the pivot), in input pixels")
-    .output("tip", PortType::Vec2, "Upper end of the fitted line, in input pixels")
-}
-
-fn cook(inputs: &Inputs<'_>, _ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-    let image = inputs.image("image")?;
-    let contours = inputs.contours("contours")?;
-    if (contours.width, contours.height) != image.size() && !contours.contours.is_empty() {
-        return Err(NodeError::port(
-            "contours",
-            format!(
-                "traced in a {}×{} image but the image is {}×{}",
-                contours.width,
-                contours.height,
-                image.width(),
-                image.height()
-            ),
-        ));
+pyrograph_core::choice! {
+    /// The `mode` option of `imaging.pose_normalize` (a [`PoseMode`] without its target height).
+    pub enum PoseModeOption {
+        /// [`PoseMode::Rotate`].
+        Rotate = "rotate",
+        /// [`PoseMode::CenterScale`].
+        CenterScale = "center_scale",
     }
-    let mode = match inputs.choice("mode")? {
-        "rotate" => PoseMode::Rotate,
-        "center_scale" => PoseMode::CenterScale(inputs.float("target_height")?),
-        other => return Err(NodeError::port("mode", format!("unknown mode '{other}'"))),
-    };
-    let weighting = match inputs.choice("weights")? {
-        "uniform" => Weighting::Uniform,
-        "root" => Weighting::Root,
-        "lowpoly" => Weighting::LowPoly(inputs.float("lowpoly_tolerance")?),
-        other => return Err(NodeError::port("weights", format!("unknown weighting '{other}'"))),
-    };
-    let pose = pose_normalize(image, contours, mode, weighting);
-    let (angle, root, tip) = pose.axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
-    Ok(vec![Value::Image(Arc::new(pose.image)), Value::Float(angle), Value::Vec2(root), Value::Vec2(tip)])
 }
 
-/// The `imaging.pose_normalize` node.
-pub fn node() -> Arc<dyn Node> {
-    FnNode::new(desc(), cook)
+pyrograph_core::choice! {
+    /// The `weights` option of `imaging.pose_normalize` (a [`Weighting`] without its tolerance).
+    pub enum WeightingOption {
+        /// [`Weighting::Uniform`].
+        Uniform = "uniform",
+        /// [`Weighting::Root`].
+        Root = "root",
+        /// [`Weighting::LowPoly`].
+        LowPoly = "lowpoly",
+    }
+}
+
+pyrograph_core::node! {
+    /// Removes the flame's direction with a weighted least-squares line through its contour (Eigenfires thesis §3.4, eq. 7–11).
+    ///
+    /// The line is fitted to the largest outermost contour (weights: uniform; root = remedy 3, more weight near the
+    /// bottom; lowpoly = remedy 1, Douglas–Peucker first), trimmed at the extreme projections of the contour points,
+    /// and the image is rotated about the lower end so the flame stands vertical. Mode center_scale instead moves the
+    /// flame's bounding box to the centre and scales it to target_height of the frame (angle and end points are
+    /// still reported). With no contours the image passes through and angle is 0.
+    #[node("imaging.pose_normalize", "Pre-processing", PerFrame)]
+    pub struct PoseNormalize {
+        /// Frame to normalize (gray or RGBA)
+        image: Arc<Image>,
+        /// Flame contours traced from this frame
+        contours: Arc<Contours>,
+        /// rotate: stand the flame upright; center_scale: centre and scale it
+        mode: PoseModeOption = PoseModeOption::Rotate,
+        /// Point weighting of the line fit (remedies 3 and 1)
+        weights: WeightingOption = WeightingOption::Uniform,
+        /// Douglas–Peucker tolerance in pixels for weights = lowpoly
+        #[range(0.1, 1000.0)]
+        lowpoly_tolerance: f64 = 8.0,
+        /// Flame height as a fraction of the frame height in center_scale mode
+        #[range(0.01, 4.0)]
+        target_height: f64 = 0.8,
+    }
+    pub struct PoseNormalizeOut {
+        /// Normalized frame
+        image: Arc<Image>,
+        /// Lean of the flame from vertical in degrees, positive to the right; 0 without contours
+        angle: f64,
+        /// Lower end of the fitted line (the pivot), in input pixels
+        root: [f64; 2],
+        /// Upper end of the fitted line, in input pixels
+        tip: [f64; 2],
+    }
+}
+
+impl Cook for PoseNormalize {
+    fn cook(self, _: &CookCtx) -> Result<PoseNormalizeOut, NodeError> {
+        let (image, contours) = (&self.image, &self.contours);
+        if (contours.width, contours.height) != image.size() && !contours.contours.is_empty() {
+            return Err(NodeError::port(
+                port!(PoseNormalize, contours),
+                format!(
+                    "traced in a {}×{} image but the image is {}×{}",
+                    contours.width,
+                    contours.height,
+                    image.width(),
+                    image.height()
+                ),
+            ));
+        }
+        let mode = match self.mode {
+            PoseModeOption::Rotate => PoseMode::Rotate,
+            PoseModeOption::CenterScale => PoseMode::CenterScale(self.target_height),
+        };
+        let weighting = match self.weights {
+            WeightingOption::Uniform => Weighting::Uniform,
+            WeightingOption::Root => Weighting::Root,
+            WeightingOption::LowPoly => Weighting::LowPoly(self.lowpoly_tolerance),
+        };
+        let pose = pose_normalize(image, contours, mode, weighting);
+        let (angle, root, tip) = pose.axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
+        Ok(PoseNormalizeOut { image: Arc::new(pose.image), angle, root, tip })
+    }
 }
 
 #[cfg(test)]

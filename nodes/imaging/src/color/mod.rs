@@ -1,0 +1,86 @@
+//! Colouring of gray flames (Eigenfires thesis §6.1): original colouring from the source video
+//! (Algorithm 2, with the smoke and bloom layers of §6.2–6.3 and the custom masks of §6.4),
+//! synthetic colouring by HLS transfer (§6.1.2), colour ramps, and alpha premultiplication.
+//!
+//! Images are f32 in 0..1, so the thesis's 8-bit threshold (0–255) is divided by 255 and its
+//! saturation `min(v, 0xff)` becomes `min(v, 1)`.
+//!
+//! Optional layers: image ports cannot have default values, so Algorithm 2 is offered as three
+//! nodes over one function, [`original_coloring`]: `imaging.original_coloring` (empty destination,
+//! smoke disabled), `imaging.original_coloring_layered` (destination = a bloom image and a smoke
+//! image, both required; feed a black `imaging.constant_color` to switch one off — with a zero
+//! layer Algorithm 2 gives exactly the result of the disabled branch) and
+//! `imaging.original_coloring_masked` (the layered node plus a §6.4 custom mask).
+//!
+//! One file per topic (original colouring, synthetic colouring with HLS and ramps, alpha), their
+//! items re-exported here.
+
+use pyrograph_core::params::Field;
+use pyrograph_core::{Channels, Cook, Image, Inputs, NodeDesc, NodeError, Registry, TimeDep, Value};
+
+mod alpha;
+mod original;
+mod synthetic;
+
+pub use alpha::*;
+pub use original::*;
+pub use synthetic::*;
+
+/// Adds this module's node types.
+pub fn register(registry: &mut Registry) {
+    registry.add(OriginalColoring::node());
+    registry.add(OriginalColoringLayered::node());
+    registry.add(OriginalColoringMasked::node());
+    registry.add(SyntheticColoring::node());
+    registry.add(SyntheticColoringTexture::node());
+    registry.add(Premultiply::node());
+    registry.add(SetAlpha::node());
+}
+
+/// A port group with every port at its declared default: the `Default` of the groups that are
+/// also an algorithm's settings (bloom, smoke, flipbook layout), so their defaults are stated once.
+///
+/// Panics if a port of the group has no default or its default does not read back: mistakes in
+/// the declaration, which every such group's tests would show.
+pub(crate) fn declared_defaults<F: Field>() -> F {
+    let mut desc = NodeDesc::new("", "", TimeDep::PerFrame, "");
+    F::describe("", "", None, None, &mut desc.inputs);
+    let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
+    F::read(&Inputs::new(&desc, &values), "").unwrap_or_else(|e| panic!("a declared default does not read back: {e}"))
+}
+
+fn size_text(img: &Image) -> String {
+    format!("{}x{}", img.width(), img.height())
+}
+
+/// Checks that `other` (on port `port`) has the size of `source`.
+pub fn check_size(source: &Image, other: &Image, port: &str) -> Result<(), NodeError> {
+    if source.size() != other.size() {
+        return Err(NodeError::port(
+            port,
+            format!("'{port}' is {} but the source is {}; both must have the same size", size_text(other), size_text(source)),
+        ));
+    }
+    Ok(())
+}
+
+/// Intensity of pixel `i` of an image: the gray value, or the Rec. 601 luma of RGBA.
+fn intensity(img: &Image, i: usize) -> f32 {
+    let d = img.data();
+    match img.channels() {
+        Channels::Gray => d[i],
+        Channels::Rgba => 0.299 * d[4 * i] + 0.587 * d[4 * i + 1] + 0.114 * d[4 * i + 2],
+    }
+}
+
+/// RGB of pixel `i` (gray is replicated).
+fn rgb(img: &Image, i: usize) -> [f32; 3] {
+    let d = img.data();
+    match img.channels() {
+        Channels::Gray => [d[i]; 3],
+        Channels::Rgba => [d[4 * i], d[4 * i + 1], d[4 * i + 2]],
+    }
+}
+
+#[cfg(test)]
+mod tests;

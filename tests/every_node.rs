@@ -21,92 +21,128 @@ fn path(p: &Path) -> ParamValue {
     text(&p.to_string_lossy())
 }
 
-/// Adds the nodes that make a value of type `ty` (once each) and returns their endpoint.
-/// Every producer is a registered node with the smallest parameters that still give data
-/// its consumers accept (a flame large enough to find, masks that select it).
-fn supply(doc: &mut GraphDoc, ty: &PortType, files: &Files) -> Option<String> {
-    fn add(doc: &mut GraphDoc, id: &str, node: NodeDoc) {
-        if doc.node(id).is_none() {
-            doc.add_node(id, node);
-        }
+/// Adds a producer node `id` unless the graph has it; true when it was added (connect it then).
+fn add(doc: &mut GraphDoc, id: &str, node: NodeDoc) -> bool {
+    let new = doc.node(id).is_none();
+    if new {
+        doc.add_node(id, node);
     }
-    let flame = || {
-        NodeDoc::new("imaging.turbulence_flame")
-            .param("width", int(48))
-            .param("height", int(64))
-            .param("frames", int(FLAME_FRAMES))
+    new
+}
+
+/// Adds the nodes that make a value of type `ty` for a port of node type `consumer` (once each)
+/// and returns their endpoint. Every producer is a registered node with the smallest parameters
+/// that still give data its consumers accept: one RGBA flame frame read from a file for images,
+/// masks and contours of it, the 150-frame flame clip (gray for the Eigenfires nodes), a database
+/// trained on it.
+fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> Option<String> {
+    let still = |doc: &mut GraphDoc| {
+        add(doc, "s_still", NodeDoc::new("imaging.load_image").param("path", path(&files.image)));
+        "s_still.image".to_string()
     };
+    let flame = NodeDoc::new("imaging.turbulence_flame")
+        .param("width", int(48))
+        .param("height", int(64))
+        .param("frames", int(FLAME_FRAMES));
     let endpoint = match ty.to_string().as_str() {
-        "Image" | "Clip<Image>" => {
-            add(doc, "s_flame", flame());
-            "s_flame.clip"
+        "Image" => still(doc),
+        "Clip<Image>" => {
+            add(doc, "s_flame", flame);
+            if !consumer.starts_with("eigen.") {
+                return Some("s_flame.clip".to_string());
+            }
+            if add(doc, "s_gray", NodeDoc::new("imaging.to_gray")) {
+                doc.connect("s_flame.clip", "s_gray.image");
+            }
+            "s_gray.image".to_string()
         }
         "Mask" => {
-            add(doc, "s_flame", flame());
-            add(doc, 
-                "s_mask",
-                NodeDoc::new("imaging.hsv_mask")
-                    .param("layer1_enabled", ParamValue::Bool(false))
-                    .param("layer2_enabled", ParamValue::Bool(true))
-                    .param("layer3_enabled", ParamValue::Bool(true)),
-            );
-            doc.connect("s_flame.clip", "s_mask.image");
-            "s_mask.mask"
+            let image = still(doc);
+            let mask = NodeDoc::new("imaging.hsv_mask")
+                .param("layer1_enabled", ParamValue::Bool(false))
+                .param("layer2_enabled", ParamValue::Bool(true))
+                .param("layer3_enabled", ParamValue::Bool(true));
+            if add(doc, "s_mask", mask) {
+                doc.connect(&image, "s_mask.image");
+            }
+            "s_mask.mask".to_string()
         }
         "Contours" => {
-            let mask = supply(doc, &PortType::Mask, files)?;
-            if doc.node("s_contours").is_none() {
-                doc.add_node("s_contours", NodeDoc::new("imaging.contours"));
+            let mask = supply(doc, &PortType::Mask, consumer, files)?;
+            if add(doc, "s_contours", NodeDoc::new("imaging.contours")) {
                 doc.connect(&mask, "s_contours.mask");
             }
-            "s_contours.contours"
+            "s_contours.contours".to_string()
         }
         "Basis" | "Weights" => {
             add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
-            if ty.to_string() == "Basis" { "s_db.basis" } else { "s_db.weights" }
+            format!("s_db.{}", if *ty == PortType::Basis { "basis" } else { "weights" })
         }
         "FrameList" => {
             add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
-            add(doc, "s_motion", NodeDoc::new("eigen.motion_list"));
-            doc.connect("s_db.weights", "s_motion.weights");
-            "s_motion.frames"
+            if add(doc, "s_motion", NodeDoc::new("eigen.motion_list").param("method", text("direct_bridging"))) {
+                doc.connect("s_db.weights", "s_motion.weights");
+            }
+            "s_motion.frames".to_string()
         }
         "FlameModel" | "ParamSeries" | "ArModel" => {
-            add(doc, "s_flame", flame());
-            add(doc, "s_fit", NodeDoc::new("flame_model.fit"));
-            doc.connect("s_flame.clip", "s_fit.clip");
+            add(doc, "s_flame", flame);
+            if add(doc, "s_fit", NodeDoc::new("flame_model.fit")) {
+                doc.connect("s_flame.clip", "s_fit.clip");
+            }
             match ty.to_string().as_str() {
-                "FlameModel" => "s_fit.model",
-                "ParamSeries" => "s_fit.params",
+                "FlameModel" => "s_fit.model".to_string(),
+                "ParamSeries" => "s_fit.params".to_string(),
                 _ => {
-                    add(doc, "s_learn", NodeDoc::new("flame_model.arp_learn"));
-                    doc.connect("s_fit.params", "s_learn.params");
-                    "s_learn.model"
+                    if add(doc, "s_learn", NodeDoc::new("flame_model.arp_learn")) {
+                        doc.connect("s_fit.params", "s_learn.params");
+                    }
+                    "s_learn.model".to_string()
                 }
             }
         }
         "Particles" => {
             add(doc, "s_roots", NodeDoc::new("particles.roots"));
-            "s_roots.roots"
+            "s_roots.roots".to_string()
         }
         "Mesh" => {
             add(doc, "s_mesh", NodeDoc::new("particles.mesh_load"));
-            "s_mesh.mesh"
+            "s_mesh.mesh".to_string()
         }
         "SpreadState" => {
             add(doc, "s_mesh", NodeDoc::new("particles.mesh_load"));
-            add(doc, "s_spread", NodeDoc::new("particles.fire_spread").param("frames", int(12)));
-            doc.connect("s_mesh.mesh", "s_spread.mesh");
-            "s_spread.spread"
+            if add(doc, "s_spread", NodeDoc::new("particles.fire_spread").param("frames", int(12))) {
+                doc.connect("s_mesh.mesh", "s_spread.mesh");
+            }
+            "s_spread.spread".to_string()
         }
         "ClothState" => {
             add(doc, "s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
-            "s_cloth.cloth"
+            "s_cloth.cloth".to_string()
         }
-        "Path" => return None,
         _ => return None,
     };
-    Some(endpoint.to_string())
+    Some(endpoint)
+}
+
+/// Parameters some nodes need beyond their defaults to have anything to do with the test data.
+fn needs(name: &str) -> &'static [(&'static str, i64)] {
+    match name {
+        // rows × cols must equal the clip's frames.
+        "imaging.flipbook" | "imaging.write_flipbook" => &[("rows", 10), ("cols", 15)],
+        // Without a query, recognition needs a database frame to look up.
+        "eigen.recognize" => &[("frame", 0)],
+        // Both sizes default to 0 ("keep the aspect"), and one of them must be set.
+        "imaging.resize" => &[("width", 24)],
+        _ => &[],
+    }
+}
+
+/// Refusals that depend on the data, not on the node's ports: End Growing (the default method of
+/// eigen.motion_list) stops when no database frame brings the two ends closer, which a 150-frame
+/// procedural flame allows for nine steps; the footage tests run it on real candles.
+fn data_refusal(name: &str, error: &str) -> bool {
+    matches!(name, "eigen.end_growing" | "eigen.motion_list") && error.contains("no pair of frames brings the two ends")
 }
 
 /// Files the loader nodes read, made by the nodes that write them.
@@ -167,6 +203,7 @@ fn every_registered_node_cooks_with_its_defaults() {
     let files = make_files(&registry);
     let mut failures = Vec::new();
     let mut cooked = 0;
+    let mut refused = 0;
     let descs: Vec<_> = registry.descs().cloned().collect();
     for desc in descs {
         let name = desc.type_name.as_str();
@@ -185,17 +222,22 @@ fn every_registered_node_cooks_with_its_defaults() {
                 doc.node_mut("n").unwrap().params.insert(port.name.clone(), path(file));
                 continue;
             }
-            let Some(from) = supply(&mut doc, &element, &files) else {
+            let Some(from) = supply(&mut doc, &port.ty, name, &files) else {
                 panic!("{name}.{}: no producer of {} in supply(); add one", port.name, port.ty);
             };
             doc.connect(&from, &format!("n.{}", port.name));
         }
+        for (param, value) in needs(name) {
+            doc.node_mut("n").unwrap().params.insert(param.to_string(), int(*value));
+        }
         let out = tempfile::tempdir().unwrap();
         match cook(&registry, &doc, out.path(), "n") {
             Ok(()) => cooked += 1,
+            Err(e) if data_refusal(name, &e) => refused += 1,
             Err(e) => failures.push(format!("{name}: {e}")),
         }
     }
     assert!(failures.is_empty(), "{} of {} node types failed:\n{}", failures.len(), cooked + failures.len(), failures.join("\n"));
-    assert!(cooked >= 70, "only {cooked} node types registered");
+    assert!(cooked + refused >= 76, "only {} node types registered", cooked + refused);
+    assert!(refused <= 2, "{refused} data refusals");
 }

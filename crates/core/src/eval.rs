@@ -146,10 +146,10 @@ impl Evaluator {
                     self.log.push(id.clone());
                 }
                 let fps = outcome.entry.as_ref().map(|e| e.out_fps.clone());
-                if let Some(entry) = outcome.entry {
-                    if graph.node(idx).node.desc().time != TimeDep::Sink {
-                        self.cache.insert(id, entry);
-                    }
+                if let Some(entry) = outcome.entry
+                    && graph.node(idx).node.desc().time != TimeDep::Sink
+                {
+                    self.cache.insert(id, entry);
                 }
                 results.insert(idx, (outcome.result, fps));
             }

@@ -111,6 +111,21 @@ impl<T: Cook> Node for Typed<T> {
     }
 }
 
+/// A declared port group (a [`ports!`](crate::ports) struct) at its declared defaults, so an
+/// algorithm's settings struct that *is* the group has a `Default` without restating the values.
+///
+/// # Panics
+/// When a port of the group has no default, or a default does not read back: mistakes in the
+/// declaration, caught by any test that builds the default.
+pub fn defaults<T: Field>() -> T {
+    let mut ports = Vec::new();
+    T::describe("", "", None, None, &mut ports);
+    let desc = NodeDesc { inputs: ports, ..NodeDesc::new("defaults", "", crate::TimeDep::PerFrame, "") };
+    let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
+    assert_eq!(values.len(), desc.inputs.len(), "every port of a group read by `defaults` has a default");
+    T::read(&Inputs::new(&desc, &values), "").unwrap_or_else(|e| panic!("a declared default does not read back: {e}"))
+}
+
 /// Joins doc-comment lines (`/// text` arrives as `" text"`): lines of a paragraph with spaces,
 /// paragraphs with a blank line, so the first line is the summary.
 pub fn doc_text(lines: &[&str]) -> String {
@@ -582,7 +597,8 @@ macro_rules! node {
 
 /// Declares a group of ports shared by several nodes (a camera, a colour ramp): a struct whose
 /// fields are ports, flattened into any [`node!`](crate::node) that has a field of its type.
-/// Field syntax is that of `node!`.
+/// Field syntax is that of `node!`. A node's field `camera: CameraPorts = CameraPorts { .. }`
+/// overrides every default of the group for that node (names, docs and ranges stay shared).
 #[macro_export]
 macro_rules! ports {
     (
@@ -605,15 +621,21 @@ macro_rules! ports {
             fn describe(
                 _: &str,
                 _: &str,
-                _: Option<Self>,
+                default: Option<Self>,
                 _: Option<(f64, f64)>,
                 out: &mut Vec<$crate::PortDesc>,
             ) {
+                // A node's `group: Group = value` gives every port of the group its default from
+                // `value` (each renderer frames its own scene); else the group's declared defaults.
                 $(
+                    let declared: Option<$fty> = $crate::__opt!($($fdef)?);
                     <$fty as $crate::params::Field>::describe(
                         stringify!($field),
                         &$crate::params::doc_text(&[$($fdoc),*]),
-                        $crate::__opt!($($fdef)?),
+                        match &default {
+                            Some(d) => Some(d.$field.clone()),
+                            None => declared,
+                        },
                         $crate::__opt!($((($lo) as f64, ($hi) as f64))?),
                         out,
                     );

@@ -3,18 +3,38 @@
 
 use glam::{Mat4, Vec3};
 
-/// A bad camera or viewport parameter; `field` names it the way the nodes name their ports.
+/// Which camera or viewport parameter is bad (the render nodes map it to their port).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraField {
+    /// The eye position.
+    Position,
+    /// The point looked at.
+    Target,
+    /// The up hint.
+    Up,
+    /// The vertical field of view.
+    Fov,
+    /// The near plane distance.
+    Near,
+    /// The far plane distance.
+    Far,
+    /// The image width.
+    Width,
+    /// The image height.
+    Height,
+}
+
+/// A bad camera or viewport parameter.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{field}: {message}")]
+#[error("{field:?}: {message}")]
 pub struct CameraError {
-    /// The offending parameter: `camera_position`, `camera_target`, `camera_up`, `fov`, `near`,
-    /// `far`, `width` or `height`.
-    pub field: &'static str,
+    /// The offending parameter.
+    pub field: CameraField,
     /// What is wrong with it.
     pub message: String,
 }
 
-fn err(field: &'static str, message: impl Into<String>) -> CameraError {
+fn err(field: CameraField, message: impl Into<String>) -> CameraError {
     CameraError { field, message: message.into() }
 }
 
@@ -36,33 +56,36 @@ impl Camera {
     /// to the view direction.
     pub fn new(position: Vec3, target: Vec3, up: Vec3, fov_y_degrees: f32, near: f32, far: f32) -> Result<Self, CameraError> {
         if !position.is_finite() {
-            return Err(err("camera_position", format!("must be finite, got {position}")));
+            return Err(err(CameraField::Position, format!("must be finite, got {position}")));
         }
         if !target.is_finite() {
-            return Err(err("camera_target", format!("must be finite, got {target}")));
+            return Err(err(CameraField::Target, format!("must be finite, got {target}")));
         }
         if !up.is_finite() || up.length_squared() < 1e-12 {
-            return Err(err("camera_up", format!("must be a finite non-zero vector, got {up}")));
+            return Err(err(CameraField::Up, format!("must be a finite non-zero vector, got {up}")));
         }
         if !(fov_y_degrees.is_finite() && fov_y_degrees > 0.0 && fov_y_degrees < 180.0) {
-            return Err(err("fov", format!("must lie strictly between 0 and 180 degrees, got {fov_y_degrees}")));
+            return Err(err(CameraField::Fov, format!("must lie strictly between 0 and 180 degrees, got {fov_y_degrees}")));
         }
         if !(near.is_finite() && near > 0.0) {
-            return Err(err("near", format!("must be positive (the camera cannot sit inside its near plane), got {near}")));
+            return Err(err(
+                CameraField::Near,
+                format!("must be positive (the camera cannot sit inside its near plane), got {near}"),
+            ));
         }
         if !(far.is_finite() && far > near) {
-            return Err(err("far", format!("must be greater than near ({near}), got {far}")));
+            return Err(err(CameraField::Far, format!("must be greater than near ({near}), got {far}")));
         }
         let dist = (target - position).length();
         if dist <= near {
             return Err(err(
-                "camera_target",
+                CameraField::Target,
                 format!("lies inside the near plane (distance {dist} <= near {near}): move the camera back or reduce near"),
             ));
         }
         let dir = (target - position) / dist;
         if up.normalize().cross(dir).length() < 1e-4 {
-            return Err(err("camera_up", "is parallel to the view direction; pick another up vector"));
+            return Err(err(CameraField::Up, "is parallel to the view direction; pick another up vector"));
         }
         Ok(Camera { position, target, up: up.normalize(), fov_y_degrees, near, far })
     }
@@ -132,13 +155,13 @@ mod tests {
     fn bad_parameters_name_their_field() {
         let c = |p: Vec3, t: Vec3, fov: f32, n: f32, f: f32| Camera::new(p, t, Vec3::Y, fov, n, f).map_err(|e| e.field);
         let p = Vec3::new(0.0, 0.0, 5.0);
-        assert_eq!(c(p, Vec3::ZERO, 60.0, 0.0, 10.0), Err("near"));
-        assert_eq!(c(p, Vec3::ZERO, 60.0, -1.0, 10.0), Err("near"));
-        assert_eq!(c(p, Vec3::ZERO, 60.0, 1.0, 0.5), Err("far"));
-        assert_eq!(c(p, Vec3::ZERO, 180.0, 0.1, 10.0), Err("fov"));
-        assert_eq!(c(p, Vec3::new(0.0, 0.0, 4.95), 60.0, 0.1, 10.0), Err("camera_target"));
-        assert_eq!(c(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, 60.0, 0.1, 10.0), Err("camera_position"));
-        assert_eq!(Camera::new(Vec3::Y * 5.0, Vec3::ZERO, Vec3::Y, 60.0, 0.1, 10.0).map_err(|e| e.field), Err("camera_up"));
+        assert_eq!(c(p, Vec3::ZERO, 60.0, 0.0, 10.0), Err(CameraField::Near));
+        assert_eq!(c(p, Vec3::ZERO, 60.0, -1.0, 10.0), Err(CameraField::Near));
+        assert_eq!(c(p, Vec3::ZERO, 60.0, 1.0, 0.5), Err(CameraField::Far));
+        assert_eq!(c(p, Vec3::ZERO, 180.0, 0.1, 10.0), Err(CameraField::Fov));
+        assert_eq!(c(p, Vec3::new(0.0, 0.0, 4.95), 60.0, 0.1, 10.0), Err(CameraField::Target));
+        assert_eq!(c(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, 60.0, 0.1, 10.0), Err(CameraField::Position));
+        assert_eq!(Camera::new(Vec3::Y * 5.0, Vec3::ZERO, Vec3::Y, 60.0, 0.1, 10.0).map_err(|e| e.field), Err(CameraField::Up));
         assert!(cam().is_ok());
     }
 

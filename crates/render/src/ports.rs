@@ -1,57 +1,17 @@
 //! The camera ports every render node exposes (`width`, `height`, `camera_position`,
 //! `camera_target`, `camera_up`, `fov`, `near`, `far`), declared once as [`CameraPorts`] and
 //! flattened into the particle, fire and cloth renderers, so their errors name the same ports
-//! the same way; and [`defaults`], the value of a declared port group at its defaults.
+//! the same way.
 
 use glam::Vec3;
-use pyrograph_core::params::{Field, doc_text};
-use pyrograph_core::{Inputs, NodeDesc, NodeError, PortDesc, TimeDep, Value};
+use pyrograph_core::{NodeError, port};
 
-use crate::{Camera, View};
+use crate::camera::CameraField;
+use crate::{Camera, CameraError, View};
 
-/// Declares [`CameraPorts`] and its [`Field`] impl from one field list. Not `ports!`: every
-/// renderer frames its own scene, so the defaults are the node's (`camera: CameraPorts =
-/// CameraPorts { .. }`), while names, docs and ranges are shared.
-macro_rules! camera_ports {
-    (
-        $(#[doc = $doc:literal])*
-        pub struct $name:ident {
-            $(
-                $(#[doc = $fdoc:literal])*
-                $(#[range($lo:expr, $hi:expr)])?
-                $field:ident : $fty:ty
-            ),* $(,)?
-        }
-    ) => {
-        $(#[doc = $doc])*
-        #[derive(Clone, Debug, PartialEq)]
-        pub struct $name {
-            $( $(#[doc = $fdoc])* pub $field: $fty, )*
-        }
-
-        impl Field for $name {
-            fn describe(_: &str, _: &str, default: Option<Self>, _: Option<(f64, f64)>, out: &mut Vec<PortDesc>) {
-                let d = default.unwrap_or_default();
-                $(
-                    <$fty as Field>::describe(
-                        stringify!($field),
-                        &doc_text(&[$($fdoc),*]),
-                        Some(d.$field),
-                        pyrograph_core::__opt!($((($lo) as f64, ($hi) as f64))?),
-                        out,
-                    );
-                )*
-            }
-
-            fn read(inputs: &Inputs<'_>, _: &str) -> Result<Self, NodeError> {
-                Ok($name { $( $field: <$fty as Field>::read(inputs, stringify!($field))?, )* })
-            }
-        }
-    };
-}
-
-camera_ports! {
-    /// A perspective camera and the image size, as ports; the node gives the defaults.
+pyrograph_core::ports! {
+    /// A perspective camera and the image size, as ports; each node gives its own defaults
+    /// (`camera: CameraPorts = CameraPorts::looking(..)`).
     pub struct CameraPorts {
         /// Image width in pixels.
         #[range(1, 16384)]
@@ -102,8 +62,8 @@ impl CameraPorts {
             self.near,
             self.far,
         )
-        .map_err(|e| NodeError::port(e.field, e.message))?;
-        View::new(camera, self.width, self.height).map_err(|e| NodeError::port(e.field, e.message))
+        .map_err(camera_error)?;
+        View::new(camera, self.width, self.height).map_err(camera_error)
     }
 }
 
@@ -113,16 +73,17 @@ impl Default for CameraPorts {
     }
 }
 
-/// A declared port group (a `ports!` struct) at its declared defaults, so an algorithm's
-/// parameter struct that *is* the group has a `Default` without restating the values.
-///
-/// # Panics
-/// When a port of the group has no default: a declaration error, caught by any test that
-/// builds the default.
-pub fn defaults<T: Field>() -> T {
-    let mut desc = NodeDesc::new("defaults", "", TimeDep::PerFrame, "");
-    T::describe("", "", None, None, &mut desc.inputs);
-    let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
-    assert_eq!(values.len(), desc.inputs.len(), "every port of a group read by `defaults` has a default");
-    T::read(&Inputs::new(&desc, &values), "").unwrap_or_else(|e| panic!("a declared default does not read back: {e}"))
+/// A camera error as an error on the port it concerns.
+fn camera_error(e: CameraError) -> NodeError {
+    let port = match e.field {
+        CameraField::Width => port!(CameraPorts, width),
+        CameraField::Height => port!(CameraPorts, height),
+        CameraField::Position => port!(CameraPorts, camera_position),
+        CameraField::Target => port!(CameraPorts, camera_target),
+        CameraField::Up => port!(CameraPorts, camera_up),
+        CameraField::Fov => port!(CameraPorts, fov),
+        CameraField::Near => port!(CameraPorts, near),
+        CameraField::Far => port!(CameraPorts, far),
+    };
+    NodeError::port(port, e.message)
 }

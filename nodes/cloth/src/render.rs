@@ -81,7 +81,7 @@ pyrograph_core::ports! {
 
 impl Default for RenderParams {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

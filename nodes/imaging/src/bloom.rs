@@ -10,7 +10,7 @@ use std::sync::Arc;
 use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, Registry};
 use rayon::prelude::*;
 
-use crate::color::{declared_defaults, hls_transfer};
+use crate::color::hls_transfer;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
@@ -201,7 +201,7 @@ pyrograph_core::ports! {
 
 impl Default for BloomParams {
     fn default() -> Self {
-        declared_defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::basic::resize;
 use crate::bloom::{Plane, convolve_separable, gaussian_kernel};
-use crate::color::{AlphaMode, declared_defaults};
+use crate::color::AlphaMode;
 use crate::io::{OutputFormat, output_format, write_image};
 
 /// Adds this module's node types.
@@ -50,7 +50,7 @@ pyrograph_core::ports! {
 
 impl Default for FlipbookOptions {
     fn default() -> Self {
-        declared_defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

@@ -9,7 +9,7 @@ use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
 
 use crate::basic::{GrayMode, to_gray};
-use crate::color::{check_size, check_threshold, declared_defaults};
+use crate::color::{check_size, check_threshold};
 use crate::preprocess::morphology::gaussian_blur;
 
 /// Adds this module's node types.
@@ -46,7 +46,7 @@ pyrograph_core::ports! {
 
 impl Default for SmokeParams {
     fn default() -> Self {
-        declared_defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

@@ -48,7 +48,7 @@ pyrograph_core::ports! {
 
 impl Default for CharParams {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

@@ -90,7 +90,7 @@ pyrograph_core::ports! {
 
 impl Default for FireLook {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

@@ -182,7 +182,7 @@ pyrograph_core::ports! {
 
 impl Default for FlameParams {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

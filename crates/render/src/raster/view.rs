@@ -4,7 +4,7 @@
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use super::{BAND_ROWS, MAX_SIZE};
-use crate::camera::{Camera, CameraError};
+use crate::camera::{Camera, CameraError, CameraField};
 
 /// Guard band: geometry is clipped to `|x|, |y| <= GUARD * w` in clip space, which keeps every
 /// screen coordinate small enough for exact 64-bit edge functions.
@@ -22,7 +22,7 @@ pub struct View {
 impl View {
     /// A view of `width × height` pixels (each 1..=[`MAX_SIZE`]).
     pub fn new(camera: Camera, width: u32, height: u32) -> Result<Self, CameraError> {
-        for (field, v) in [("width", width), ("height", height)] {
+        for (field, v) in [(CameraField::Width, width), (CameraField::Height, height)] {
             if v == 0 || v > MAX_SIZE {
                 return Err(CameraError { field, message: format!("must be 1..={MAX_SIZE} pixels, got {v}") });
             }

@@ -73,7 +73,7 @@ pyrograph_core::ports! {
 
 impl Default for ClothParams {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

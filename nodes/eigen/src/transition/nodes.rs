@@ -28,13 +28,13 @@ pyrograph_core::ports! {
         t1_start: usize = 0,
         /// Last database frame of T1 (α, inclusive).
         #[range(0, 100_000_000)]
-        t1_end: usize = 0,
+        t1_end: usize = 49,
         /// First database frame of motion T2 (β).
         #[range(0, 100_000_000)]
-        t2_start: usize = 1,
+        t2_start: usize = 100,
         /// Last database frame of T2 (inclusive).
         #[range(0, 100_000_000)]
-        t2_end: usize = 1,
+        t2_end: usize = 149,
     }
 }
 

@@ -11,8 +11,7 @@
 //! scaled to 1, and the intensity scaled to the clip's average. PCA of the normalized images
 //! (the Eigenfires code) gives the eigenflames and the N_e appearance weights (§3.2).
 
-use pyrograph_core::params::Field;
-use pyrograph_core::{FlameModel, FrameRef, Inputs, NodeDesc, ParamSeries, TimeDep, Value};
+use pyrograph_core::{FlameModel, FrameRef, ParamSeries};
 use pyrograph_nodes_eigen::pca;
 use rayon::prelude::*;
 
@@ -80,11 +79,7 @@ impl FitSettings {
 impl Default for FitSettings {
     /// The declared defaults of the ports.
     fn default() -> Self {
-        let mut ports = Vec::new();
-        <FitSettings as Field>::describe("", "", None, None, &mut ports);
-        let desc = NodeDesc { inputs: ports, ..NodeDesc::new("", "", TimeDep::Source, "") };
-        let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
-        <FitSettings as Field>::read(&Inputs::new(&desc, &values), "").expect("every fit setting has a valid default")
+        pyrograph_core::params::defaults()
     }
 }
 

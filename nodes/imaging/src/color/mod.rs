@@ -15,8 +15,7 @@
 //! One file per topic (original colouring, synthetic colouring with HLS and ramps, alpha), their
 //! items re-exported here.
 
-use pyrograph_core::params::Field;
-use pyrograph_core::{Channels, Cook, Image, Inputs, NodeDesc, NodeError, Registry, TimeDep, Value};
+use pyrograph_core::{Channels, Cook, Image, NodeError, Registry};
 
 mod alpha;
 mod original;
@@ -35,18 +34,6 @@ pub fn register(registry: &mut Registry) {
     registry.add(SyntheticColoringTexture::node());
     registry.add(Premultiply::node());
     registry.add(SetAlpha::node());
-}
-
-/// A port group with every port at its declared default: the `Default` of the groups that are
-/// also an algorithm's settings (bloom, smoke, flipbook layout), so their defaults are stated once.
-///
-/// Panics if a port of the group has no default or its default does not read back: mistakes in
-/// the declaration, which every such group's tests would show.
-pub(crate) fn declared_defaults<F: Field>() -> F {
-    let mut desc = NodeDesc::new("", "", TimeDep::PerFrame, "");
-    F::describe("", "", None, None, &mut desc.inputs);
-    let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
-    F::read(&Inputs::new(&desc, &values), "").unwrap_or_else(|e| panic!("a declared default does not read back: {e}"))
 }
 
 fn size_text(img: &Image) -> String {

@@ -1,7 +1,7 @@
 use super::*;
 use proptest::prelude::*;
-use pyrograph_core::Mask;
 use pyrograph_core::params::Port;
+use pyrograph_core::{Mask, Value};
 
 fn gray(w: u32, h: u32, data: &[f32]) -> Image {
     Image::from_vec(w, h, Channels::Gray, data.to_vec()).unwrap()
@@ -169,7 +169,9 @@ fn declared_defaults_are_the_ports_defaults() {
 #[test]
 fn alpha_mode_is_an_enum_port() {
     assert_eq!(AlphaMode::from_value(&Value::Enum("premultiplied".into())), Ok(AlphaMode::Premultiplied));
-    assert!(AlphaMode::from_value(&Value::Enum("dim".into())).unwrap_err().contains("unknown option 'dim' (straight, premultiplied)"));
+    assert!(
+        AlphaMode::from_value(&Value::Enum("dim".into())).unwrap_err().contains("unknown option 'dim' (straight, premultiplied)")
+    );
     assert_eq!(AlphaMode::options(), AlphaMode::NAMES);
 }
 

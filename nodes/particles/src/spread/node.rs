@@ -64,7 +64,7 @@ pyrograph_core::ports! {
 
 impl Default for SpreadParams {
     fn default() -> Self {
-        pyrograph_render::ports::defaults()
+        pyrograph_core::params::defaults()
     }
 }
 

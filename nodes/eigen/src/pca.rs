@@ -272,7 +272,7 @@ pub fn project(basis: &Basis, frames: &[f32], e: usize) -> Result<Weights, Strin
     if e > basis.components() {
         return Err(format!("{e} components asked, the basis has {}", basis.components()));
     }
-    if n == 0 || frames.len() % n != 0 {
+    if n == 0 || !frames.len().is_multiple_of(n) {
         return Err(format!("frame data of {} samples is not a whole number of {n}-sample frames", frames.len()));
     }
     let f = frames.len() / n;

@@ -54,7 +54,7 @@ pub fn lowpass_transition(
 ) -> Result<Vec<Vec<f32>>, String> {
     check_range(&t1, db.frames, "T1")?;
     check_range(&t2, db.frames, "T2")?;
-    if kernel.len() % 2 == 0 || kernel.is_empty() {
+    if kernel.len().is_multiple_of(2) || kernel.is_empty() {
         return Err("the kernel needs an odd length".into());
     }
     let seq: Vec<usize> = t1.clone().chain(t2.clone()).collect();

@@ -47,19 +47,19 @@ pub fn original_coloring(
     if let Some(s) = layers.smoke {
         check_size(source, s, port!(ColoringLayerInputs, smoke))?;
     }
-    if let Some(m) = layers.custom_mask {
-        if (m.width(), m.height()) != source.size() {
-            let port = port!(OriginalColoringMasked, custom_mask);
-            return Err(NodeError::port(
-                port,
-                format!(
-                    "'{port}' is {}x{} but the source is {}; both must have the same size",
-                    m.width(),
-                    m.height(),
-                    size_text(source)
-                ),
-            ));
-        }
+    if let Some(m) = layers.custom_mask
+        && (m.width(), m.height()) != source.size()
+    {
+        let port = port!(OriginalColoringMasked, custom_mask);
+        return Err(NodeError::port(
+            port,
+            format!(
+                "'{port}' is {}x{} but the source is {}; both must have the same size",
+                m.width(),
+                m.height(),
+                size_text(source)
+            ),
+        ));
     }
     let (w, h) = source.size();
     let n = w as usize * h as usize;

@@ -91,7 +91,7 @@ impl Element {
 
 /// The structuring element of `shape` and odd `size` (1..=99).
 pub fn structuring_element(shape: KernelShape, size: u32) -> Result<Element, NodeError> {
-    if size % 2 == 0 || !(1..=99).contains(&size) {
+    if size.is_multiple_of(2) || !(1..=99).contains(&size) {
         return Err(NodeError::port(port!(Morphology, size), format!("must be odd and in 1..=99, got {size}")));
     }
     let r = size / 2;

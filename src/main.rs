@@ -317,14 +317,12 @@ fn explain(node: &str, e: &NodeError) -> String {
 }
 
 fn output_map(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> serde_json::Value {
-    let Some(idx) = graph.index(id) else { return json!({}) };
-    let desc = graph.node(idx).node.desc();
+    let Some(desc) = graph.desc(id) else { return json!({}) };
     desc.outputs.iter().zip(values).map(|(p, v)| (p.name.clone(), json!(v.summary()))).collect::<serde_json::Map<_, _>>().into()
 }
 
 fn describe_outputs(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> String {
-    let Some(idx) = graph.index(id) else { return String::new() };
-    let desc = graph.node(idx).node.desc();
+    let Some(desc) = graph.desc(id) else { return String::new() };
     desc.outputs.iter().zip(values).map(|(p, v)| format!("{} = {}", p.name, v.summary())).collect::<Vec<_>>().join(", ")
 }
 

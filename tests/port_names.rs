@@ -50,7 +50,11 @@ fn literals(line: &str) -> Vec<&str> {
 /// Literals that equal a port name but are not one: `(file, literal, why)`.
 const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("crates/core/src/node.rs", "source", "the name of TimeDep::Source in listings"),
-    ("crates/core/src/include.rs", "path", "graph.include is built by the loader from its file, not declared with node!"),
+    (
+        "crates/core/src/builtin.rs",
+        "path",
+        "INCLUDE_PATH: graph.include is built by the loader from its file, not declared with node!",
+    ),
     ("nodes/flame-model/src/arp/sampler.rs", "height", "a column name of a parameter series"),
     ("nodes/flame-model/src/model/fit.rs", "height", "a column name of a parameter series"),
     ("nodes/flame-model/src/arp/mod.rs", "log_likelihood", "the column name of the likelihood series"),

@@ -3,20 +3,32 @@
 
 use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::include::{IncludePlaceholder, include_desc};
-use crate::node::Node;
+use crate::node::{Node, NodeDesc, PathRole, PortDesc, TimeDep};
 use crate::params::Cook;
 
 /// The built-in node types, for [`crate::Registry::with_builtins`] (a list rather than a
 /// `register(&mut Registry)`, so this module does not depend on the registry that depends on it).
 pub fn nodes() -> Vec<std::sync::Arc<dyn Node>> {
-    vec![
-        std::sync::Arc::new(IncludePlaceholder(include_desc())),
-        FloatValue::node(),
-        IntValue::node(),
-        Add::node(),
-        Multiply::node(),
-    ]
+    vec![FloatValue::node(), IntValue::node(), Add::node(), Multiply::node()]
+}
+
+/// The type name of include nodes.
+pub const INCLUDE_TYPE: &str = "graph.include";
+
+/// The input of `graph.include` naming the file; the loader reads it, so it is declared here.
+pub const INCLUDE_PATH: &str = "path";
+
+/// The description of `graph.include` as listed (the loader adds the ports of the file it names
+/// and flattens the file's nodes into the including graph, so it has no cook of its own).
+pub fn include_desc() -> NodeDesc {
+    NodeDesc::new(
+        INCLUDE_TYPE,
+        "Graph",
+        TimeDep::WholeClip,
+        "Uses another graph file as one node: its declared interface inputs, outputs and exposed \
+         parameters become this node's ports. The path resolves against the including file's folder.",
+    )
+    .input(PortDesc::path(INCLUDE_PATH, PathRole::Input, None, "Graph file to include (RON with an `interface`)."))
 }
 
 /// Bound of the value and math nodes' numbers: wide, but finite so sliders have ends.

@@ -149,6 +149,8 @@ pub enum DiagnosticKind {
     UnsetVariable,
     /// A sub-graph include failed (missing file, include cycle, bad interface).
     Include,
+    /// A node id that cannot be used (empty, or holding the include separator `/`).
+    BadId,
 }
 
 /// One problem found while loading or validating a graph, with its location.

@@ -18,9 +18,9 @@ use rayon::prelude::*;
 pub use crate::ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn};
 use crate::error::NodeError;
 use crate::fingerprint::{Fingerprinter, hash_path_on_disk};
-use crate::frame_cache::FrameCache;
 use crate::graph::{Graph, GraphNode, InputSource};
 use crate::node::{Inputs, Node, PathRole, TimeDep};
+use crate::value::frame_cache::FrameCache;
 use crate::value::{Clip, FrameSource, PortType, Value};
 
 #[derive(Clone)]
@@ -52,14 +52,45 @@ impl CookResult {
     pub fn output(&self, graph: &Graph, id: &str, port: &str) -> Result<Value, NodeError> {
         let res = self.results.get(id).ok_or_else(|| NodeError::msg(format!("node '{id}' was not cooked")))?;
         let values = res.as_ref().map_err(|e| self.cause(e))?;
-        let idx = graph.index(id).ok_or_else(|| NodeError::msg(format!("no node '{id}'")))?;
-        let p = graph
-            .node(idx)
-            .node
-            .desc()
-            .output_index(port)
-            .ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
-        Ok(values[p].clone())
+        let desc = graph.desc(id).ok_or_else(|| NodeError::msg(format!("no node '{id}'")))?;
+        let p = desc.output_index(port).ok_or_else(|| NodeError::port(port, format!("node '{id}' has no output '{port}'")))?;
+        values.get(p).cloned().ok_or_else(|| NodeError::port(port, format!("node '{id}' produced no output '{port}'")))
+    }
+
+    /// Gives each include whose outputs were cooked a result of its own under its id, read
+    /// from the inner nodes its outputs stand for (an "upstream failed" echo of the first inner
+    /// node that failed).
+    fn add_includes(&mut self, graph: &Graph) {
+        let mut found = Vec::new();
+        for id in graph.include_ids() {
+            let Some(inc) = graph.included(id) else { continue };
+            let mut values = Vec::with_capacity(inc.outputs.len());
+            let mut outcome: Option<NodeResult> = None;
+            for (idx, port) in &inc.outputs {
+                match self.results.get(&*graph.node(*idx).id) {
+                    Some(Ok(vals)) => values.push(vals[*port].clone()),
+                    // An echo, like any node downstream of a failure: the inner node reports it.
+                    Some(Err(_)) => {
+                        outcome = Some(Err(NodeError::Upstream(graph.node(*idx).id.to_string())));
+                        break;
+                    }
+                    None => {
+                        outcome = None;
+                        values.clear();
+                        break;
+                    }
+                }
+            }
+            let outcome = match outcome {
+                Some(failed) => Some(failed),
+                None if values.len() == inc.outputs.len() => Some(Ok(values.into())),
+                None => None,
+            };
+            if let Some(o) = outcome {
+                found.push((id.clone(), o));
+            }
+        }
+        self.results.extend(found);
     }
 
     /// The error behind `e`: an "upstream failed" echo is followed up the chain of failed nodes to
@@ -130,7 +161,7 @@ impl Evaluator {
     pub fn cook(&mut self, graph: &Graph, targets: &[&str], ctx: &CookCtx) -> Result<CookResult, NodeError> {
         let mut roots = Vec::with_capacity(targets.len());
         for t in targets {
-            roots.push(graph.index(t).ok_or_else(|| NodeError::msg(format!("no node '{t}' in the graph")))?);
+            roots.extend(graph.roots(t).ok_or_else(|| NodeError::msg(format!("no node '{t}' in the graph")))?);
         }
         let levels = levels_of_cone(graph, &roots);
         let mut results: Done = HashMap::new();
@@ -158,8 +189,11 @@ impl Evaluator {
         self.cache.retain(|k, _| live.contains(&**k));
         // The cook has let go of the frames it was using: bring the shared cache back to budget.
         FrameCache::global().trim();
-        let results = results.into_iter().map(|(idx, (r, _))| (graph.node(idx).id.clone(), r)).collect();
-        Ok(CookResult { results })
+        let results: HashMap<Arc<str>, NodeResult> =
+            results.into_iter().map(|(idx, (r, _))| (graph.node(idx).id.clone(), r)).collect();
+        let mut result = CookResult { results };
+        result.add_includes(graph);
+        Ok(result)
     }
 
     /// Cooks one output port (`"node.port"`) and returns its value.

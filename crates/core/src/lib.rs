@@ -4,14 +4,11 @@
 #![deny(missing_docs)]
 
 pub mod builtin;
-pub mod clip;
-mod compact;
 pub mod ctx;
 pub mod document;
 pub mod error;
 pub mod eval;
 pub mod fingerprint;
-pub mod frame_cache;
 pub mod graph;
 pub mod include;
 pub mod learned;
@@ -21,6 +18,9 @@ pub mod params;
 pub mod registry;
 pub mod stepping;
 pub mod value;
+
+/// Clips and the shared frame cache live with the values they hold and are made of.
+pub use value::{clip, frame_cache};
 
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};

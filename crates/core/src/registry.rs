@@ -9,6 +9,8 @@ use crate::node::{Node, NodeDesc};
 #[derive(Clone, Default)]
 pub struct Registry {
     nodes: BTreeMap<String, Arc<dyn Node>>,
+    /// Types the graph loader builds itself (`graph.include`): listed, never cooked.
+    loader: BTreeMap<String, NodeDesc>,
 }
 
 impl Registry {
@@ -23,6 +25,8 @@ impl Registry {
         for node in crate::builtin::nodes() {
             r.add(node);
         }
+        let include = crate::builtin::include_desc();
+        r.loader.insert(include.type_name.clone(), include);
         r
     }
 
@@ -33,8 +37,9 @@ impl Registry {
     /// error caught by the first test that builds the registry, never a user-input condition.
     pub fn add(&mut self, node: Arc<dyn Node>) {
         let name = node.desc().type_name.clone();
+        let taken = self.loader.contains_key(&name);
         let previous = self.nodes.insert(name.clone(), node);
-        assert!(previous.is_none(), "node type '{name}' registered twice");
+        assert!(previous.is_none() && !taken, "node type '{name}' registered twice");
     }
 
     /// Adds a node declared with [`crate::node!`]: `registry.declare::<levels::Levels>()`.
@@ -47,9 +52,16 @@ impl Registry {
         self.nodes.get(type_name)
     }
 
+    /// The description of type `type_name`, cookable or built by the loader.
+    pub fn desc(&self, type_name: &str) -> Option<&NodeDesc> {
+        self.nodes.get(type_name).map(|n| n.desc()).or_else(|| self.loader.get(type_name))
+    }
+
     /// All descriptions, sorted by type name.
     pub fn descs(&self) -> impl Iterator<Item = &NodeDesc> {
-        self.nodes.values().map(|n| n.desc())
+        let mut all: Vec<&NodeDesc> = self.nodes.values().map(|n| n.desc()).chain(self.loader.values()).collect();
+        all.sort_by(|a, b| a.type_name.cmp(&b.type_name));
+        all.into_iter()
     }
 
     /// Type names close to `name` (same suffix or a small edit distance), for "did you mean" hints.
@@ -57,6 +69,7 @@ impl Registry {
         let tail = name.rsplit('.').next().unwrap_or(name);
         self.nodes
             .keys()
+            .chain(self.loader.keys())
             .map(|k| (edit_distance(k, name).min(edit_distance(k.rsplit('.').next().unwrap_or(k), tail)), k))
             .filter(|(d, _)| *d <= 2)
             .min()

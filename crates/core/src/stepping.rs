@@ -10,8 +10,8 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
+use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::eval::CookCtx;
 
 /// A simulation state a [`SteppingCache`] can keep.
 pub trait Checkpoint: Clone + Send {

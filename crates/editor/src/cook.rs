@@ -266,7 +266,7 @@ fn worker_loop(
 fn cone_size(request: &CookRequest) -> usize {
     let graph = &request.graph;
     let mut seen = std::collections::HashSet::new();
-    let mut stack: Vec<_> = request.targets.iter().filter_map(|t| graph.index(t)).collect();
+    let mut stack: Vec<_> = request.targets.iter().filter_map(|t| graph.roots(t)).flatten().collect();
     while let Some(i) = stack.pop() {
         if seen.insert(i) {
             stack.extend(graph.upstream(i));
@@ -349,19 +349,18 @@ fn run_job(
 }
 
 /// The value of output `port` of `node` in a cook result.
-fn output_value(graph: &Graph, result: &CookResult, node: &str, port: usize) -> Result<Value, String> {
+fn output_value(result: &CookResult, node: &str, port: usize) -> Result<Value, String> {
     let values = match result.node(node) {
         Some(Ok(v)) => v,
         Some(Err(e)) => return Err(e.to_string()),
         None => return Err(format!("node '{node}' was not cooked")),
     };
-    let _ = graph.index(node);
     values.get(port).cloned().ok_or_else(|| format!("node '{node}' has no output #{port}"))
 }
 
 fn make_preview(graph: &Graph, result: &CookResult, pr: &PreviewRequest, ctx: &CookCtx) -> Preview {
     let mut preview = Preview { request: Some(pr.clone()), ..Preview::default() };
-    let value = match output_value(graph, result, &pr.node, pr.output) {
+    let value = match output_value(result, &pr.node, pr.output) {
         Ok(v) => v,
         Err(e) => {
             preview.error = Some(e);
@@ -415,8 +414,7 @@ fn fill_preview(preview: &mut Preview, value: &Value) {
 }
 
 fn upstream_image(graph: &Graph, result: &CookResult, node: &str, frame: usize, ctx: &CookCtx) -> Option<PreviewImage> {
-    let start = graph.index(node)?;
-    let mut queue: std::collections::VecDeque<_> = graph.upstream(start).collect();
+    let mut queue: std::collections::VecDeque<_> = graph.roots(node)?.into_iter().flat_map(|r| graph.upstream(r)).collect();
     let mut seen = std::collections::HashSet::new();
     while let Some(idx) = queue.pop_front() {
         if !seen.insert(idx) {
@@ -426,7 +424,7 @@ fn upstream_image(graph: &Graph, result: &CookResult, node: &str, frame: usize, 
         for (port, ty) in gn.out_types.iter().enumerate() {
             let elem = ty.clip_element().unwrap_or(ty);
             if matches!(elem, PortType::Image | PortType::Mask)
-                && let Ok(v) = output_value(graph, result, &gn.id, port)
+                && let Ok(v) = output_value(result, &gn.id, port)
             {
                 let v = match v {
                     Value::Clip(c) if !c.is_empty() => c.get(frame.min(c.len() - 1), ctx).ok()?,

@@ -684,7 +684,7 @@ impl Editor {
         let dir = self.base_dir();
         for (id, nd) in &self.doc.nodes.0 {
             let desc = if nd.type_name == INCLUDE_TYPE {
-                match graph.and_then(|g| g.index(id).map(|i| g.node(i).node.desc().clone())) {
+                match graph.and_then(|g| g.desc(id).cloned()) {
                     Some(d) => Some(d),
                     None => match nd.params.get("path") {
                         Some(ParamValue::String(p)) => {

@@ -93,7 +93,7 @@ impl Viewer<'_> {
             .validation()
             .graph
             .as_ref()
-            .and_then(|g| g.index(id).and_then(|i| g.node(i).out_types.get(idx).cloned()))
+            .and_then(|g| g.output_type(id, idx).cloned())
             .unwrap_or_else(|| port.ty.clone());
         Some((id.clone(), port.name.clone(), ty, port.doc.clone()))
     }

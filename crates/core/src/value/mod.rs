@@ -5,10 +5,14 @@ use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-pub use crate::clip::{Clip, FrameSource};
+pub mod clip;
+mod compact;
+pub mod frame_cache;
+
 use crate::fingerprint::{Fingerprinter, hash_f32s};
 pub use crate::learned::{ArModel, FlameModel, ParamSeries};
 pub use crate::mesh::{CharMark, FlameRoot, Mesh, NO_NEIGHBOR, SpreadState};
+pub use clip::{Clip, FrameSource};
 
 /// The closed set of types a port can carry.
 ///

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::ctx::CookCtx;
 use crate::error::NodeError;
 use crate::fingerprint::Fingerprinter;
-use crate::frame_cache::{ClipKey, FrameCache, next_clip_id};
+use crate::value::frame_cache::{ClipKey, FrameCache, next_clip_id};
 use crate::value::{Image, PortType, Value};
 
 /// Produces the frames of a [`Clip`] on demand.

@@ -7,7 +7,7 @@
 //! reader recompute a frame that is in memory anyway. An evicted frame is recomputed by its clip's
 //! source on the next request, bit-identically (sources are deterministic). With
 //! [`FrameCache::set_compact`], frames of 8-bit content (decoded files and videos) are held at one
-//! byte a sample and widened on the way out ([`crate::compact`]), so a budget holds four times as
+//! byte a sample and widened on the way out ([`crate::value::compact`]), so a budget holds four times as
 //! many of them.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -15,8 +15,8 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard};
 
 use lru::LruCache;
 
-use crate::compact::Bytes8;
 use crate::value::Value;
+use crate::value::compact::Bytes8;
 
 /// Default budget: enough for eight 1080p RGBA float frames (or 64 gray 8-bit-sized ones), small
 /// enough that a streaming cook of any length stays well under a gigabyte. Interactive work can

@@ -1,0 +1,170 @@
+//! `graph.include`: another graph file used as one node. Its nodes are flattened into the
+//! including graph under the include's id (`fire/noise`), so they cook, cache and report errors
+//! like any other node; the include keeps only its description and the inner ports behind it.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use super::build::{Parts, build, diag, node_inputs};
+use super::{BuildOptions, Graph, GraphNode, Included, InputSource, LoadCtx, PATH_SEP, PortRef, expand_vars};
+use crate::builtin::{INCLUDE_PATH, INCLUDE_TYPE, include_desc};
+use crate::document::{GraphDoc, NodeDoc, ParamValue};
+use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
+use crate::node::{NodeDesc, PortDesc, TimeDep};
+use crate::registry::Registry;
+use crate::value::PortType;
+
+fn include_diag(id: &str, message: String) -> Diagnostic {
+    diag(DiagnosticKind::Include, Location::Port { node: id.to_string(), port: INCLUDE_PATH.into() }, message)
+}
+
+/// Loads and builds the file include `id` names, with its description.
+fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<Diagnostic>> {
+    let raw = match nd.params.get(INCLUDE_PATH) {
+        Some(ParamValue::String(s)) => s,
+        Some(other) => return Err(vec![include_diag(id, format!("needs a path string, got {other}"))]),
+        None => return Err(vec![include_diag(id, "graph.include needs a 'path' parameter naming the graph file".into())]),
+    };
+    let expanded = expand_vars(raw).map_err(|m| vec![include_diag(id, m)])?;
+    let path = ctx.dir.join(&expanded);
+    let canon = std::fs::canonicalize(&path)
+        .map_err(|e| vec![include_diag(id, format!("cannot open included graph {}: {e}", path.display()))])?;
+    if ctx.include_stack.contains(&canon) {
+        let chain: Vec<String> = ctx.include_stack.iter().chain([&canon]).map(|p| short(p)).collect();
+        return Err(vec![include_diag(id, format!("include cycle: {}", chain.join(" -> ")))]);
+    }
+    let text =
+        std::fs::read_to_string(&canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
+    let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, &canon, d.0))?;
+    let mut stack = ctx.include_stack.clone();
+    stack.push(canon.clone());
+    let child = LoadCtx { dir: canon.parent().map(Path::to_path_buf).unwrap_or_default(), include_stack: stack, ..ctx.clone() };
+    let mut sub = build(&doc, &child).map_err(|d| nested(id, &canon, d.0))?;
+    sub.file = Some(canon.clone());
+    let desc = describe(&doc, &sub).map_err(|m| vec![include_diag(id, format!("{}: {m}", canon.display()))])?;
+    Ok((sub, desc))
+}
+
+/// Adds the nodes of the file include `id` names to `parts` as `id/<inner id>`, sets the inner
+/// ports its parameters stand for, and records the include's port map.
+pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) -> Result<(), Vec<Diagnostic>> {
+    let (sub, desc) = load(id, nd, ctx)?;
+    let mut diags = Vec::new();
+    let sources = node_inputs(id, nd, &desc, ctx, &mut diags);
+    if !diags.is_empty() {
+        return Err(diags);
+    }
+    let Some(iface) = &sub.interface else { return Err(vec![include_diag(id, "included graph has no interface".into())]) };
+    let mut map = std::collections::HashMap::new();
+    for old in sub.g.node_indices() {
+        let inner = &sub.g[old];
+        let new_id: Arc<str> = Arc::from(format!("{id}{PATH_SEP}{}", inner.id));
+        let idx = parts.g.add_node(GraphNode { id: new_id.clone(), ..inner.clone() });
+        parts.ids.insert(new_id, idx);
+        map.insert(old, idx);
+    }
+    for idx in map.values() {
+        for src in &mut parts.g[*idx].inputs {
+            if let InputSource::Edge { from, .. } = src {
+                *from = map[from];
+            }
+        }
+    }
+    for e in sub.g.edge_indices() {
+        if let (Some((a, b)), Some(w)) = (sub.g.edge_endpoints(e), sub.g.edge_weight(e)) {
+            parts.g.add_edge(map[&a], map[&b], *w);
+        }
+    }
+    let remap = |(_, idx, port): &(String, _, usize)| (map[idx], *port);
+    // The include's own `path` input comes first and stands for no inner port.
+    let own = include_desc().inputs.len();
+    let inner_inputs = iface.inputs.iter().chain(&iface.params).map(|p| Some(remap(p)));
+    let inputs: Vec<Option<PortRef>> = std::iter::repeat_n(None, own).chain(inner_inputs).collect();
+    let outputs: Vec<_> = iface.outputs.iter().map(remap).collect();
+    for (target, source) in inputs.iter().zip(sources) {
+        if let Some((idx, port)) = target {
+            parts.g[*idx].inputs[*port] = source;
+        }
+    }
+    parts.includes.insert(Arc::from(id), Included { desc: Arc::new(desc), inputs, outputs });
+    Ok(())
+}
+
+/// The node description a graph file would have when included (its exposed ports), for preset
+/// listings; problems in the file come back as diagnostics.
+pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
+    let options = BuildOptions::default();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let ctx = LoadCtx { registry, dir, options: &options, include_stack: Vec::new() };
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(name));
+    load("preset", &nd, &ctx).map(|(_, desc)| desc).map_err(|d| Diagnostics(d).in_file(path))
+}
+
+fn short(p: &Path) -> String {
+    p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+fn nested(id: &str, file: &Path, inner: Vec<Diagnostic>) -> Vec<Diagnostic> {
+    inner
+        .into_iter()
+        .map(|d| {
+            let what = if d.kind == DiagnosticKind::Include { d.message } else { format!("{}: {}", d.location, d.message) };
+            include_diag(id, format!("in included graph {}: {what}", file.display()))
+        })
+        .collect()
+}
+
+/// Ports of an include node, read from the sub-graph's interface and inner port descriptions.
+fn describe(doc: &GraphDoc, sub: &Graph) -> Result<NodeDesc, String> {
+    let iface = sub.interface.as_ref().ok_or("has no `interface`, so it cannot be used as a node")?;
+    let mut desc = include_desc();
+    if let Some(text) = &doc.description {
+        desc.doc = text.clone();
+    }
+    let mut only_per_frame = sub.topo_order().iter().all(|i| {
+        let n = sub.node(*i);
+        !n.lifted && matches!(n.node.desc().time, TimeDep::Source | TimeDep::PerFrame)
+    });
+    for (name, idx, port) in &iface.inputs {
+        let inner = &sub.node(*idx).node.desc().inputs[*port];
+        only_per_frame &= !matches!(inner.ty, PortType::Clip(_));
+        let default = match &sub.node(*idx).inputs[*port] {
+            InputSource::Const(v) => Some(v.clone()),
+            _ => None,
+        };
+        desc.inputs.push(PortDesc {
+            name: name.clone(),
+            default,
+            doc: format!("Feeds {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc),
+            ..inner.clone()
+        });
+    }
+    for (name, idx, port) in &iface.params {
+        let inner = &sub.node(*idx).node.desc().inputs[*port];
+        if !inner.ty.is_parameter() {
+            return Err(format!("exposed parameter '{name}' points at a {} input; expose it under `inputs`", inner.ty));
+        }
+        let current = match &sub.node(*idx).inputs[*port] {
+            InputSource::Const(v) => Some(v.clone()),
+            _ => return Err(format!("exposed parameter '{name}' is connected inside the graph")),
+        };
+        desc.inputs.push(PortDesc {
+            name: name.clone(),
+            default: current,
+            doc: format!("Sets {}.{}. {}", sub.node(*idx).id, inner.name, inner.doc),
+            ..inner.clone()
+        });
+    }
+    for (name, idx, port) in &iface.outputs {
+        let ty = sub.node(*idx).out_types[*port].clone();
+        only_per_frame &= !matches!(ty, PortType::Clip(_));
+        desc.outputs.push(PortDesc::new(
+            name,
+            ty,
+            &format!("Output {}.{}", sub.node(*idx).id, sub.node(*idx).node.desc().outputs[*port].name),
+        ));
+    }
+    desc.time = if only_per_frame { TimeDep::PerFrame } else { TimeDep::WholeClip };
+    Ok(desc)
+}

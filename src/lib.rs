@@ -15,6 +15,7 @@ pub use pyrograph_nodes_eigen as eigen;
 pub use pyrograph_nodes_flame_model as flame_model;
 pub use pyrograph_nodes_imaging as imaging;
 pub use pyrograph_nodes_particles as particles;
+pub use pyrograph_render as render;
 
 /// A registry with every node type pyrograph ships.
 pub fn registry() -> core::Registry {

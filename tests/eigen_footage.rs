@@ -6,9 +6,10 @@
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value, Weights};
+use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
 use pyrograph::eigen::motion::{Method, transition};
 use pyrograph::eigen::transition::{distance, lowpass_kernel};
+use pyrograph::eigen::values::{FrameItem, Weights};
 
 fn footage() -> PathBuf {
     std::env::var_os("PYROGRAPH_FOOTAGE")
@@ -38,9 +39,10 @@ fn tealight_weights() -> Weights {
     ];
     let g = Graph::build(&doc, &pyrograph::registry(), &root.join("graphs"), &BuildOptions::default())
         .unwrap_or_else(|d| panic!("{d}"));
-    match Evaluator::new().output(&g, "pca.weights", &CookCtx::new()).unwrap() {
-        Value::Weights(w) => w.as_ref().clone(),
-        other => panic!("expected weights, got {}", other.type_name()),
+    let out = Evaluator::new().output(&g, "pca.weights", &CookCtx::new()).unwrap();
+    match out.downcast::<Weights>() {
+        Some(w) => w.as_ref().clone(),
+        None => panic!("expected weights, got {}", out.type_name()),
     }
 }
 
@@ -61,8 +63,8 @@ fn largest_jump(w: &Weights, x: &RangeInclusive<usize>, y: &RangeInclusive<usize
     let mut seq = vec![row(w, x.end() - t.trim_end)];
     for item in &t.items {
         seq.push(match item {
-            pyrograph::core::FrameItem::Frame(f) => row(w, *f as usize),
-            pyrograph::core::FrameItem::Weights(v) => v.clone(),
+            FrameItem::Frame(f) => row(w, *f as usize),
+            FrameItem::Weights(v) => v.clone(),
         });
     }
     seq.push(row(w, y.start() + t.trim_start));

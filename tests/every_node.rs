@@ -76,7 +76,7 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
         }
         "Basis" | "Weights" => {
             add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));
-            format!("s_db.{}", if *ty == PortType::Basis { "basis" } else { "weights" })
+            format!("s_db.{}", if ty.to_string() == "Basis" { "basis" } else { "weights" })
         }
         "FrameList" => {
             add(doc, "s_db", NodeDoc::new("eigen.load_database").param("path", path(&files.database)));

@@ -11,8 +11,6 @@ pub mod eval;
 pub mod fingerprint;
 pub mod graph;
 pub mod include;
-pub mod learned;
-pub mod mesh;
 pub mod node;
 pub mod params;
 pub mod registry;
@@ -30,8 +28,4 @@ pub use graph::{BuildOptions, Graph};
 pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
 pub use params::{ClipOf, Cook, InputPath, OutputPath};
 pub use registry::Registry;
-pub use value::{
-    ArModel, Basis, Channels, CharMark, Clip, ClothState, Contour, Contours, FlameModel, FlameRoot, FrameItem, FrameList,
-    FrameRef, FrameSource, Image, LargeWind, Mask, Mesh, NO_NEIGHBOR, ParamSeries, Particle, Particles, PortType, SpreadState,
-    Value, Weights, WindField,
-};
+pub use value::{Channels, Clip, Contour, Contours, FrameSource, Image, Mask, PortType, TypeInfo, Value, ValueType};

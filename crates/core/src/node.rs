@@ -340,92 +340,10 @@ impl<'a> Inputs<'a> {
         }
     }
 
-    /// A wind field.
-    pub fn wind_field(&self, name: &str) -> Result<&'a Arc<crate::value::WindField>, NodeError> {
-        match self.get(name)? {
-            Value::WindField(v) => Ok(v),
-            other => Err(self.wrong(name, "WindField", other)),
-        }
-    }
-
-    /// Particles.
-    pub fn particles(&self, name: &str) -> Result<&'a Arc<crate::value::Particles>, NodeError> {
-        match self.get(name)? {
-            Value::Particles(v) => Ok(v),
-            other => Err(self.wrong(name, "Particles", other)),
-        }
-    }
-
-    /// Mass-spring flame cloths.
-    pub fn cloth_state(&self, name: &str) -> Result<&'a Arc<crate::value::ClothState>, NodeError> {
-        match self.get(name)? {
-            Value::ClothState(v) => Ok(v),
-            other => Err(self.wrong(name, "ClothState", other)),
-        }
-    }
-
-    /// A [`crate::value::ParamSeries`].
-    pub fn param_series(&self, name: &str) -> Result<&'a Arc<crate::value::ParamSeries>, NodeError> {
-        match self.get(name)? {
-            Value::ParamSeries(v) => Ok(v),
-            other => Err(self.wrong(name, "ParamSeries", other)),
-        }
-    }
-
-    /// A [`crate::value::ArModel`].
-    pub fn ar_model(&self, name: &str) -> Result<&'a Arc<crate::value::ArModel>, NodeError> {
-        match self.get(name)? {
-            Value::ArModel(v) => Ok(v),
-            other => Err(self.wrong(name, "ArModel", other)),
-        }
-    }
-
-    /// A [`crate::value::FlameModel`].
-    pub fn flame_model(&self, name: &str) -> Result<&'a Arc<crate::value::FlameModel>, NodeError> {
-        match self.get(name)? {
-            Value::FlameModel(v) => Ok(v),
-            other => Err(self.wrong(name, "FlameModel", other)),
-        }
-    }
-
-    /// A [`crate::value::Mesh`].
-    pub fn mesh(&self, name: &str) -> Result<&'a Arc<crate::value::Mesh>, NodeError> {
-        match self.get(name)? {
-            Value::Mesh(v) => Ok(v),
-            other => Err(self.wrong(name, "Mesh", other)),
-        }
-    }
-
-    /// A [`crate::value::SpreadState`].
-    pub fn spread_state(&self, name: &str) -> Result<&'a Arc<crate::value::SpreadState>, NodeError> {
-        match self.get(name)? {
-            Value::SpreadState(v) => Ok(v),
-            other => Err(self.wrong(name, "SpreadState", other)),
-        }
-    }
-
-    /// An Eigenfires basis.
-    pub fn basis(&self, name: &str) -> Result<&'a Arc<crate::value::Basis>, NodeError> {
-        match self.get(name)? {
-            Value::Basis(v) => Ok(v),
-            other => Err(self.wrong(name, "Basis", other)),
-        }
-    }
-
-    /// Eigenfires weights.
-    pub fn weights(&self, name: &str) -> Result<&'a Arc<crate::value::Weights>, NodeError> {
-        match self.get(name)? {
-            Value::Weights(v) => Ok(v),
-            other => Err(self.wrong(name, "Weights", other)),
-        }
-    }
-
-    /// A frame list.
-    pub fn frame_list(&self, name: &str) -> Result<&'a Arc<crate::value::FrameList>, NodeError> {
-        match self.get(name)? {
-            Value::FrameList(v) => Ok(v),
-            other => Err(self.wrong(name, "FrameList", other)),
-        }
+    /// A value of a type declared by a node crate.
+    pub fn custom<T: crate::value::ValueType>(&self, name: &str) -> Result<Arc<T>, NodeError> {
+        let v = self.get(name)?;
+        v.downcast::<T>().ok_or_else(|| self.wrong(name, T::INFO.name, v))
     }
 
     /// A Vec3.

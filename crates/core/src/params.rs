@@ -15,10 +15,7 @@ use std::sync::Arc;
 use crate::ctx::CookCtx;
 use crate::error::NodeError;
 use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc};
-use crate::value::{
-    ArModel, Basis, Clip, ClothState, Contours, FlameModel, FrameList, Image, Mask, Mesh, ParamSeries, Particles, PortType,
-    SpreadState, Value, Weights, WindField,
-};
+use crate::value::{Clip, Contours, Image, Mask, PortType, Value};
 
 /// A type that one port carries: how it is described and how it converts to and from a [`Value`].
 pub trait Port: Sized {
@@ -383,22 +380,20 @@ macro_rules! shared_port {
         }
     )*};
 }
-shared_port!(
-    Image,
-    Mask,
-    Contours,
-    WindField,
-    Particles,
-    ClothState,
-    Basis,
-    Weights,
-    FrameList,
-    ParamSeries,
-    ArModel,
-    FlameModel,
-    Mesh,
-    SpreadState
-);
+shared_port!(Image, Mask, Contours);
+
+/// Every type a node crate declares with [`crate::value::ValueType`] is a port type as `Arc<T>`.
+impl<T: crate::value::ValueType> Port for Arc<T> {
+    fn port_type() -> PortType {
+        PortType::of::<T>()
+    }
+    fn into_value(self) -> Value {
+        Value::custom(self)
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        v.downcast::<T>().ok_or_else(|| wrong(T::INFO.name, v))
+    }
+}
 
 /// A clip whose frames are `T`s: the port type `Clip<T>`.
 pub struct ClipOf<T> {

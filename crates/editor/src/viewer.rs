@@ -29,14 +29,8 @@ pub fn type_color(ty: &PortType) -> Color32 {
         PortType::Image => Color32::from_rgb(240, 140, 60),
         PortType::Mask => Color32::from_rgb(235, 235, 235),
         PortType::Contours => Color32::from_rgb(80, 210, 240),
-        PortType::WindField => Color32::from_rgb(120, 160, 250),
-        PortType::Particles => Color32::from_rgb(245, 110, 180),
-        PortType::Basis | PortType::Weights | PortType::FrameList => Color32::from_rgb(200, 180, 140),
-        PortType::ParamSeries | PortType::ArModel | PortType::FlameModel => Color32::from_rgb(230, 150, 200),
-        PortType::Mesh | PortType::SpreadState => Color32::from_rgb(150, 200, 150),
+        PortType::Custom(info) => Color32::from_rgb(info.color[0], info.color[1], info.color[2]),
         PortType::Clip(inner) => type_color(inner),
-        #[allow(unreachable_patterns)]
-        _ => Color32::GRAY,
     }
 }
 

@@ -30,10 +30,12 @@
 #![deny(missing_docs)]
 
 pub mod camera;
+pub mod particles;
 pub mod ports;
 pub mod raster;
 
 pub use camera::{Camera, CameraError};
+pub use particles::{Particle, Particles};
 pub use raster::{
     BAND_ROWS, Blend, DrawList, Framebuffer, ScreenVertex, TextureId, Vertex, View, blend_pixel, render, render_image,
     sample_bilinear,

@@ -8,7 +8,7 @@
 //! The algorithms are plain functions and types ([`sim::Simulation`], [`sim::Topology`],
 //! [`render::render_cloth`], [`textures::builtin_textures`]); the node wrappers only read ports.
 //!
-//! Nodes: `cloth.mass_spring_flame` (simulation, a clip of [`pyrograph_core::ClothState`]),
+//! Nodes: `cloth.mass_spring_flame` (simulation, a clip of [`ClothState`]),
 //! `cloth.cloth_render` (built-in procedural flame textures, wireframe, plain cloth) and
 //! `cloth.cloth_render_textured` (the same with a required texture input, so any image or clip —
 //! another node's output — textures the cloth; a `Clip<Image>` there lifts the render over time
@@ -17,6 +17,7 @@
 
 pub mod render;
 pub mod sim;
+pub mod state;
 pub mod stencil;
 pub mod textures;
 
@@ -30,6 +31,7 @@ pub fn register(registry: &mut Registry) {
 
 #[cfg(test)]
 mod tests {
+    use crate::state::ClothState;
     use pyrograph_core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, PortType, Registry, Value};
 
     fn cook(ron: &str, endpoint: &str) -> Value {
@@ -72,7 +74,7 @@ mod tests {
         assert!(a.data().chunks(4).any(|p| p[0] > 0.3), "the textured cloth is visible");
         assert_ne!(a.data(), b.data(), "frames differ as cloth and texture move");
         let Value::Clip(states) = cook(ron, "cloth.cloth") else { panic!("the simulation gives a clip") };
-        let Value::ClothState(s) = states.get(2, &ctx).unwrap() else { panic!("cloth states") };
+        let Some(s) = states.get(2, &ctx).unwrap().downcast::<ClothState>() else { panic!("cloth states") };
         assert_eq!((s.flames(), s.width, s.height, s.positions.len()), (1, 4, 6, 24));
     }
 }

@@ -7,11 +7,12 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{ClothState, CookCtx, Image, NodeError, Registry, port};
+use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, Camera, DrawList, TextureId, Vertex, View, render_image};
 use rayon::prelude::*;
 
+use crate::state::ClothState;
 use crate::textures::builtin_textures;
 
 /// Adds `cloth.cloth_render` and `cloth.cloth_render_textured`.

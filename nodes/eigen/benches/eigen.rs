@@ -7,9 +7,9 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use pyrograph_core::{Basis, FrameRef, Weights};
 use pyrograph_nodes_eigen::pca::{reconstruct, train};
 use pyrograph_nodes_eigen::transition::end_growing;
+use pyrograph_nodes_eigen::values::{Basis, FrameRef, Weights};
 
 /// Smooth moving blobs with a little noise: flame-like variation with a decaying spectrum.
 fn frames(w: u32, h: u32, m: usize) -> Vec<f32> {

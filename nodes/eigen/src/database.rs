@@ -14,10 +14,11 @@ use std::sync::Arc;
 
 use pyrograph_core::document::write_atomic;
 use pyrograph_core::params::{Cook, InputPath, OutputPath};
-use pyrograph_core::{Basis, CookCtx, FrameRef, NodeError, Registry, Weights, port};
+use pyrograph_core::{CookCtx, NodeError, Registry, port};
 use serde::{Deserialize, Serialize};
 
 use crate::pca::Database;
+use crate::values::{Basis, FrameRef, Weights};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {

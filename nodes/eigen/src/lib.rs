@@ -12,6 +12,7 @@ pub mod motion;
 pub mod pca;
 pub mod pca_blocks;
 pub mod transition;
+pub mod values;
 pub mod view;
 
 use pyrograph_core::Registry;

@@ -6,11 +6,12 @@ use std::ops::RangeInclusive;
 use std::sync::Arc;
 
 use pyrograph_core::params::{ClipOf, Cook};
-use pyrograph_core::{Basis, Clip, CookCtx, FrameItem, FrameList, Image, NodeError, PortType, Registry, Weights, port};
+use pyrograph_core::{Clip, CookCtx, Image, NodeError, PortType, Registry, port};
 use rayon::prelude::*;
 
 use crate::pca::{components_to_use, empty_clip, reconstruct, samples_to_clip};
 use crate::transition::{Kernel, check_range, direct_bridging, end_exclusion, end_growing, exclusion_mask, lowpass_transition};
+use crate::values::{Basis, FrameItem, FrameList, Weights};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {

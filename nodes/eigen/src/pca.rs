@@ -9,11 +9,12 @@
 
 use std::sync::Arc;
 
+use crate::values::{Basis, FrameRef, Weights};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use pyrograph_core::params::{ClipOf, Cook};
-use pyrograph_core::{Basis, Channels, Clip, CookCtx, FrameRef, Image, NodeError, PortType, Registry, Value, Weights, port};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, NodeError, PortType, Registry, Value, port};
 use rayon::prelude::*;
 
 /// Adds this module's node types.

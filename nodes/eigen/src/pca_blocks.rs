@@ -16,11 +16,11 @@ use std::path::Path;
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef};
-use pyrograph_core::FrameRef;
 use rayon::prelude::*;
 
 use crate::frame_store::FrameStore;
 use crate::pca::{Database, database_shape, decompose, finish, par};
+use crate::values::FrameRef;
 
 /// Fills the buffer with frames `range` of the database, one `N`-sample gray frame after another.
 pub type ReadFrames<'a> = dyn Fn(Range<usize>, &mut [f32]) -> Result<(), String> + Sync + 'a;

@@ -5,8 +5,9 @@
 
 use std::sync::Arc;
 
+use crate::values::{Basis, FrameItem, FrameList, Weights};
 use pyrograph_core::params::Cook;
-use pyrograph_core::{Basis, Channels, CookCtx, FrameItem, FrameList, Image, NodeError, Registry, Weights, port};
+use pyrograph_core::{Channels, CookCtx, Image, NodeError, Registry, port};
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {

@@ -2,7 +2,8 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Clip, CookCtx, Image, Inputs, NodeError, PortType, Registry, Value, Weights};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, Inputs, NodeError, PortType, Registry, Value};
+use pyrograph_nodes_eigen::values::{Basis, FrameList, Weights};
 
 fn registry() -> Registry {
     let mut r = Registry::new();
@@ -52,7 +53,7 @@ fn trained() -> (Value, Value) {
 #[test]
 fn two_clips_become_one_database_remembering_sources() {
     let (basis, weights) = trained();
-    let (Value::Basis(b), Value::Weights(w)) = (&basis, &weights) else { panic!() };
+    let (Some(b), Some(w)) = (basis.downcast::<Basis>(), weights.downcast::<Weights>()) else { panic!() };
     assert_eq!(b.sources.len(), 12);
     assert_eq!((b.sources[8].clip, b.sources[8].index), (1, 0));
     assert_eq!(w.frames, 12);
@@ -123,7 +124,7 @@ fn empty_ranges_and_unreachable_theta_are_errors() {
     );
     assert!(e.contains("port 'theta_min'"), "{e}");
     let ok = cook("eigen.recognize", &[("weights", weights), ("frame", Value::Int(0)), ("exclude", Value::Int(1))]).unwrap();
-    let Value::FrameList(l) = &ok[0] else { panic!() };
+    let Some(l) = ok[0].downcast::<FrameList>() else { panic!() };
     assert_eq!(l.items.len(), 1);
 }
 
@@ -184,7 +185,7 @@ fn weights_edit_from_zeros_reconstructs_the_mean() {
     let w = cook("eigen.weights_edit", &[("basis", basis.clone()), ("weights", weights.clone())]).unwrap();
     let out =
         cook("eigen.reconstruct", &[("basis", basis.clone()), ("weights", w[0].clone()), ("clamp", Value::Bool(false))]).unwrap();
-    let (Value::Clip(c), Value::Basis(b)) = (&out[0], &basis) else { panic!() };
+    let (Value::Clip(c), Some(b)) = (&out[0], basis.downcast::<Basis>()) else { panic!() };
     let img = c.image(0, &CookCtx::new()).unwrap();
     assert!(img.data().iter().zip(&b.mean).all(|(a, m)| (a - m).abs() < 1e-6));
     let e = message(
@@ -244,6 +245,6 @@ fn end_growing_adaptive_theta_needs_the_basis_and_reports_the_thresholds() {
     let fixed = cook("eigen.end_growing", &ports("fixed")).unwrap();
     let (Value::String(t), Value::String(tf)) = (&out[2], &fixed[2]) else { panic!() };
     assert_eq!((t.as_str(), tf.as_str()), ("0, 0", "0"));
-    let (Value::FrameList(a), Value::FrameList(b)) = (&out[0], &fixed[0]) else { panic!() };
+    let (Some(a), Some(b)) = (out[0].downcast::<FrameList>(), fixed[0].downcast::<FrameList>()) else { panic!() };
     assert_eq!(a.items.len(), b.items.len());
 }

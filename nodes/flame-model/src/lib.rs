@@ -7,6 +7,7 @@
 pub mod arp;
 pub mod model;
 pub mod plot;
+pub mod values;
 
 use pyrograph_core::Registry;
 

@@ -4,8 +4,9 @@
 
 use std::sync::Arc;
 
+use crate::values::ParamSeries;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, ParamSeries, Registry, port};
+use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
 use pyrograph_nodes_eigen::view::Canvas;
 
 /// Adds `flame_model.param_plot`.

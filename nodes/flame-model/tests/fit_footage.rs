@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use pyrograph_nodes_flame_model::model::{FitSettings, RenderSettings, fit_gray_frames, gray_plane, render_frame};
+use pyrograph_nodes_flame_model::values::ParamSeries;
 use pyrograph_nodes_imaging::io::load_image;
 use rayon::prelude::*;
 
@@ -99,7 +100,7 @@ fn column_stats(v: &[f64]) -> [f64; 4] {
     [mean, var.sqrt(), acf(1), acf(2)]
 }
 
-fn columns(p: &pyrograph_core::ParamSeries) -> Vec<Vec<f64>> {
+fn columns(p: &ParamSeries) -> Vec<Vec<f64>> {
     (0..p.dim()).map(|c| (0..p.frames).map(|r| p.row(r).unwrap()[c]).collect()).collect()
 }
 

@@ -5,9 +5,10 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
-use pyrograph_core::{Particles, WindField};
 use pyrograph_nodes_particles::flame::{FlameParams, Layout, Root, layout_roots, simulate_frame};
 use pyrograph_nodes_particles::render::render_particles;
+use pyrograph_nodes_particles::types::WindField;
+use pyrograph_render::Particles;
 use pyrograph_render::{Blend, Camera, View};
 
 /// Flames on a square grid filling the view (flame size shrinks as the count grows, like a

@@ -22,6 +22,7 @@ use glam::Vec3;
 use pyrograph_core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Registry, Value};
 use pyrograph_nodes_particles::mesh::{build_mesh, plane};
 use pyrograph_nodes_particles::spread::{Ignition, Spread, SpreadParams, Surface};
+use pyrograph_nodes_particles::types::SpreadState;
 
 /// First frame of the timed window (the fire covers most of the near side) and its length.
 const WINDOW: (usize, usize) = (48, 48);
@@ -76,7 +77,7 @@ fn burning_cube_frame(c: &mut Criterion) {
     let spread = clip(&graph, "spread.spread");
     let ctx = CookCtx::new();
     for f in [WINDOW.0, WINDOW.0 + WINDOW.1] {
-        if let Ok(Value::SpreadState(s)) = spread.get(f, &ctx) {
+        if let Some(s) = spread.get(f, &ctx).ok().and_then(|v| v.downcast::<SpreadState>()) {
             let points: usize = s.boundaries.iter().map(Vec::len).sum();
             println!(
                 "burning cube frame {f}: {points} control points, {} live flames, {} char marks",

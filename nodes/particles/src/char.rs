@@ -6,9 +6,11 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, NodeError, Particle, Particles, Registry, SpreadState};
+use pyrograph_core::{CookCtx, NodeError, Registry};
 
 use crate::flame::unit_random;
+use crate::types::SpreadState;
+use pyrograph_render::{Particle, Particles};
 
 /// Adds `particles.char`.
 pub fn register(registry: &mut Registry) {
@@ -123,7 +125,7 @@ impl Cook for Char {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pyrograph_core::CharMark;
+    use crate::types::CharMark;
 
     #[test]
     fn glow_starts_red_and_fades_to_translucent_char() {

@@ -6,14 +6,16 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, Mesh, NodeError, Particle, Particles, Registry, SpreadState, WindField, port};
+use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace, validate_params};
 use crate::render::{LightParams, flame_lights, no_particles};
+use crate::types::{Mesh, SpreadState, WindField};
 use crate::wind::{WindSampler, validate_wind};
+use pyrograph_render::{Particle, Particles};
 
 /// Adds `particles.render_fire`.
 pub fn register(registry: &mut Registry) {

@@ -8,12 +8,12 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::params::{Cook, Port};
-use pyrograph_core::{
-    Clip, ClipOf, CookCtx, FrameSource, NodeError, Particle, Particles, PortType, Registry, Value, WindField, port,
-};
+use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Registry, Value, port};
 use rayon::prelude::*;
 
+use crate::types::WindField;
 use crate::wind::{WindSampler, finite3, validate_wind};
+use pyrograph_render::{Particle, Particles};
 
 /// Adds `particles.roots` and `particles.particle_flame`.
 pub fn register(registry: &mut Registry) {
@@ -508,7 +508,7 @@ impl FrameSource for FlameSource {
         self.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::Particles(Arc::new(simulate_frame(&self.roots, &self.wind, &self.params, index)?)))
+        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &self.wind, &self.params, index)?)))
     }
 }
 
@@ -522,12 +522,12 @@ impl Cook for ParticleFlame {
         validate_params(&self.params)?;
         let mut h = Fingerprinter::new();
         "particles.particle_flame".hash(&mut h);
-        Value::Particles(self.roots.clone()).hash_into(&mut h);
-        Value::WindField(self.wind.clone()).hash_into(&mut h);
+        Value::custom(self.roots.clone()).hash_into(&mut h);
+        Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}", self.params).hash(&mut h);
         self.frames.hash(&mut h);
         let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames: self.frames };
-        let clip = Clip::new(PortType::Particles, self.fps, h.finish(), Arc::new(source));
+        let clip = Clip::new(PortType::of::<Particles>(), self.fps, h.finish(), Arc::new(source));
         Ok(ParticleFlameOut { flames: ClipOf::new(clip) })
     }
 }
@@ -535,8 +535,9 @@ impl Cook for ParticleFlame {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::types::LargeWind;
+    use pyrograph_core::Inputs;
     use pyrograph_core::params::Declared;
-    use pyrograph_core::{Inputs, LargeWind};
 
     fn up_root(x: f32, z: f32) -> Root {
         Root { position: Vec3::new(x, 0.0, z), direction: Vec3::Y }
@@ -646,7 +647,7 @@ mod tests {
         let mut values: Vec<Value> = desc
             .inputs
             .iter()
-            .map(|p| p.default.clone().unwrap_or_else(|| Value::Particles(Arc::new(Particles::default()))))
+            .map(|p| p.default.clone().unwrap_or_else(|| Value::custom(Arc::new(Particles::default()))))
             .collect();
         let cook = |values: &[Value]| ParticleFlame::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
         let port_of = |values: &[Value]| match cook(values) {
@@ -658,9 +659,9 @@ mod tests {
         assert_eq!(port_of(&values), "steps");
         values[steps] = Value::Int(25);
         let wind = desc.input_index("wind").unwrap();
-        values[wind] = Value::WindField(Arc::new(WindField { k_s: f32::NAN, ..WindField::default() }));
+        values[wind] = Value::custom(Arc::new(WindField { k_s: f32::NAN, ..WindField::default() }));
         assert_eq!(port_of(&values), "wind");
-        values[wind] = Value::WindField(Arc::new(WindField::default()));
+        values[wind] = Value::custom(Arc::new(WindField::default()));
         values[desc.input_index("center_ramp").unwrap()] = Value::String("0: 1 1".into());
         assert_eq!(port_of(&values), "center_ramp");
     }

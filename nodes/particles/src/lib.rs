@@ -11,6 +11,7 @@ pub mod flame;
 pub mod mesh;
 pub mod render;
 pub mod spread;
+pub mod types;
 pub mod wind;
 
 use pyrograph_core::Registry;

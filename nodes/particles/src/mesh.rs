@@ -12,9 +12,10 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::types::{Mesh, NO_NEIGHBOR};
 use glam::{Quat, Vec3};
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, InputPath, Mesh, NO_NEIGHBOR, NodeError, Registry, port};
+use pyrograph_core::{CookCtx, InputPath, NodeError, Registry, port};
 
 /// Adds `particles.mesh_load`.
 pub fn register(registry: &mut Registry) {

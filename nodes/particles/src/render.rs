@@ -7,9 +7,10 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use noise::{NoiseFn, Perlin};
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, Particle, Particles, Registry, port};
+use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
+use pyrograph_render::{Particle, Particles};
 use rayon::prelude::*;
 
 /// Adds `particles.render_flames` and `particles.flame_lights`.
@@ -265,7 +266,7 @@ impl Cook for FlameLights {
 mod tests {
     use super::*;
     use crate::flame::{FlameParams, Root, simulate_frame};
-    use pyrograph_core::WindField;
+    use crate::types::WindField;
     use pyrograph_core::params::Declared;
     use pyrograph_core::{Inputs, Value};
     use pyrograph_render::Camera;
@@ -329,7 +330,7 @@ mod tests {
     #[test]
     fn a_camera_with_zero_near_is_an_error_naming_the_port() {
         let desc = RenderFlames::desc();
-        let empty = || Value::Particles(no_particles());
+        let empty = || Value::custom(no_particles());
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
         let cook = |values: &[Value]| RenderFlames::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
         values[desc.input_index("near").unwrap()] = Value::Float(0.0);

@@ -3,10 +3,11 @@
 
 use std::sync::Arc;
 
+use crate::types::{LargeWind, WindField};
 use glam::{DVec3, Vec3};
 use noise::permutationtable::{NoiseHasher, PermutationTable};
 use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, LargeWind, NodeError, Registry, WindField, port};
+use pyrograph_core::{CookCtx, NodeError, Registry, port};
 
 /// Adds `particles.wind_field`.
 pub fn register(registry: &mut Registry) {

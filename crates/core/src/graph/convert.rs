@@ -157,21 +157,7 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         Value::Vec3(c) => ParamValue::List(c.iter().map(|x| ParamValue::Float(*x)).collect()),
         Value::String(s) | Value::Enum(s) => ParamValue::String(s.clone()),
         Value::Path(p) => ParamValue::String(p.display().to_string()),
-        Value::Image(_)
-        | Value::Mask(_)
-        | Value::Contours(_)
-        | Value::WindField(_)
-        | Value::Particles(_)
-        | Value::ClothState(_)
-        | Value::Basis(_)
-        | Value::Weights(_)
-        | Value::FrameList(_)
-        | Value::ParamSeries(_)
-        | Value::ArModel(_)
-        | Value::FlameModel(_)
-        | Value::Mesh(_)
-        | Value::SpreadState(_)
-        | Value::Clip(_) => {
+        Value::Image(_) | Value::Mask(_) | Value::Contours(_) | Value::Custom(_) | Value::Clip(_) => {
             return None;
         }
     })

@@ -254,17 +254,7 @@ fn in_use(value: &Value) -> bool {
         Value::Image(v) => shared(v),
         Value::Mask(v) => shared(v),
         Value::Contours(v) => shared(v),
-        Value::WindField(v) => shared(v),
-        Value::Particles(v) => shared(v),
-        Value::ClothState(v) => shared(v),
-        Value::Basis(v) => shared(v),
-        Value::Weights(v) => shared(v),
-        Value::FrameList(v) => shared(v),
-        Value::ParamSeries(v) => shared(v),
-        Value::ArModel(v) => shared(v),
-        Value::FlameModel(v) => shared(v),
-        Value::Mesh(v) => shared(v),
-        Value::SpreadState(v) => shared(v),
+        Value::Custom(v) => super::custom::shared(v),
         // A nested clip keeps its own frames in the cache; a handle to it is small.
         _ => false,
     }

@@ -10,9 +10,10 @@ mod compact;
 pub mod frame_cache;
 
 use crate::fingerprint::{Fingerprinter, hash_f32s};
-pub use crate::learned::{ArModel, FlameModel, ParamSeries};
-pub use crate::mesh::{CharMark, FlameRoot, Mesh, NO_NEIGHBOR, SpreadState};
+mod custom;
+
 pub use clip::{Clip, FrameSource};
+pub use custom::{CustomValue, TypeInfo, ValueType};
 
 /// The closed set of types a port can carry.
 ///
@@ -45,28 +46,9 @@ pub enum PortType {
     Mask,
     /// Polygons traced from a mask, with hierarchy depth and area.
     Contours,
-    /// A wind field description (Perry 1994 §3.2.3), evaluated by the particle nodes.
-    WindField,
-    /// A set of particles (flame roots, flame trajectories, lights).
-    Particles,
-    /// Mass-spring flame cloths at one moment (mass-spring flame project 2019).
-    ClothState,
-    /// An Eigenfires basis: mean image, eigenvectors and eigenvalues (thesis §4.2).
-    Basis,
-    /// Eigenfires weights, frames × components (thesis §4.3 eq. 18).
-    Weights,
-    /// A sequence of database frames and synthesized weight vectors (thesis §5.1 motion lists).
-    FrameList,
-    /// A time series of flame-model parameter vectors x_t (Stich & Magnor §3).
-    ParamSeries,
-    /// A learned auto-regressive process (Stich & Magnor §4).
-    ArModel,
-    /// The generic flame model: parameter sizes and eigenflames (Stich & Magnor §3).
-    FlameModel,
-    /// A triangle mesh with face adjacency (Perry 1994 §3.3.2).
-    Mesh,
-    /// A fire spreading over a mesh at one moment (Perry 1994 §3.3–3.4).
-    SpreadState,
+    /// A type declared by a node crate with [`ValueType`] (meshes, learned models, wind fields,
+    /// cloth states…): never a parameter, always connected.
+    Custom(&'static TypeInfo),
     /// A time-varying sequence of the inner type.
     Clip(Box<PortType>),
 }
@@ -75,6 +57,11 @@ impl PortType {
     /// `Clip<inner>`.
     pub fn clip_of(inner: PortType) -> PortType {
         PortType::Clip(Box::new(inner))
+    }
+
+    /// The port type of values of `T`, a type declared by a node crate.
+    pub fn of<T: ValueType>() -> PortType {
+        PortType::Custom(T::INFO)
     }
 
     /// The element type of a clip type, `None` for per-frame types.
@@ -87,24 +74,7 @@ impl PortType {
 
     /// Types that can be written as a constant parameter in a graph file.
     pub fn is_parameter(&self) -> bool {
-        !matches!(
-            self,
-            PortType::Image
-                | PortType::Mask
-                | PortType::Contours
-                | PortType::WindField
-                | PortType::Particles
-                | PortType::ClothState
-                | PortType::Basis
-                | PortType::Weights
-                | PortType::FrameList
-                | PortType::ParamSeries
-                | PortType::ArModel
-                | PortType::FlameModel
-                | PortType::Mesh
-                | PortType::SpreadState
-                | PortType::Clip(_)
-        )
+        !matches!(self, PortType::Image | PortType::Mask | PortType::Contours | PortType::Custom(_) | PortType::Clip(_))
     }
 }
 
@@ -112,6 +82,7 @@ impl fmt::Display for PortType {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             PortType::Clip(inner) => write!(f, "Clip<{inner}>"),
+            PortType::Custom(info) => f.write_str(info.name),
             other => write!(f, "{other:?}"),
         }
     }
@@ -297,216 +268,6 @@ pub struct Contours {
     pub contours: Vec<Contour>,
 }
 
-/// The large-scale part `w_L(p, t)` of a [`WindField`] (Perry 1994 §3.2.3, §3.4).
-#[derive(Clone, Debug, PartialEq, Default)]
-pub enum LargeWind {
-    /// No large-scale wind.
-    #[default]
-    None,
-    /// A constant wind vector.
-    Constant([f32; 3]),
-    /// A Rankine vortex around the vertical axis through `center`: tangential speed grows
-    /// linearly to `strength` at `radius`, then falls off as `1/r`.
-    Vortex {
-        /// A point on the vortex axis.
-        center: [f32; 3],
-        /// Tangential speed at `radius` (positive: counter-clockwise seen from above).
-        strength: f32,
-        /// Core radius.
-        radius: f32,
-    },
-    /// The wind felt by flames on an object moving with this velocity: its negative (§3.4).
-    MovingObject([f32; 3]),
-}
-
-/// The wind `u∞(p, t) = −k_g g + w_L(p, t) + w_S(p, t)` of Perry 1994 §3.2.3, as data; the
-/// particle nodes evaluate it. `w_S` is eq. 3.1: `((p − p(0))·ĵ) C ∇N(k_p p − k_s T ĵ)`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WindField {
-    /// Gravity `g` (Perry: `−ĵ`).
-    pub gravity: [f32; 3],
-    /// Convection coefficient `k_g` (Perry: 1.0).
-    pub k_g: f32,
-    /// Large-scale wind `w_L`.
-    pub large: LargeWind,
-    /// Flame noisiness `C` of eq. 3.1.
-    pub noise_c: f32,
-    /// Inverse inter-flame cohesion `k_p`: the scale of positions in noise space.
-    pub k_p: f32,
-    /// Flame sampling `k_s`: how fast time moves down through the noise field (per frame).
-    pub k_s: f32,
-    /// Seed of the noise field.
-    pub seed: u32,
-    /// World length of one unit of the height factor of eq. 3.1 (the paper measures height in
-    /// unit-time integration steps; smaller values bend flames more).
-    pub height_unit: f32,
-}
-
-impl Default for WindField {
-    fn default() -> Self {
-        WindField {
-            gravity: [0.0, -1.0, 0.0],
-            k_g: 1.0,
-            large: LargeWind::None,
-            noise_c: 0.04,
-            k_p: 1.0,
-            k_s: 0.1,
-            seed: 0,
-            height_unit: 1.0,
-        }
-    }
-}
-
-/// One particle: a camera-facing fuzzy N-gon (Perry 1994 §3.2.1), or a root, or a light.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Particle {
-    /// World position.
-    pub position: [f32; 3],
-    /// Velocity (for roots: the initial direction of the flame).
-    pub velocity: [f32; 3],
-    /// Half extents of the N-gon along the billboard's x and y.
-    pub size: [f32; 2],
-    /// Straight RGBA of the centre vertex.
-    pub center: [f32; 4],
-    /// Straight RGBA of the rim vertices.
-    pub edge: [f32; 4],
-    /// A free scalar: the age for flame particles, the intensity for lights.
-    pub weight: f32,
-    /// Which flame (or other group) the particle belongs to.
-    pub group: u32,
-}
-
-/// A set of particles at one moment.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct Particles {
-    /// The particles, in drawing order.
-    pub particles: Vec<Particle>,
-    /// Triangles per particle N-gon.
-    pub sides: u32,
-    /// Simulation time, in frames.
-    pub time: f32,
-}
-
-/// Mass-spring flames at one moment (mass-spring flame project 2019, after Balci & Foroosh 2006):
-/// `flames` cloths of `width × height` masses each, in flame-local coordinates (x across, y up,
-/// z toward the viewer) around a world root, so a renderer can turn each one to face its camera.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct ClothState {
-    /// Masses per row.
-    pub width: u32,
-    /// Rows of masses; row 0 is the pinned bottom row.
-    pub height: u32,
-    /// World position of each flame's root (the centre of its pinned bottom row).
-    pub roots: Vec<[f32; 3]>,
-    /// Per-flame seed (a renderer picks a built-in texture from it).
-    pub seeds: Vec<u32>,
-    /// Local mass positions, flame-major, then row-major from the bottom row:
-    /// `flames × height × width`.
-    pub positions: Vec<[f32; 3]>,
-    /// Simulation time in seconds.
-    pub time: f32,
-}
-
-impl ClothState {
-    /// Number of flames.
-    pub fn flames(&self) -> usize {
-        self.roots.len()
-    }
-
-    /// The local positions of flame `i`, `None` past the last.
-    pub fn flame(&self, i: usize) -> Option<&[[f32; 3]]> {
-        let n = self.width as usize * self.height as usize;
-        self.positions.get(i * n..(i + 1) * n)
-    }
-}
-
-/// Where a database frame came from: which training clip (0-based) and which frame of it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
-pub struct FrameRef {
-    /// Index of the training clip.
-    pub clip: u32,
-    /// Frame index within that clip.
-    pub index: u32,
-}
-
-/// An Eigenfires basis (thesis §4.2): the mean image Ψ (eq. 12), the eigenvectors `u_k` of the
-/// covariance (eq. 15–17) sorted by decreasing eigenvalue `λ_k` (eq. 13), and where each training
-/// frame came from. Gray `width × height` images are vectors of `N = width·height` samples.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct Basis {
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// The mean image Ψ, `N` samples row-major.
-    pub mean: Vec<f32>,
-    /// The eigenvectors, one after another (`components × N`, component-major): eigenvector `k`
-    /// is `eigenvectors[k·N..(k+1)·N]` (a column-major `N × components` matrix).
-    pub eigenvectors: Vec<f32>,
-    /// Eigenvalues λ_k (eq. 13), largest first, one per eigenvector.
-    pub eigenvalues: Vec<f64>,
-    /// Source clip and frame of each training frame (the rows of its training weights).
-    pub sources: Vec<FrameRef>,
-}
-
-impl Basis {
-    /// Samples per image, `N`.
-    pub fn pixels(&self) -> usize {
-        self.width as usize * self.height as usize
-    }
-
-    /// Number of eigenvectors `E`.
-    pub fn components(&self) -> usize {
-        self.eigenvalues.len()
-    }
-
-    /// Eigenvector `k` (0-based), `None` past the last.
-    pub fn eigenvector(&self, k: usize) -> Option<&[f32]> {
-        let n = self.pixels();
-        self.eigenvectors.get(k * n..(k + 1) * n)
-    }
-}
-
-/// Eigenfires weights (thesis §4.3 eq. 18): one row Ω of `components` weights per frame.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct Weights {
-    /// Number of rows (frames).
-    pub frames: usize,
-    /// Number of columns (components).
-    pub components: usize,
-    /// Row-major `frames × components`.
-    pub data: Vec<f32>,
-}
-
-impl Weights {
-    /// Wraps row-major data; `None` if its length is not `frames × components`.
-    pub fn new(frames: usize, components: usize, data: Vec<f32>) -> Option<Self> {
-        (frames.checked_mul(components)? == data.len()).then_some(Weights { frames, components, data })
-    }
-
-    /// Row `i` (the weights of frame `i`), `None` past the last.
-    pub fn row(&self, i: usize) -> Option<&[f32]> {
-        self.data.get(i * self.components..(i + 1) * self.components)
-    }
-}
-
-/// One entry of a [`FrameList`].
-#[derive(Clone, Debug, PartialEq)]
-pub enum FrameItem {
-    /// A database frame: a row of the training weights (and a frame of a training clip).
-    Frame(u32),
-    /// A synthesized weight vector (a low-pass morph, a hand-edited flame).
-    Weights(Vec<f32>),
-}
-
-/// A motion list (thesis §5.1): the frames of an animation, each a database frame or a
-/// synthesized weight vector.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct FrameList {
-    /// The frames in playing order.
-    pub items: Vec<FrameItem>,
-}
-
 /// A value on a port.
 #[derive(Clone, Debug)]
 pub enum Value {
@@ -534,28 +295,8 @@ pub enum Value {
     Mask(Arc<Mask>),
     /// See [`PortType::Contours`].
     Contours(Arc<Contours>),
-    /// See [`PortType::WindField`].
-    WindField(Arc<WindField>),
-    /// See [`PortType::Particles`].
-    Particles(Arc<Particles>),
-    /// See [`PortType::ClothState`].
-    ClothState(Arc<ClothState>),
-    /// See [`PortType::Basis`].
-    Basis(Arc<Basis>),
-    /// See [`PortType::Weights`].
-    Weights(Arc<Weights>),
-    /// See [`PortType::FrameList`].
-    FrameList(Arc<FrameList>),
-    /// See [`PortType::ParamSeries`].
-    ParamSeries(Arc<ParamSeries>),
-    /// See [`PortType::ArModel`].
-    ArModel(Arc<ArModel>),
-    /// See [`PortType::FlameModel`].
-    FlameModel(Arc<FlameModel>),
-    /// See [`PortType::Mesh`].
-    Mesh(Arc<Mesh>),
-    /// See [`PortType::SpreadState`].
-    SpreadState(Arc<SpreadState>),
+    /// See [`PortType::Custom`]; [`Value::custom`] wraps one, [`Value::downcast`] unwraps it.
+    Custom(Arc<dyn CustomValue>),
     /// See [`PortType::Clip`].
     Clip(Clip),
 }
@@ -576,18 +317,24 @@ impl Value {
             Value::Image(_) => PortType::Image,
             Value::Mask(_) => PortType::Mask,
             Value::Contours(_) => PortType::Contours,
-            Value::WindField(_) => PortType::WindField,
-            Value::Particles(_) => PortType::Particles,
-            Value::ClothState(_) => PortType::ClothState,
-            Value::Basis(_) => PortType::Basis,
-            Value::Weights(_) => PortType::Weights,
-            Value::FrameList(_) => PortType::FrameList,
-            Value::ParamSeries(_) => PortType::ParamSeries,
-            Value::ArModel(_) => PortType::ArModel,
-            Value::FlameModel(_) => PortType::FlameModel,
-            Value::Mesh(_) => PortType::Mesh,
-            Value::SpreadState(_) => PortType::SpreadState,
+            Value::Custom(v) => PortType::Custom(v.type_info()),
             Value::Clip(c) => PortType::clip_of(c.element().clone()),
+        }
+    }
+
+    /// Wraps a value of a type declared by a node crate.
+    pub fn custom<T: ValueType>(v: Arc<T>) -> Value {
+        Value::Custom(v)
+    }
+
+    /// The `T` inside, if this is a custom value of type `T`.
+    pub fn downcast<T: ValueType>(&self) -> Option<Arc<T>> {
+        match self {
+            Value::Custom(v) => {
+                let any: Arc<dyn std::any::Any + Send + Sync> = v.clone();
+                any.downcast::<T>().ok()
+            }
+            _ => None,
         }
     }
 
@@ -630,46 +377,10 @@ impl Value {
                     k.points.iter().for_each(|p| (p[0].to_bits(), p[1].to_bits()).hash(h));
                 }
             }
-            Value::WindField(w) => format!("{w:?}").hash(h),
-            Value::Particles(p) => {
-                (p.particles.len(), p.sides, p.time.to_bits()).hash(h);
-                for q in &p.particles {
-                    let floats = [q.position.as_slice(), &q.velocity, &q.size, &q.center, &q.edge, &[q.weight]];
-                    floats.iter().for_each(|f| hash_f32s(h, f));
-                    q.group.hash(h);
-                }
+            Value::Custom(v) => {
+                v.type_info().name.hash(h);
+                v.hash_value(h);
             }
-            Value::ClothState(c) => {
-                (c.width, c.height, c.roots.len(), &c.seeds, c.positions.len(), c.time.to_bits()).hash(h);
-                c.roots.iter().chain(&c.positions).for_each(|p| hash_f32s(h, p));
-            }
-            Value::Basis(b) => {
-                (b.width, b.height, b.eigenvalues.len(), &b.sources).hash(h);
-                b.eigenvalues.iter().for_each(|v| v.to_bits().hash(h));
-                hash_f32s(h, &b.mean);
-                hash_f32s(h, &b.eigenvectors);
-            }
-            Value::Weights(w) => {
-                (w.frames, w.components).hash(h);
-                hash_f32s(h, &w.data);
-            }
-            Value::FrameList(l) => {
-                l.items.len().hash(h);
-                for item in &l.items {
-                    match item {
-                        FrameItem::Frame(f) => (0u8, f).hash(h),
-                        FrameItem::Weights(w) => {
-                            (1u8, w.len()).hash(h);
-                            hash_f32s(h, w);
-                        }
-                    }
-                }
-            }
-            Value::ParamSeries(v) => v.hash_into(h),
-            Value::ArModel(v) => v.hash_into(h),
-            Value::FlameModel(v) => v.hash_into(h),
-            Value::Mesh(v) => v.hash_into(h),
-            Value::SpreadState(v) => v.hash_into(h),
             Value::Clip(c) => c.fingerprint().hash(h),
         }
     }
@@ -680,18 +391,7 @@ impl Value {
             Value::Image(img) => img.byte_size(),
             Value::Mask(m) => m.data.len(),
             Value::Contours(c) => c.contours.iter().map(|k| k.points.len() * 8 + 48).sum(),
-            Value::Particles(p) => p.particles.len() * std::mem::size_of::<Particle>(),
-            Value::ClothState(c) => (c.roots.len() + c.positions.len()) * 12 + c.seeds.len() * 4,
-            Value::Basis(b) => (b.mean.len() + b.eigenvectors.len()) * 4 + b.eigenvalues.len() * 8 + b.sources.len() * 8,
-            Value::Weights(w) => w.data.len() * 4,
-            Value::FrameList(l) => {
-                l.items.iter().map(|i| if let FrameItem::Weights(w) = i { w.len() * 4 + 32 } else { 32 }).sum()
-            }
-            Value::ParamSeries(v) => v.byte_size(),
-            Value::ArModel(v) => v.byte_size(),
-            Value::FlameModel(v) => v.byte_size(),
-            Value::Mesh(v) => v.byte_size(),
-            Value::SpreadState(v) => v.byte_size(),
+            Value::Custom(v) => v.value_bytes(),
             Value::String(s) | Value::Enum(s) => s.len(),
             _ => std::mem::size_of::<Value>(),
         }
@@ -711,21 +411,7 @@ impl Value {
             Value::Image(img) => format!("Image {}x{} {:?}", img.width, img.height, img.channels),
             Value::Mask(m) => format!("Mask {}x{}", m.width, m.height),
             Value::Contours(c) => format!("Contours {} in {}x{}", c.contours.len(), c.width, c.height),
-            Value::WindField(w) => {
-                format!("WindField k_g={} C={} k_p={} k_s={} w_L={:?}", w.k_g, w.noise_c, w.k_p, w.k_s, w.large)
-            }
-            Value::Particles(p) => format!("Particles {} ({}-gons)", p.particles.len(), p.sides),
-            Value::ClothState(c) => format!("ClothState {} flames of {}x{} masses", c.flames(), c.width, c.height),
-            Value::Basis(b) => {
-                format!("Basis {} components of {}x{} from {} frames", b.components(), b.width, b.height, b.sources.len())
-            }
-            Value::Weights(w) => format!("Weights {} frames x {} components", w.frames, w.components),
-            Value::FrameList(l) => format!("FrameList {} frames", l.items.len()),
-            Value::ParamSeries(v) => v.summary(),
-            Value::ArModel(v) => v.summary(),
-            Value::FlameModel(v) => v.summary(),
-            Value::Mesh(v) => v.summary(),
-            Value::SpreadState(v) => v.summary(),
+            Value::Custom(v) => v.value_summary(),
             Value::Clip(c) => format!("Clip<{}> {} frames @ {} fps", c.element(), c.len(), c.fps()),
         }
     }

@@ -6,9 +6,10 @@ use std::collections::{BTreeMap, VecDeque};
 use std::sync::{Arc, Mutex};
 
 use pyrograph_core::stepping::{Checkpoint, SteppingCache};
-use pyrograph_core::{ClothState, CookCtx, FrameSource, NodeError, Value};
+use pyrograph_core::{CookCtx, FrameSource, NodeError, Value};
 
 use super::simulation::Simulation;
+use crate::state::ClothState;
 
 /// Checkpoints of the full state are kept every this many frames (within [`CHECKPOINT_BUDGET`]).
 pub const CHECKPOINT_EVERY: usize = 24;
@@ -36,13 +37,13 @@ impl Snapshots {
         if self.by_frame.contains_key(&frame) {
             return;
         }
-        self.bytes += Value::ClothState(s.clone()).byte_size();
+        self.bytes += Value::custom(s.clone()).byte_size();
         self.by_frame.insert(frame, s.clone());
         self.order.push_back(frame);
         while self.bytes > SNAPSHOT_BUDGET && self.order.len() > 1 {
             let Some(old) = self.order.pop_front() else { break };
             if let Some(v) = self.by_frame.remove(&old) {
-                self.bytes -= Value::ClothState(v).byte_size();
+                self.bytes -= Value::custom(v).byte_size();
             }
         }
     }
@@ -97,6 +98,6 @@ impl FrameSource for ClothSource {
         self.frames
     }
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::ClothState(self.state(index, ctx)?))
+        Ok(Value::custom(self.state(index, ctx)?))
     }
 }

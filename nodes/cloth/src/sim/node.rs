@@ -7,11 +7,13 @@ use std::sync::Arc;
 use glam::Vec3;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{Clip, ClipOf, ClothState, CookCtx, NodeError, Particles, PortType, Value, port};
+use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::ClothSource;
 use super::params::{ClothParams, validate};
 use super::simulation::{Simulation, grid_roots};
+use crate::state::ClothState;
+use pyrograph_render::Particles;
 
 pyrograph_core::node! {
     /// Mass-spring flames, the silk torch of the mass-spring flame project 2019 (after Balci & Foroosh 2006):
@@ -69,11 +71,12 @@ impl Cook for MassSpringFlame {
         let sim = Simulation::new(&params, &roots)?;
         let mut h = Fingerprinter::new();
         "cloth.mass_spring_flame".hash(&mut h);
-        Value::Particles(self.roots.clone()).hash_into(&mut h);
+        Value::custom(self.roots.clone()).hash_into(&mut h);
         roots.iter().for_each(|r| r.to_array().map(f32::to_bits).hash(&mut h));
         format!("{params:?}").hash(&mut h);
         frames.hash(&mut h);
-        let clip = Clip::new(PortType::ClothState, params.fps as f64, h.finish(), Arc::new(ClothSource::new(sim, frames)));
+        let clip =
+            Clip::new(PortType::of::<ClothState>(), params.fps as f64, h.finish(), Arc::new(ClothSource::new(sim, frames)));
         Ok(MassSpringFlameOut { cloth: ClipOf::new(clip) })
     }
 }

@@ -3,11 +3,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::{ClothState, NodeError, port};
+use pyrograph_core::{NodeError, port};
 use rayon::prelude::*;
 
 use super::model::{FlameState, Topology, mix, unit_random, wind_active};
 use super::params::{ClothParams, check_step, validate};
+use crate::state::ClothState;
 
 /// A whole simulation: shared topology, every flame's state and the frame it has reached.
 #[derive(Clone, Debug)]

@@ -2,9 +2,8 @@
 
 use std::collections::HashSet;
 
-use pyrograph_core::Weights;
-
 use super::distance::{distances_to, row};
+use crate::values::Weights;
 
 /// §5.1.2.1 Direct Bridging from frame `alpha` to `beta`: the line between them in fire space is
 /// divided into `steps + 1` equal parts and, for each of the `steps` points on it, the nearest

@@ -2,7 +2,7 @@
 
 use std::ops::RangeInclusive;
 
-use pyrograph_core::Weights;
+use crate::values::Weights;
 use rayon::prelude::*;
 
 /// Eq. 21 over the first `e` components.

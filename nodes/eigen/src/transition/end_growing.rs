@@ -4,9 +4,8 @@ use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 use std::ops::RangeInclusive;
 
-use pyrograph_core::{FrameRef, Weights};
-
 use super::distance::{distances_from_two, distances_to, exclusion_mask, frame_distance, row};
+use crate::values::{FrameRef, Weights};
 
 /// The result of [`end_growing`].
 #[derive(Clone, Debug, PartialEq)]

@@ -2,9 +2,8 @@
 
 use std::ops::RangeInclusive;
 
-use pyrograph_core::Weights;
-
 use super::distance::{check_range, row};
+use crate::values::Weights;
 
 pyrograph_core::choice! {
     /// The kernels of §5.1.1.

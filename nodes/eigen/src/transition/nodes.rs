@@ -5,7 +5,7 @@ use std::ops::RangeInclusive;
 use std::sync::Arc;
 
 use pyrograph_core::params::Cook;
-use pyrograph_core::{Basis, CookCtx, FrameItem, FrameList, NodeError, Weights, port};
+use pyrograph_core::{CookCtx, NodeError, port};
 
 use super::distance::row;
 use super::{
@@ -13,6 +13,7 @@ use super::{
     lowpass_transition, parse_thresholds, recognize,
 };
 use crate::pca::components_to_use;
+use crate::values::{Basis, FrameItem, FrameList, Weights};
 
 fn frames_value(frames: impl IntoIterator<Item = usize>) -> Arc<FrameList> {
     Arc::new(FrameList { items: frames.into_iter().map(|f| FrameItem::Frame(f as u32)).collect() })

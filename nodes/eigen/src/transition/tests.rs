@@ -1,6 +1,5 @@
-use pyrograph_core::{FrameRef, Weights};
-
 use super::*;
+use crate::values::{FrameRef, Weights};
 
 fn db_from(points: &[Vec<f32>]) -> Weights {
     let c = points[0].len();

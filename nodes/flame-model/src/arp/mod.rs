@@ -10,10 +10,11 @@ use std::sync::Arc;
 
 use faer::Mat;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{ArModel, CookCtx, NodeError, ParamSeries, Registry, port};
+use pyrograph_core::{CookCtx, NodeError, Registry, port};
 
 pub use sampler::{ArSampler, ArpSample, BendShape, ControlPorts, Controls, Ramp, sample};
 
+use crate::values::{ArModel, ParamSeries};
 use em::Lambda;
 
 /// Adds `flame_model.arp_learn` and `flame_model.arp_sample`.

@@ -5,10 +5,11 @@
 use std::sync::Arc;
 
 use pyrograph_core::params::Cook;
-use pyrograph_core::{ArModel, CookCtx, NodeError, ParamSeries, port};
+use pyrograph_core::{CookCtx, NodeError, port};
 
 use super::rng::Rng;
 use super::spectral_radius;
+use crate::values::{ArModel, ParamSeries};
 
 /// Steps eq. 2 with flat, preallocated arrays: one step is a `D × K·D` mat-vec, a triangular
 /// `D × D` mat-vec and D normal deviates, with no allocation.

@@ -223,9 +223,10 @@ fn the_nodes_learn_and_sample_through_their_ports() {
     let series = Arc::new(ar2_series(&A1, &A2, &D, &B, 400, 0.01, 8));
     let learn = ArpLearn::node();
     let desc = learn.desc().clone();
-    let values = cook_values(&desc, &[("params", Value::ParamSeries(series.clone()))]);
+    let values = cook_values(&desc, &[("params", Value::custom(series.clone()))]);
     let out = learn.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
-    let (Value::ArModel(model), Value::ParamSeries(ll), Value::Float(rho)) = (&out[0], &out[1], &out[2]) else {
+    let (Some(model), Some(ll), Value::Float(rho)) = (out[0].downcast::<ArModel>(), out[1].downcast::<ParamSeries>(), &out[2])
+    else {
         panic!("outputs {out:?}")
     };
     assert_eq!((ll.frames, ll.data.as_slice()), (model.log_likelihood.len(), model.log_likelihood.as_slice()));
@@ -235,16 +236,16 @@ fn the_nodes_learn_and_sample_through_their_ports() {
     let values = cook_values(
         &desc,
         &[
-            ("model", Value::ArModel(model.clone())),
+            ("model", Value::custom(model.clone())),
             ("frames", Value::Int(50)),
             ("ramp", Value::Bool(true)),
             ("height_end", Value::Float(2.0)),
         ],
     );
     let out = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
-    let Value::ParamSeries(p) = &out[0] else { panic!("{out:?}") };
+    let Some(p) = out[0].downcast::<ParamSeries>() else { panic!("{out:?}") };
     assert_eq!((p.frames, p.dim()), (50, 3));
-    let values = cook_values(&desc, &[("model", Value::ArModel(model.clone())), ("bend", Value::Float(f64::NAN))]);
+    let values = cook_values(&desc, &[("model", Value::custom(model.clone())), ("bend", Value::Float(f64::NAN))]);
     let e = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, .. } if port == "bend"), "{e}");
 }

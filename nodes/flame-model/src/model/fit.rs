@@ -11,11 +11,12 @@
 //! scaled to 1, and the intensity scaled to the clip's average. PCA of the normalized images
 //! (the Eigenfires code) gives the eigenflames and the N_e appearance weights (§3.2).
 
-use pyrograph_core::{FlameModel, FrameRef, ParamSeries};
 use pyrograph_nodes_eigen::pca;
 use rayon::prelude::*;
 
 use super::shape::{Moments, Spline, plumes, slice_value};
+use crate::values::{FlameModel, ParamSeries};
+use pyrograph_nodes_eigen::values::FrameRef;
 
 pyrograph_core::ports! {
     /// Settings of the fit: the ports of `flame_model.fit` after its clip, with their defaults.

@@ -9,11 +9,11 @@ pub mod shape;
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
+use crate::values::{FlameModel, ParamSeries};
+use pyrograph_core::ValueType;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::params::{ClipOf, Cook};
-use pyrograph_core::{
-    Channels, Clip, CookCtx, FlameModel, FrameSource, Image, NodeError, ParamSeries, PortType, Registry, Value, port,
-};
+use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
 use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
 use rayon::prelude::*;
 

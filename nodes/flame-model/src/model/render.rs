@@ -3,12 +3,13 @@
 //! deformation is the inverse normalization, with the sparsely sampled path and width parameters
 //! interpolated by natural cubic splines, the height scaling the main axis.
 
-use pyrograph_core::{Channels, FlameModel, Image};
+use pyrograph_core::{Channels, Image};
 use pyrograph_nodes_imaging::color::ColorRamp;
 use rayon::prelude::*;
 
 use super::fit::{MIN_WIDTH, knot};
 use super::shape::Spline;
+use crate::values::FlameModel;
 
 /// Controls of the renderer (§5.1: offsets on the path, and scaling of height, width and size).
 #[derive(Clone, Debug, PartialEq)]

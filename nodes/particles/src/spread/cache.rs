@@ -3,9 +3,10 @@
 use std::sync::Arc;
 
 use pyrograph_core::stepping::{Checkpoint, SteppingCache};
-use pyrograph_core::{CookCtx, FrameSource, NodeError, Value, WindField};
+use pyrograph_core::{CookCtx, FrameSource, NodeError, Value};
 
 use super::front::{Spread, spread_wind};
+use crate::types::WindField;
 
 /// Frames between kept checkpoints of the stepping cache.
 const CHECKPOINT_EVERY: usize = 16;
@@ -58,6 +59,6 @@ impl FrameSource for SpreadSource {
         self.frames
     }
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::SpreadState(Arc::new(self.with_spread(index, ctx, Spread::state)?)))
+        Ok(Value::custom(Arc::new(self.with_spread(index, ctx, Spread::state)?)))
     }
 }

@@ -5,12 +5,13 @@
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
-use pyrograph_core::{CharMark, FlameRoot, NodeError, SpreadState, WindField, port};
+use pyrograph_core::{NodeError, port};
 use rayon::prelude::*;
 
 use super::node::{FireSpread, SpreadParams};
 use super::surface::{Chord, Surface, segment_distance};
 use crate::flame::unit_random;
+use crate::types::{CharMark, FlameRoot, SpreadState, WindField};
 use crate::wind::WindSampler;
 
 /// Where and when a fire starts.

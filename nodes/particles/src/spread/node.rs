@@ -10,11 +10,12 @@ use std::sync::Arc;
 use glam::Vec3;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::params::Cook;
-use pyrograph_core::{Clip, ClipOf, CookCtx, Mesh, NodeError, PortType, SpreadState, Value, WindField, port};
+use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::SpreadSource;
 use super::front::{Ignition, Spread, validate};
 use super::surface::Surface;
+use crate::types::{Mesh, SpreadState, WindField};
 use crate::wind::validate_wind;
 
 pyrograph_core::ports! {
@@ -116,13 +117,13 @@ impl Cook for FireSpread {
         let (frames, fps, substeps) = (self.frames, self.fps, self.substeps);
         let mut h = Fingerprinter::new();
         "particles.fire_spread".hash(&mut h);
-        Value::Mesh(self.mesh.clone()).hash_into(&mut h);
-        Value::WindField(self.wind.clone()).hash_into(&mut h);
+        Value::custom(self.mesh.clone()).hash_into(&mut h);
+        Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}{ignitions:?}", self.params).hash(&mut h);
         (frames, fps.to_bits(), substeps).hash(&mut h);
         let spread = Spread::new(surface, ignitions, self.params, fps as f32)?;
         let source = SpreadSource::new(spread, (*self.wind).clone(), frames, fps as f32, substeps);
-        Ok(FireSpreadOut { spread: ClipOf::new(Clip::new(PortType::SpreadState, fps, h.finish(), Arc::new(source))) })
+        Ok(FireSpreadOut { spread: ClipOf::new(Clip::new(PortType::of::<SpreadState>(), fps, h.finish(), Arc::new(source))) })
     }
 }
 

@@ -2,8 +2,8 @@
 //! surface across edges by the stored rotations, and the bent chords the double-burn test of
 //! Figure 3-9 measures along.
 
+use crate::types::{Mesh, NO_NEIGHBOR};
 use glam::{Quat, Vec3};
-use pyrograph_core::{Mesh, NO_NEIGHBOR};
 
 /// Per-face geometry derived from a [`Mesh`] once.
 #[derive(Clone, Debug)]

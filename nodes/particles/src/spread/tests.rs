@@ -1,11 +1,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
+use pyrograph_core::NodeError;
 use pyrograph_core::params::Declared;
-use pyrograph_core::{LargeWind, Mesh, NodeError, WindField};
 
 use super::*;
 use crate::mesh::{build_mesh, cube, cylinder, plane};
+use crate::types::{LargeWind, Mesh, WindField};
 
 /// Frames per second the tests' flame lifetimes are counted in (the node's default).
 const FPS: f32 = 24.0;

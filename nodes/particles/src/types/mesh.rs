@@ -3,7 +3,8 @@
 
 use std::hash::Hash;
 
-use crate::fingerprint::{Fingerprinter, hash_f32s};
+use pyrograph_core::fingerprint::{Fingerprinter, hash_f32s};
+use pyrograph_core::{TypeInfo, ValueType};
 
 /// Marks a boundary edge in [`Mesh::neighbors`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
@@ -26,23 +27,23 @@ pub struct Mesh {
     pub polygons: Vec<u32>,
 }
 
-impl Mesh {
-    /// Feeds the content into a fingerprint.
-    pub fn hash_into(&self, h: &mut Fingerprinter) {
+impl ValueType for Mesh {
+    const INFO: &'static TypeInfo =
+        &TypeInfo { name: "Mesh", doc: "A triangle mesh with face adjacency (Perry 1994 §3.3.2).", color: [150, 200, 150] };
+
+    fn hash_into(&self, h: &mut Fingerprinter) {
         (self.positions.len(), &self.triangles, &self.neighbors, &self.polygons).hash(h);
         self.positions.iter().chain(&self.normals).for_each(|p| hash_f32s(h, p));
         self.edge_rotations.iter().flatten().for_each(|q| hash_f32s(h, q));
     }
 
-    /// Approximate memory held.
-    pub fn byte_size(&self) -> usize {
+    fn byte_size(&self) -> usize {
         (self.positions.len() + self.normals.len() + 2 * self.triangles.len()) * 12
             + self.edge_rotations.len() * 48
             + self.polygons.len() * 4
     }
 
-    /// One-line description.
-    pub fn summary(&self) -> String {
+    fn summary(&self) -> String {
         format!("Mesh {} vertices, {} triangles", self.positions.len(), self.triangles.len())
     }
 }
@@ -90,9 +91,14 @@ pub struct SpreadState {
     pub flames_dropped: u64,
 }
 
-impl SpreadState {
-    /// Feeds the content into a fingerprint.
-    pub fn hash_into(&self, h: &mut Fingerprinter) {
+impl ValueType for SpreadState {
+    const INFO: &'static TypeInfo = &TypeInfo {
+        name: "SpreadState",
+        doc: "A fire spreading over a mesh at one moment (Perry 1994 §3.3–3.4).",
+        color: [150, 200, 150],
+    };
+
+    fn hash_into(&self, h: &mut Fingerprinter) {
         (self.time.to_bits(), self.boundaries.len(), self.roots.len(), self.extinguished.len(), self.char_marks.len()).hash(h);
         self.flames_dropped.hash(h);
         self.boundaries.iter().flatten().chain(&self.extinguished).for_each(|p| hash_f32s(h, p));
@@ -108,15 +114,13 @@ impl SpreadState {
         }
     }
 
-    /// Approximate memory held.
-    pub fn byte_size(&self) -> usize {
+    fn byte_size(&self) -> usize {
         (self.boundaries.iter().map(Vec::len).sum::<usize>() + self.extinguished.len()) * 12
             + self.roots.len() * std::mem::size_of::<FlameRoot>()
             + self.char_marks.len() * std::mem::size_of::<CharMark>()
     }
 
-    /// One-line description.
-    pub fn summary(&self) -> String {
+    fn summary(&self) -> String {
         let points: usize = self.boundaries.iter().map(Vec::len).sum();
         format!(
             "SpreadState t={} {} boundary points, {} flames, {} char marks",

@@ -3,7 +3,8 @@
 
 use std::hash::Hash;
 
-use crate::fingerprint::{Fingerprinter, hash_f32s};
+use pyrograph_core::fingerprint::{Fingerprinter, hash_f32s};
+use pyrograph_core::{TypeInfo, ValueType};
 
 fn hash_f64s(h: &mut Fingerprinter, values: &[f64]) {
     values.len().hash(h);
@@ -40,20 +41,25 @@ impl ParamSeries {
         let d = self.dim();
         self.data.get(t * d..(t + 1) * d)
     }
+}
 
-    /// Feeds the content into a fingerprint.
-    pub fn hash_into(&self, h: &mut Fingerprinter) {
+impl ValueType for ParamSeries {
+    const INFO: &'static TypeInfo = &TypeInfo {
+        name: "ParamSeries",
+        doc: "A time series of flame-model parameter vectors x_t (Stich & Magnor §3).",
+        color: [230, 150, 200],
+    };
+
+    fn hash_into(&self, h: &mut Fingerprinter) {
         (&self.names, self.frames, self.fps.to_bits()).hash(h);
         hash_f64s(h, &self.data);
     }
 
-    /// Approximate memory held.
-    pub fn byte_size(&self) -> usize {
+    fn byte_size(&self) -> usize {
         self.data.len() * 8 + self.names.iter().map(|n| n.len() + 24).sum::<usize>()
     }
 
-    /// One-line description.
-    pub fn summary(&self) -> String {
+    fn summary(&self) -> String {
         format!("ParamSeries {} frames x {} parameters", self.frames, self.dim())
     }
 }
@@ -93,9 +99,13 @@ impl ArModel {
     pub fn dim(&self) -> usize {
         self.names.len()
     }
+}
 
-    /// Feeds the content into a fingerprint.
-    pub fn hash_into(&self, h: &mut Fingerprinter) {
+impl ValueType for ArModel {
+    const INFO: &'static TypeInfo =
+        &TypeInfo { name: "ArModel", doc: "A learned auto-regressive process (Stich & Magnor §4).", color: [230, 150, 200] };
+
+    fn hash_into(&self, h: &mut Fingerprinter) {
         (&self.names, self.order, self.fps.to_bits()).hash(h);
         for v in
             [&self.a, &self.d, &self.b, &self.observation_noise, &self.offset, &self.scale, &self.initial, &self.log_likelihood]
@@ -104,13 +114,11 @@ impl ArModel {
         }
     }
 
-    /// Approximate memory held.
-    pub fn byte_size(&self) -> usize {
+    fn byte_size(&self) -> usize {
         (self.a.len() + self.b.len() + self.d.len() + self.initial.len() + 4 * self.dim() + self.log_likelihood.len()) * 8
     }
 
-    /// One-line description.
-    pub fn summary(&self) -> String {
+    fn summary(&self) -> String {
         format!("ArModel K={} over {} parameters, {} EM iterations", self.order, self.dim(), self.log_likelihood.len())
     }
 }
@@ -164,9 +172,16 @@ impl FlameModel {
     pub fn dim(&self) -> usize {
         self.path_samples + self.width_samples + self.eigenflames + 1
     }
+}
 
-    /// Feeds the content into a fingerprint.
-    pub fn hash_into(&self, h: &mut Fingerprinter) {
+impl ValueType for FlameModel {
+    const INFO: &'static TypeInfo = &TypeInfo {
+        name: "FlameModel",
+        doc: "The generic flame model: parameter sizes and eigenflames (Stich & Magnor §3).",
+        color: [230, 150, 200],
+    };
+
+    fn hash_into(&self, h: &mut Fingerprinter) {
         (self.path_samples, self.width_samples, self.eigenflames, self.width, self.height, self.frame_size).hash(h);
         hash_f32s(h, &self.mean);
         hash_f32s(h, &self.basis);
@@ -177,13 +192,11 @@ impl FlameModel {
         hash_f64s(h, &self.mean_params);
     }
 
-    /// Approximate memory held.
-    pub fn byte_size(&self) -> usize {
+    fn byte_size(&self) -> usize {
         (self.mean.len() + self.basis.len()) * 4 + (self.eigenvalues.len() + self.mean_params.len() + 10) * 8
     }
 
-    /// One-line description.
-    pub fn summary(&self) -> String {
+    fn summary(&self) -> String {
         format!(
             "FlameModel Np={} Nw={} Ne={} on {}x{} normalized images",
             self.path_samples, self.width_samples, self.eigenflames, self.width, self.height

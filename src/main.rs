@@ -10,8 +10,8 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use serde_json::json;
 
 use pyrograph::core::{
-    BuildOptions, CookCtx, CookResult, CookSettings, Diagnostic, Diagnostics, Evaluator, Graph, GraphDoc, NodeError, ParamValue,
-    Progress, Registry, TimeDep,
+    BuildOptions, CookCtx, CookResult, CookSettings, Diagnostic, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError,
+    ParamValue, Progress, Registry, TimeDep,
 };
 
 #[derive(Parser)]
@@ -31,9 +31,16 @@ enum Command {
     Render {
         /// The graph file (RON).
         graph: PathBuf,
-        /// Inclusive frame range to write, e.g. 0-99 or 12.
+        /// Frames to write: 12, 0-99, 0-99:2 (or 0-99x2, every second), lists like 1,5,9-12.
         #[arg(long, value_parser = parse_frames)]
-        frames: Option<(usize, usize)>,
+        frames: Option<FrameSet>,
+        /// Leave frames whose files already exist (a re-run after a crash writes only what is
+        /// missing; files are written atomically, so an existing file is a whole one).
+        #[arg(long)]
+        skip_existing: bool,
+        /// Let writer paths leave --out (or the graph's folder): absolute paths and `..`.
+        #[arg(long)]
+        allow_outside_out: bool,
         /// Folder that relative output paths resolve against (default: the graph file's folder).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -66,6 +73,13 @@ enum Command {
     Check {
         /// The graph file (RON).
         graph: PathBuf,
+        /// The output folder the render will use: writer paths must stay inside it (without
+        /// it, inside the graph file's folder).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Let writer paths leave the output folder, as `render --allow-outside-out`.
+        #[arg(long)]
+        allow_outside_out: bool,
         /// Print a JSON report instead of text.
         #[arg(long)]
         json: bool,
@@ -113,16 +127,8 @@ enum Command {
     },
 }
 
-fn parse_frames(s: &str) -> Result<(usize, usize), String> {
-    let parse = |t: &str| t.trim().parse::<usize>().map_err(|_| format!("'{t}' is not a frame number"));
-    let (a, b) = match s.split_once('-') {
-        Some((a, b)) => (parse(a)?, parse(b)?),
-        None => (parse(s)?, parse(s)?),
-    };
-    if a > b {
-        return Err(format!("frame range {a}-{b} is empty: the first frame is after the last"));
-    }
-    Ok((a, b))
+fn parse_frames(s: &str) -> Result<FrameSet, String> {
+    s.parse()
 }
 
 /// A failure that ends the command with exit code 1 after printing its message.
@@ -140,13 +146,28 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
-        Some(Command::Render { graph, frames, out, set, nodes, overwrite, cache_mb, compact_cache, cache_dir, json }) => {
+        Some(Command::Render {
+            graph,
+            frames,
+            skip_existing,
+            allow_outside_out,
+            out,
+            set,
+            nodes,
+            overwrite,
+            cache_mb,
+            compact_cache,
+            cache_dir,
+            json,
+        }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
             pyrograph::core::FrameCache::global().set_compact(compact_cache);
-            let opts = RenderOpts { frames, out, set, nodes, overwrite, cache_dir, json };
+            let opts = RenderOpts { frames, skip_existing, allow_outside_out, out, set, nodes, overwrite, cache_dir, json };
             render(&registry, &graph, &opts)
         }
-        Some(Command::Check { graph, json }) => check(&registry, &graph, json),
+        Some(Command::Check { graph, out, allow_outside_out, json }) => {
+            check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out }, json)
+        }
         Some(Command::Nodes { markdown, json }) => {
             nodes(&registry, markdown, json);
             Ok(())
@@ -170,7 +191,9 @@ fn main() -> ExitCode {
 }
 
 struct RenderOpts {
-    frames: Option<(usize, usize)>,
+    frames: Option<FrameSet>,
+    skip_existing: bool,
+    allow_outside_out: bool,
     out: Option<PathBuf>,
     set: Vec<String>,
     nodes: Vec<String>,
@@ -228,7 +251,7 @@ fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
 }
 
 fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failure> {
-    let options = BuildOptions { output_dir: o.out.clone() };
+    let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out };
     let (_, graph) = load(registry, path, &o.set, &options)?;
     let targets: Vec<String> = if o.nodes.is_empty() {
         let sinks = graph.sinks();
@@ -242,7 +265,12 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     {
         return Err(Failure(format!("error: --cache-dir {}: not a folder", dir.display())));
     }
-    let settings = CookSettings { frames: o.frames, overwrite: o.overwrite, cache_dir: o.cache_dir.clone() };
+    let settings = CookSettings {
+        frames: o.frames.clone(),
+        skip_existing: o.skip_existing,
+        overwrite: o.overwrite,
+        cache_dir: o.cache_dir.clone(),
+    };
     let mut ctx = CookCtx::new().with_settings(settings);
     if let Some(p) = progress_bars(!o.json) {
         ctx = ctx.with_progress(p);
@@ -328,7 +356,7 @@ fn describe_outputs(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) 
 
 fn demo(registry: &Registry, out: &Path) -> Result<(), Failure> {
     let doc = GraphDoc::from_ron(pyrograph::demo::DEMO_RON)?;
-    let options = BuildOptions { output_dir: Some(out.to_path_buf()) };
+    let options = BuildOptions { output_dir: Some(out.to_path_buf()), ..BuildOptions::default() };
     let graph = Graph::build(&doc, registry, Path::new("."), &options)?;
     let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
@@ -362,8 +390,8 @@ fn diag_json(d: &Diagnostic) -> serde_json::Value {
     })
 }
 
-fn check(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure> {
-    let built = load_checked(registry, path);
+fn check(registry: &Registry, path: &Path, options: &BuildOptions, json_out: bool) -> Result<(), Failure> {
+    let built = Graph::load(path, registry, options).map(|(_, g)| g);
     let (graph, problems) = match built {
         Ok(g) => {
             let errs = probe_sources(&g);
@@ -384,10 +412,6 @@ fn check(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure
         eprintln!("{}: {} problem(s)", path.display(), problems.len());
     }
     if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
-}
-
-fn load_checked(registry: &Registry, path: &Path) -> Result<Graph, Diagnostics> {
-    Graph::load(path, registry, &BuildOptions::default()).map(|(_, g)| g)
 }
 
 /// Cooks the source nodes (loaders), which open and probe their files, so `check` reports a

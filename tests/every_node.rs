@@ -155,7 +155,7 @@ struct Files {
 }
 
 fn cook(registry: &Registry, doc: &GraphDoc, out: &Path, target: &str) -> Result<(), String> {
-    let options = BuildOptions { output_dir: Some(out.to_path_buf()) };
+    let options = BuildOptions { output_dir: Some(out.to_path_buf()), ..BuildOptions::default() };
     let graph = Graph::build(doc, registry, out, &options).map_err(|d| format!("does not build: {d}"))?;
     let result = Evaluator::new().cook(&graph, &[target], &CookCtx::new()).map_err(|e| e.to_string())?;
     match result.node(target) {

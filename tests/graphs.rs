@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, Graph, GraphDoc, Value};
+use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Value};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -78,11 +78,12 @@ fn every_registered_node_has_a_doc_and_documented_ports() {
 fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
     let out = tempfile::tempdir().unwrap();
     let path = root().join("graphs").join(graph);
-    let options = BuildOptions { output_dir: Some(out.path().to_path_buf()) };
+    let options = BuildOptions { output_dir: Some(out.path().to_path_buf()), ..BuildOptions::default() };
     let (_, g) = Graph::load(&path, &pyrograph::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
     let sinks: Vec<String> = g.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
-    let ctx = CookCtx::new().with_settings(CookSettings { frames: Some(frames), overwrite: false, cache_dir: None });
+    let ctx = CookCtx::new()
+        .with_settings(CookSettings { frames: Some(FrameSet::range(frames.0, frames.1)), ..CookSettings::default() });
     let res = Evaluator::new().cook(&g, &targets, &ctx).unwrap();
     assert!(res.is_ok(), "{:?}", res.root_errors());
     let golden_dir = root().join("tests/golden");

@@ -62,8 +62,11 @@ impl CancelToken {
 /// Settings of one render that sinks (writers) obey.
 #[derive(Clone, Debug, Default)]
 pub struct CookSettings {
-    /// Inclusive frame range to write (`--frames A-B`); all frames when `None`.
-    pub frames: Option<(usize, usize)>,
+    /// Frames to write (`--frames 0-99`, `1,5,9-12`, a farm task's chunk); all when `None`.
+    pub frames: Option<crate::frames::FrameSet>,
+    /// Leave frames whose files exist alone (`--skip-existing`): a re-queued task redoes only
+    /// what is missing. Files are written atomically, so an existing file is a whole one.
+    pub skip_existing: bool,
     /// Replace existing files even where a writer's `overwrite` parameter is off.
     pub overwrite: bool,
     /// Folder for scratch files of out-of-core work (`--cache-dir`); the system's temp folder

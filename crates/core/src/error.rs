@@ -149,6 +149,8 @@ pub enum DiagnosticKind {
     UnsetVariable,
     /// A sub-graph include failed (missing file, include cycle, bad interface).
     Include,
+    /// A writer path that leaves the output folder (`--out`, else the graph's folder).
+    OutsideOutput,
     /// A node id that cannot be used (empty, or holding the include separator `/`).
     BadId,
 }

@@ -393,6 +393,7 @@ mod tests {
             start: 0,
             overwrite: false,
             frames: None,
+            skip_existing: false,
             alpha: crate::color::AlphaMode::Straight,
         };
         let err = crate::io::write_sequence(&clip, &options, &ctx).unwrap_err().to_string();

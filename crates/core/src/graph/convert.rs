@@ -26,6 +26,35 @@ fn resolve_path(p: &Path, role: PathRole, ctx: &LoadCtx) -> PathBuf {
     }
 }
 
+/// `path` with `.` and `..` resolved by their names (no file-system access: the file may not
+/// exist yet); a `..` above the start is kept.
+fn lexical(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out: Vec<Component> = Vec::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => match out.last() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                Some(Component::RootDir | Component::Prefix(_)) => {}
+                _ => out.push(c),
+            },
+            other => out.push(other),
+        }
+    }
+    out.iter().collect()
+}
+
+/// Whether `path` stays inside folder `root`, judged by names (`out/a/../b.png` is inside
+/// `out`; `out/../b.png` and `/tmp/b.png` are not, unless `root` is `/tmp`). A relative `root`
+/// is taken from the current folder, as the writer will take it.
+pub(crate) fn inside(path: &Path, root: &Path) -> bool {
+    let abs = |p: &Path| if p.is_absolute() { lexical(p) } else { lexical(&std::env::current_dir().unwrap_or_default().join(p)) };
+    abs(path).starts_with(abs(root))
+}
+
 /// Expands `${NAME}` from the environment; an unset variable is an error naming it.
 pub fn expand_vars(text: &str) -> Result<String, String> {
     let mut out = String::new();
@@ -134,7 +163,21 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
         PortType::Path => match pv {
             ParamValue::String(s) => {
                 let expanded = expand_vars(s).map_err(|m| (DiagnosticKind::UnsetVariable, m))?;
-                Ok(Value::Path(resolve_path(Path::new(&expanded), port.path_role.unwrap_or(PathRole::Input), ctx)))
+                let role = port.path_role.unwrap_or(PathRole::Input);
+                let path = resolve_path(Path::new(&expanded), role, ctx);
+                if role == PathRole::Output && !ctx.options.allow_outside_out && !inside(&path, &ctx.root) {
+                    let what = if ctx.options.output_dir.is_some() { "the output folder (--out)" } else { "the graph's folder" };
+                    return Err((
+                        DiagnosticKind::OutsideOutput,
+                        format!(
+                            "\"{s}\" writes to {}, outside {what} {}; write a path inside it, or render with \
+                             --allow-outside-out",
+                            path.display(),
+                            ctx.root.display()
+                        ),
+                    ));
+                }
+                Ok(Value::Path(path))
             }
             _ => Err(wrong("a path string")),
         },

@@ -95,7 +95,7 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
 pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
     let options = BuildOptions::default();
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let ctx = LoadCtx { registry, dir, options: &options, include_stack: Vec::new() };
+    let ctx = LoadCtx { registry, root: dir.clone(), dir, options: &options, include_stack: Vec::new() };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(name));
     load("preset", &nd, &ctx).map(|(_, desc)| desc).map_err(|d| Diagnostics(d).in_file(path))

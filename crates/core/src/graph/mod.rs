@@ -33,6 +33,10 @@ pub const PATH_SEP: char = '/';
 pub struct BuildOptions {
     /// Where relative output paths go (`--out`); the graph file's folder when `None`.
     pub output_dir: Option<PathBuf>,
+    /// Let writers' paths leave the output folder (`--allow-outside-out`). Off, a writer path
+    /// that is absolute or climbs out with `..` is refused when the graph loads, so a preset
+    /// from a library cannot write anywhere on a farm node.
+    pub allow_outside_out: bool,
 }
 
 /// Where an input's value comes from.
@@ -116,6 +120,8 @@ pub(crate) struct LoadCtx<'a> {
     pub registry: &'a Registry,
     pub dir: PathBuf,
     pub options: &'a BuildOptions,
+    /// The folder writers must stay inside: `--out`, else the top graph file's folder.
+    pub root: PathBuf,
     /// Canonical paths of the files being included, outermost first (for cycle detection).
     pub include_stack: Vec<PathBuf>,
 }
@@ -126,7 +132,8 @@ impl Graph {
         let doc = GraphDoc::load(path)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let stack = vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())];
-        let ctx = LoadCtx { registry, dir, options, include_stack: stack };
+        let root = options.output_dir.clone().unwrap_or_else(|| dir.clone());
+        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root };
         let mut graph = build(&doc, &ctx).map_err(|d| d.in_file(path))?;
         graph.file = Some(path.to_path_buf());
         Ok((doc, graph))
@@ -134,7 +141,8 @@ impl Graph {
 
     /// Validates and type-checks a document whose relative paths resolve against `dir`.
     pub fn build(doc: &GraphDoc, registry: &Registry, dir: &Path, options: &BuildOptions) -> Result<Graph, Diagnostics> {
-        let ctx = LoadCtx { registry, dir: dir.to_path_buf(), options, include_stack: Vec::new() };
+        let root = options.output_dir.clone().unwrap_or_else(|| dir.to_path_buf());
+        let ctx = LoadCtx { registry, dir: dir.to_path_buf(), options, include_stack: Vec::new(), root };
         build(doc, &ctx)
     }
 

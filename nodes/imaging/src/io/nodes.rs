@@ -134,7 +134,8 @@ impl Cook for WriteSequence {
             format: output_format(&self.pattern, self.bit_depth, self.exr_type)?,
             start: self.start,
             overwrite: self.overwrite || ctx.settings().overwrite,
-            frames: ctx.settings().frames,
+            frames: ctx.settings().frames.clone(),
+            skip_existing: ctx.settings().skip_existing,
             alpha: self.alpha,
             pattern: self.pattern.0,
         };

@@ -3,14 +3,13 @@
 
 use std::cmp::Ordering;
 use std::hash::{Hash, Hasher};
-use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 
 use pyrograph_core::document::write_atomic;
 use pyrograph_core::fingerprint::{Fingerprinter, hash_metadata};
-use pyrograph_core::{Clip, CookCtx, FrameSource, NodeError, PortType, Value, port};
+use pyrograph_core::{Clip, CookCtx, FrameSet, FrameSource, NodeError, PortType, Value, port};
 use rayon::prelude::*;
 
 use super::files::{OutputFormat, decode_image, encode_image, image_dimensions};
@@ -282,8 +281,10 @@ pub struct WriteOptions {
     pub start: u64,
     /// Replace existing files.
     pub overwrite: bool,
-    /// Inclusive range of clip frames to write; every frame when `None`.
-    pub frames: Option<(usize, usize)>,
+    /// Clip frames to write; every frame when `None`.
+    pub frames: Option<FrameSet>,
+    /// Leave frames whose files exist alone instead of refusing or replacing them.
+    pub skip_existing: bool,
     /// Alpha convention of the files (frames are straight in memory; gray frames have no alpha).
     pub alpha: AlphaMode,
 }
@@ -301,15 +302,15 @@ pub fn output_pattern(pattern: &Path) -> Result<(PathBuf, FramePattern), NodeErr
     Ok((dir, parsed))
 }
 
-/// The clip frames to write: the requested inclusive range (checked) or all of them.
-pub fn frames_to_write(len: usize, frames: Option<(usize, usize)>) -> Result<Range<usize>, NodeError> {
+/// The clip frames to write, ascending: the requested set (checked against the clip) or all.
+pub fn frames_to_write(len: usize, frames: Option<&FrameSet>) -> Result<Vec<usize>, NodeError> {
     if len == 0 {
         return Err(NodeError::port(port!(WriteSequence, clip), "the clip has no frames"));
     }
     match frames {
-        None => Ok(0..len),
-        Some((a, b)) if a <= b && b < len => Ok(a..b + 1),
-        Some((a, b)) => Err(NodeError::msg(format!("frame range {a}-{b} is outside the clip's frames 0-{}", len - 1))),
+        None => Ok((0..len).collect()),
+        Some(set) if set.last() < len => Ok(set.frames()),
+        Some(set) => Err(NodeError::msg(format!("frames {set} reach past the clip's frames 0-{}", len - 1))),
     }
 }
 
@@ -318,9 +319,12 @@ pub fn frames_to_write(len: usize, frames: Option<(usize, usize)>) -> Result<Ran
 /// Nothing is written when any target exists and `overwrite` is off.
 pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, NodeError> {
     let (dir, pattern) = output_pattern(&options.pattern)?;
-    let range = frames_to_write(clip.len(), options.frames)?;
-    let targets: Vec<(usize, PathBuf)> = range.map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
-    if !options.overwrite {
+    let frames = frames_to_write(clip.len(), options.frames.as_ref())?;
+    let mut targets: Vec<(usize, PathBuf)> =
+        frames.into_iter().map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
+    if options.skip_existing {
+        targets.retain(|(_, p)| !p.exists());
+    } else if !options.overwrite {
         refuse_existing(&targets)?;
     }
     if !dir.as_os_str().is_empty() {

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Clip, Cook, CookCtx, Image, Inputs, PortType, Value};
+use pyrograph_core::{Channels, Clip, Cook, CookCtx, FrameSet, Image, Inputs, PortType, Value};
 
 use super::*;
 use crate::color::AlphaMode;
@@ -34,7 +34,7 @@ fn clip_of(images: Vec<Image>) -> Clip {
 }
 
 fn options(pattern: PathBuf, format: OutputFormat) -> WriteOptions {
-    WriteOptions { pattern, format, start: 0, overwrite: false, frames: None, alpha: AlphaMode::Straight }
+    WriteOptions { pattern, format, start: 0, overwrite: false, frames: None, skip_existing: false, alpha: AlphaMode::Straight }
 }
 
 fn assert_close(a: &[f32], b: &[f32], tol: f32) {
@@ -195,14 +195,47 @@ fn writer_honours_frame_range_start_and_creates_folders() {
     let clip = clip_of((0..5).map(|i| gray(1, 1, &[i as f32 / 4.0])).collect());
     let opts = WriteOptions {
         start: 100,
-        frames: Some((1, 2)),
+        frames: Some(FrameSet::range(1, 2)),
         ..options(dir.path().join("a/b/x_###.png"), OutputFormat::Png { sixteen_bit: false })
     };
     let written = write_sequence(&clip, &opts, &ctx).unwrap();
     assert_eq!(written, [dir.path().join("a/b/x_101.png"), dir.path().join("a/b/x_102.png")]);
     assert_close(load_image(&written[1]).unwrap().data(), &[0.5], 0.5 / 255.0 + 1e-6);
-    let outside = WriteOptions { frames: Some((3, 5)), ..opts };
+    let outside = WriteOptions { frames: Some(FrameSet::range(3, 5)), ..opts };
     assert!(write_sequence(&clip, &outside, &ctx).unwrap_err().to_string().contains("0-4"));
+}
+
+#[test]
+fn writer_takes_stepped_frames_and_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    let clip = clip_of((0..10).map(|i| gray(1, 1, &[i as f32 / 9.0])).collect());
+    let frames: FrameSet = "0-9:4,7".parse().unwrap();
+    let opts =
+        WriteOptions { frames: Some(frames), ..options(dir.path().join("f_#.png"), OutputFormat::Png { sixteen_bit: false }) };
+    let written = write_sequence(&clip, &opts, &CookCtx::new()).unwrap();
+    let names: Vec<String> = written.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["f_0.png", "f_4.png", "f_7.png", "f_8.png"]);
+}
+
+#[test]
+fn skip_existing_writes_only_the_missing_frames_and_leaves_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let ctx = CookCtx::new();
+    let clip = clip_of((0..6).map(|i| gray(1, 1, &[i as f32 / 5.0])).collect());
+    let opts = options(dir.path().join("f_#.png"), OutputFormat::Png { sixteen_bit: false });
+    let all = write_sequence(&clip, &opts, &ctx).unwrap();
+    let whole: Vec<Vec<u8>> = all.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    // A crash took frames 2 and 5; frame 3 holds something else that must survive.
+    std::fs::remove_file(&all[2]).unwrap();
+    std::fs::remove_file(&all[5]).unwrap();
+    std::fs::write(&all[3], b"kept").unwrap();
+    assert!(write_sequence(&clip, &opts, &ctx).is_err(), "without skip_existing the existing files are refused");
+    let resumed = write_sequence(&clip, &WriteOptions { skip_existing: true, ..opts }, &ctx).unwrap();
+    assert_eq!(resumed, [all[2].clone(), all[5].clone()]);
+    assert_eq!(std::fs::read(&all[3]).unwrap(), b"kept");
+    for i in [0, 1, 2, 4, 5] {
+        assert_eq!(std::fs::read(&all[i]).unwrap(), whole[i], "frame {i} is the same as an uninterrupted render");
+    }
 }
 
 #[test]

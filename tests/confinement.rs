@@ -1,0 +1,110 @@
+//! Writers stay inside the output folder: with `--out`, a writer path that is absolute or
+//! climbs out with `..` is refused when the graph loads (naming node and port), by `check` as
+//! by `render`, and nothing is written; `--allow-outside-out` lets it through. Without `--out`
+//! the graph file's folder is the limit.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pyrograph")).args(args).output().expect("the binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// A graph with one writer of `writer_type` whose `port` is `target`, fed what it needs.
+fn graph(writer_type: &str, port: &str, target: &str) -> String {
+    let target = target.replace('\\', "\\\\");
+    let (feed, edges) = match writer_type {
+        "imaging.write_image" => ("imaging.constant_color", r#"("src.image", "w.image")"#),
+        "eigen.save_database" => ("imaging.constant_color", ""),
+        _ => ("imaging.turbulence_flame", r#"("src.clip", "w.clip")"#),
+    };
+    format!(
+        r#"(version: 1, nodes: {{"src": (type: "{feed}", params: {{"width": 8, "height": 8}}),
+            "w": (type: "{writer_type}", params: {{"{port}": "{target}"}})}}, edges: [{edges}])"#
+    )
+}
+
+const WRITERS: &[(&str, &str, &str)] = &[
+    ("imaging.write_image", "path", "x.png"),
+    ("imaging.write_sequence", "pattern", "x_####.png"),
+    ("imaging.write_flipbook", "path", "x.png"),
+    ("eigen.save_database", "path", "x.db"),
+];
+
+fn setup() -> (tempfile::TempDir, PathBuf, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let graphs = dir.path().join("graphs");
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&graphs).unwrap();
+    std::fs::create_dir_all(&out).unwrap();
+    (dir, graphs, out)
+}
+
+fn files_under(dir: &Path) -> usize {
+    walk(dir).len()
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_dir() { v.extend(walk(&p)) } else { v.push(p) }
+    }
+    v
+}
+
+#[test]
+fn every_writer_refuses_absolute_and_climbing_paths_under_out() {
+    let (dir, graphs, out) = setup();
+    let escape = dir.path().join("escaped");
+    for (ty, port, name) in WRITERS {
+        for target in [escape.join(name).to_string_lossy().into_owned(), format!("../../escaped/{name}")] {
+            let file = graphs.join("g.ron");
+            std::fs::write(&file, graph(ty, port, &target)).unwrap();
+            let file = file.to_str().unwrap();
+            let out_s = out.to_str().unwrap();
+            for args in [vec!["check", file, "--out", out_s], vec!["render", file, "--out", out_s]] {
+                let o = run(&args);
+                let all = text(&o);
+                assert_eq!(o.status.code(), Some(1), "{ty} {target} {args:?}:\n{all}");
+                assert!(all.contains(&format!("node 'w', port '{port}'")), "{ty} {target}: names node and port:\n{all}");
+                assert!(all.contains("outside the output folder (--out)") && all.contains("--allow-outside-out"), "{all}");
+            }
+        }
+    }
+    assert_eq!(files_under(dir.path()), 1, "only the graph file exists: nothing was written");
+}
+
+#[test]
+fn without_out_the_graph_folder_is_the_limit() {
+    let (dir, graphs, _) = setup();
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", "../escaped.png")).unwrap();
+    let o = run(&["check", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("outside the graph's folder"), "{}", text(&o));
+    // Inside it, `..` that stays in is fine.
+    std::fs::write(&file, graph("imaging.write_image", "path", "sub/../inside.png")).unwrap();
+    let o = run(&["render", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(graphs.join("inside.png").is_file());
+    assert!(!dir.path().join("escaped.png").exists());
+}
+
+#[test]
+fn allow_outside_out_lets_a_writer_out() {
+    let (dir, graphs, out) = setup();
+    let target = dir.path().join("elsewhere/x.png");
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", target.to_str().unwrap())).unwrap();
+    let args = ["render", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--allow-outside-out"];
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(target.is_file());
+    let o = run(&["check", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--allow-outside-out"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}

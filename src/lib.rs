@@ -7,6 +7,8 @@
 
 pub mod bench;
 pub mod demo;
+pub mod job;
+pub mod manifest;
 pub mod reference;
 
 pub use pyrograph_core as core;

@@ -9,6 +9,9 @@ use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use serde_json::json;
 
+mod cli_farm;
+
+use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use pyrograph::core::{
     BuildOptions, CookCtx, CookResult, CookSettings, Diagnostic, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError,
     ParamValue, Progress, Registry, TimeDep,
@@ -41,6 +44,9 @@ enum Command {
         /// Let writer paths leave --out (or the graph's folder): absolute paths and `..`.
         #[arg(long)]
         allow_outside_out: bool,
+        /// Write a JSON manifest of the files written (size, SHA-256), the time and peak memory.
+        #[arg(long, value_name = "FILE")]
+        manifest: Option<PathBuf>,
         /// Folder that relative output paths resolve against (default: the graph file's folder).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -68,6 +74,39 @@ enum Command {
         /// Print a JSON report instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Write an Open Job Description job bundle that renders the graph on a render farm (AWS
+    /// Deadline Cloud) or locally with `openjd run`: one task per chunk of frames.
+    /// `job collect JOB_DIR` merges the tasks' manifests and reports missing frames.
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+    Job {
+        #[command(subcommand)]
+        action: Option<JobAction>,
+        /// The graph file (RON).
+        #[arg(required = true)]
+        graph: Option<PathBuf>,
+        /// Where the tasks write (relative output paths resolve against it).
+        #[arg(long, required = true)]
+        out: Option<PathBuf>,
+        /// Frames to render: 0-239, 0-99:2, 1,5,9-12.
+        #[arg(long, value_parser = parse_frames, required = true)]
+        frames: Option<FrameSet>,
+        /// Frames per task.
+        #[arg(long, default_value_t = 24)]
+        chunk: usize,
+        /// Override a parameter in every task: node.param=value.
+        #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
+        set: Vec<String>,
+        /// List the chunks as a STRING task parameter instead of using the TASK_CHUNKING
+        /// extension, for schedulers without it.
+        #[arg(long)]
+        no_chunking: bool,
+        /// The bundle folder to write.
+        #[arg(short = 'o', long = "output", value_name = "JOB_DIR", required = true)]
+        job_dir: Option<PathBuf>,
+        /// Replace bundle files that already exist.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Validate a graph and probe its sources (files exist and decode) without rendering.
     Check {
@@ -151,6 +190,7 @@ fn main() -> ExitCode {
             frames,
             skip_existing,
             allow_outside_out,
+            manifest,
             out,
             set,
             nodes,
@@ -162,8 +202,19 @@ fn main() -> ExitCode {
         }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
             pyrograph::core::FrameCache::global().set_compact(compact_cache);
-            let opts = RenderOpts { frames, skip_existing, allow_outside_out, out, set, nodes, overwrite, cache_dir, json };
+            let opts =
+                RenderOpts { frames, skip_existing, allow_outside_out, manifest, out, set, nodes, overwrite, cache_dir, json };
             render(&registry, &graph, &opts)
+        }
+        Some(Command::Job { action: Some(JobAction::Collect { job_dir, json }), .. }) => collect(&job_dir, json),
+        Some(Command::Job { action: None, graph, out, frames, chunk, set, no_chunking, job_dir, overwrite }) => {
+            match (graph, out, frames, job_dir) {
+                (Some(graph), Some(out), Some(frames), Some(job_dir)) => {
+                    let spec = JobArgs { graph, out, frames, chunk, sets: set, task_chunking: !no_chunking };
+                    job(&registry, &spec, &job_dir, overwrite)
+                }
+                _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
+            }
         }
         Some(Command::Check { graph, out, allow_outside_out, json }) => {
             check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out }, json)
@@ -194,6 +245,7 @@ struct RenderOpts {
     frames: Option<FrameSet>,
     skip_existing: bool,
     allow_outside_out: bool,
+    manifest: Option<PathBuf>,
     out: Option<PathBuf>,
     set: Vec<String>,
     nodes: Vec<String>,
@@ -277,6 +329,10 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     }
     let started = std::time::Instant::now();
     let result = Evaluator::new().cook(&graph, &target_refs, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
+    if let Some(file) = &o.manifest {
+        let out = o.out.clone().unwrap_or_else(|| graph.dir.clone());
+        write_manifest(file, path, &out, o, &ctx, &result, started.elapsed())?;
+    }
     report(&graph, &targets, &result, started.elapsed(), o.json)
 }
 

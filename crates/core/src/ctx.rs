@@ -81,6 +81,7 @@ pub struct CookCtx {
     progress: Option<ProgressFn>,
     settings: Arc<CookSettings>,
     node: Option<Arc<str>>,
+    written: Arc<std::sync::Mutex<Vec<std::path::PathBuf>>>,
 }
 
 impl CookCtx {
@@ -114,6 +115,17 @@ impl CookCtx {
     /// `Err(Cancelled)` once cancellation was asked for.
     pub fn check_cancel(&self) -> Result<(), NodeError> {
         if self.cancel.is_cancelled() { Err(NodeError::Cancelled) } else { Ok(()) }
+    }
+    /// Notes a file a writer has finished writing (for the render's manifest).
+    pub fn record_written(&self, path: &std::path::Path) {
+        if let Ok(mut w) = self.written.lock() {
+            w.push(path.to_path_buf());
+        }
+    }
+    /// The files writers finished in cooks with this context (and contexts made from it), in
+    /// the order they were finished.
+    pub fn written(&self) -> Vec<std::path::PathBuf> {
+        self.written.lock().map(|w| w.clone()).unwrap_or_default()
     }
     /// The id of the node being cooked, if any.
     pub fn node_id(&self) -> Option<&str> {

@@ -87,7 +87,7 @@ impl FrameSet {
 
     /// Whether `frame` is in the set.
     pub fn contains(&self, frame: usize) -> bool {
-        self.ranges.iter().any(|r| frame >= r.start && frame <= r.end && (frame - r.start) % r.step == 0)
+        self.ranges.iter().any(|r| frame >= r.start && frame <= r.end && (frame - r.start).is_multiple_of(r.step))
     }
 
     /// The frames cut into consecutive chunks of at most `size` frames (as a farm's tasks), each
@@ -95,6 +95,15 @@ impl FrameSet {
     pub fn chunks(&self, size: usize) -> Vec<FrameSet> {
         let size = size.max(1);
         self.frames().chunks(size).map(FrameSet::from_frames).collect()
+    }
+
+    /// The set of exactly these frames (in any order, repeats allowed), in its shortest form;
+    /// `None` when there are none.
+    pub fn from_list(frames: &[usize]) -> Option<FrameSet> {
+        let mut sorted = frames.to_vec();
+        sorted.sort_unstable();
+        sorted.dedup();
+        (!sorted.is_empty()).then(|| FrameSet::from_frames(&sorted))
     }
 
     /// The smallest set of ranges holding exactly `frames` (ascending, distinct, non-empty).
@@ -250,6 +259,15 @@ mod tests {
             for c in &chunks {
                 prop_assert_eq!(c.to_string().parse::<FrameSet>().unwrap().frames(), c.frames());
             }
+        }
+
+        #[test]
+        fn from_list_holds_exactly_the_frames(list in prop::collection::vec(0usize..300, 1..50)) {
+            let set = FrameSet::from_list(&list).unwrap();
+            let mut want = list.clone();
+            want.sort_unstable();
+            want.dedup();
+            prop_assert_eq!(set.frames(), want);
         }
 
         #[test]

@@ -9,7 +9,7 @@
 //! components when asked. Every file is written atomically and the header last; a truncated,
 //! altered or foreign file is a clear error.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use pyrograph_core::document::write_atomic;
@@ -118,7 +118,8 @@ fn write_file(dir: &Path, name: &str, bytes: &[u8], overwrite: bool) -> Result<F
 }
 
 /// Writes `db` into folder `dir` in packs of `pack_size` components; the header goes last.
-pub fn save(db: &Database, dir: &Path, pack_size: usize, overwrite: bool) -> Result<(), String> {
+/// Returns the files written, in the order they were written.
+pub fn save(db: &Database, dir: &Path, pack_size: usize, overwrite: bool) -> Result<Vec<PathBuf>, String> {
     let (b, w) = (&db.basis, &db.weights);
     let (n, m, e) = (b.pixels(), b.sources.len(), b.components());
     if w.frames != m || w.components != e {
@@ -163,7 +164,11 @@ pub fn save(db: &Database, dir: &Path, pack_size: usize, overwrite: bool) -> Res
     };
     let text = ron::ser::to_string_pretty(&header, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())?;
     let path = dir.join(HEADER);
-    write_atomic(&path, text.as_bytes(), true).map_err(|e| format!("writing {}: {e}", path.display()))
+    write_atomic(&path, text.as_bytes(), true).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    let mut written = vec![dir.join(&header.mean.file)];
+    written.extend(header.packs.iter().map(|p| dir.join(&p.data.file)));
+    written.push(path);
+    Ok(written)
 }
 
 /// Reads and validates the header of the database in `dir`.
@@ -289,8 +294,9 @@ pyrograph_core::node! {
 impl Cook for SaveDatabase {
     fn cook(self, ctx: &CookCtx) -> Result<SaveDatabaseOut, NodeError> {
         let db = Database { basis: Arc::unwrap_or_clone(self.basis), weights: Arc::unwrap_or_clone(self.weights) };
-        save(&db, &self.path, self.pack_size, self.overwrite || ctx.settings().overwrite)
+        let written = save(&db, &self.path, self.pack_size, self.overwrite || ctx.settings().overwrite)
             .map_err(|m| NodeError::port(port!(SaveDatabase, path), m))?;
+        written.iter().for_each(|f| ctx.record_written(f));
         Ok(SaveDatabaseOut { path: self.path })
     }
 }

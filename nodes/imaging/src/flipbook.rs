@@ -478,6 +478,9 @@ impl Cook for WriteFlipbook {
             sidecar_json(&fb, opts, clip.len(), clip.fps(), &name(&sheet_file), motion_path.as_deref().map(name).as_deref());
         write_atomic(&json_path, json.as_bytes(), overwrite)
             .map_err(|e| NodeError::port(path_port, format!("writing {}: {e}", json_path.display())))?;
+        for p in [Some(&sheet_file), motion_path.as_ref(), Some(&json_path)].into_iter().flatten() {
+            ctx.record_written(p);
+        }
         Ok(WriteFlipbookOut { path: OutputPath(sheet_file), frames: clip.len() })
     }
 }

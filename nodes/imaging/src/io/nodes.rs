@@ -177,6 +177,7 @@ impl Cook for WriteImage {
             e => e,
         })?;
         write_image(&self.image, &self.path, format, self.overwrite || ctx.settings().overwrite)?;
+        ctx.record_written(&self.path);
         Ok(WriteImageOut { path: self.path })
     }
 }

@@ -323,7 +323,14 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
     let mut targets: Vec<(usize, PathBuf)> =
         frames.into_iter().map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
     if options.skip_existing {
-        targets.retain(|(_, p)| !p.exists());
+        // Existing files are whole (every write is atomic) and belong to this render's output.
+        targets.retain(|(_, p)| {
+            let exists = p.exists();
+            if exists {
+                ctx.record_written(p);
+            }
+            !exists
+        });
     } else if !options.overwrite {
         refuse_existing(&targets)?;
     }
@@ -340,6 +347,7 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
             AlphaMode::Premultiplied => encode_image(&premultiply(&img), options.format)?,
         };
         write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+        ctx.record_written(path);
         ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
         Ok::<(), NodeError>(())
     })?;

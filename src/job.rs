@@ -1,0 +1,180 @@
+//! `pyrograph job`: an Open Job Description job bundle that renders a graph on a farm.
+//!
+//! The bundle is what AWS Deadline Cloud submits unchanged and what `openjd run` runs locally:
+//! `template.yaml` (jobtemplate-2023-09, one `Render` step whose tasks are chunks of the
+//! frames), `parameter_values.yaml` (Deadline's `parameterValues` list) and `job_params.yaml`
+//! (the same values as a map, for `openjd run -p file://job_params.yaml`). Every task runs
+//! `pyrograph render GRAPH --out OUT --frames <its chunk> --skip-existing`, so a re-queued task
+//! redoes only the frames it had not finished, and leaves a manifest of its files in
+//! `OUT/.pyrograph-job/` for `pyrograph job collect`. The graph is referenced where it lies (a farm
+//! shares storage), so its includes and relative inputs resolve as they do here.
+//!
+//! The YAML is written by hand: it is a fixed shape whose every scalar is emitted as a JSON
+//! string (YAML reads JSON strings as strings), which a YAML library would not make safer.
+
+use std::path::{Path, PathBuf};
+
+use pyrograph_core::FrameSet;
+
+/// What a job renders and how its frames are cut into tasks.
+#[derive(Clone, Debug)]
+pub struct JobSpec {
+    /// Job name shown by the farm.
+    pub name: String,
+    /// The pyrograph binary the workers run (absolute).
+    pub pyrograph: PathBuf,
+    /// The graph file (absolute).
+    pub graph: PathBuf,
+    /// The output folder (absolute).
+    pub out: PathBuf,
+    /// Frames to render.
+    pub frames: FrameSet,
+    /// Frames per task.
+    pub chunk: usize,
+    /// `--set node.param=value` overrides, passed to every task.
+    pub sets: Vec<String>,
+    /// Use the TASK_CHUNKING extension (`CHUNK[INT]`); without it the chunks are listed as a
+    /// STRING task parameter, for schedulers that lack the extension.
+    pub task_chunking: bool,
+}
+
+/// The files of a job bundle, by name.
+pub struct Bundle {
+    /// `(file name, contents)`.
+    pub files: Vec<(&'static str, String)>,
+}
+
+fn q(s: &str) -> String {
+    serde_json::Value::String(s.to_string()).to_string()
+}
+
+fn path_text(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+impl JobSpec {
+    /// The bundle's files.
+    pub fn bundle(&self) -> Bundle {
+        Bundle {
+            files: vec![
+                ("template.yaml", self.template()),
+                ("parameter_values.yaml", self.parameter_values()),
+                ("job_params.yaml", self.job_params()),
+            ],
+        }
+    }
+
+    fn params(&self) -> [(&'static str, String); 4] {
+        [
+            ("Pyrograph", path_text(&self.pyrograph)),
+            ("Graph", path_text(&self.graph)),
+            ("Out", path_text(&self.out)),
+            ("Frames", self.frames.to_string()),
+        ]
+    }
+
+    /// The job template (jobtemplate-2023-09).
+    pub fn template(&self) -> String {
+        let mut t = String::from("specificationVersion: 'jobtemplate-2023-09'\n");
+        if self.task_chunking {
+            t += "extensions:\n- TASK_CHUNKING\n";
+        }
+        t += &format!("name: {}\n", q(&self.name));
+        t += "parameterDefinitions:\n";
+        for (name, kind, extra) in [
+            ("Pyrograph", "PATH", "  objectType: FILE\n  dataFlow: IN\n"),
+            ("Graph", "PATH", "  objectType: FILE\n  dataFlow: IN\n"),
+            ("Out", "PATH", "  objectType: DIRECTORY\n  dataFlow: OUT\n"),
+        ] {
+            t += &format!("- name: {name}\n  type: {kind}\n{extra}");
+        }
+        t += &format!("- name: Frames\n  type: STRING\n  default: {}\n", q(&self.frames.to_string()));
+        t += "steps:\n- name: Render\n  parameterSpace:\n    taskParameterDefinitions:\n";
+        if self.task_chunking {
+            let contiguous = matches!(self.frames.ranges(), [r] if r.step == 1);
+            t += &format!(
+                "    - name: Frame\n      type: CHUNK[INT]\n      range: \"{{{{Param.Frames}}}}\"\n      chunks:\n        \
+                 defaultTaskCount: {}\n        rangeConstraint: {}\n",
+                self.chunk.max(1),
+                if contiguous { "CONTIGUOUS" } else { "NONCONTIGUOUS" }
+            );
+        } else {
+            let chunks: Vec<String> = self.frames.chunks(self.chunk).iter().map(|c| q(&c.to_string())).collect();
+            t += &format!("    - name: Frame\n      type: STRING\n      range: [{}]\n", chunks.join(", "));
+        }
+        let mut args = vec![
+            q("render"),
+            q("{{Param.Graph}}"),
+            q("--out"),
+            q("{{Param.Out}}"),
+            q("--frames"),
+            q("{{Task.Param.Frame}}"),
+            q("--skip-existing"),
+            q("--manifest"),
+            q(&format!("{{{{Param.Out}}}}/{}/task-{{{{Task.Param.Frame}}}}.json", crate::manifest::TASK_DIR)),
+        ];
+        for s in &self.sets {
+            args.push(q("--set"));
+            args.push(q(s));
+        }
+        t += "  script:\n    actions:\n      onRun:\n        command: \"{{Param.Pyrograph}}\"\n";
+        t += &format!("        args: [{}]\n", args.join(", "));
+        t
+    }
+
+    /// Deadline Cloud's job-bundle parameter file.
+    pub fn parameter_values(&self) -> String {
+        let mut t = String::from("parameterValues:\n");
+        for (name, value) in self.params() {
+            t += &format!("- name: {name}\n  value: {}\n", q(&value));
+        }
+        t
+    }
+
+    /// The same values as a map, for `openjd run -p file://job_params.yaml`.
+    pub fn job_params(&self) -> String {
+        self.params().iter().map(|(name, value)| format!("{name}: {}\n", q(value))).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(frames: &str, chunking: bool) -> JobSpec {
+        JobSpec {
+            name: "cube \"test\"".into(),
+            pyrograph: "/bin/pyrograph".into(),
+            graph: "/g/burning-cube.ron".into(),
+            out: "/o".into(),
+            frames: frames.parse().unwrap(),
+            chunk: 8,
+            sets: vec!["spread.fps=12".into()],
+            task_chunking: chunking,
+        }
+    }
+
+    #[test]
+    fn a_chunked_template_names_its_extension_and_chunk_size() {
+        let t = spec("0-47", true).template();
+        assert!(t.contains("extensions:\n- TASK_CHUNKING\n"), "{t}");
+        assert!(t.contains("type: CHUNK[INT]") && t.contains("defaultTaskCount: 8") && t.contains("CONTIGUOUS"), "{t}");
+        assert!(t.contains(r#"name: "cube \"test\"""#), "names are quoted: {t}");
+        assert!(t.contains(r#""--set", "spread.fps=12""#), "{t}");
+        assert!(spec("0-47:2", true).template().contains("NONCONTIGUOUS"));
+    }
+
+    #[test]
+    fn without_the_extension_the_chunks_are_listed() {
+        let t = spec("0-19", false).template();
+        assert!(!t.contains("TASK_CHUNKING"), "{t}");
+        assert!(t.contains(r#"range: ["0-7", "8-15", "16-19"]"#), "{t}");
+    }
+
+    #[test]
+    fn parameter_files_carry_the_same_values() {
+        let s = spec("0-47", true);
+        assert!(s.parameter_values().contains("- name: Graph\n  value: \"/g/burning-cube.ron\"\n"));
+        assert!(s.job_params().contains("Frames: \"0-47\"\n"));
+    }
+}

@@ -1,0 +1,163 @@
+//! Render manifests: what one `render` (one farm task) wrote — every file with its size and
+//! SHA-256, the frames it covered, its time and peak memory — and `job collect`, which merges
+//! a job's task manifests and finds the frames no finished task covered.
+
+use std::collections::BTreeSet;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use pyrograph_core::FrameSet;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+/// Where a job's tasks leave their manifests, inside the job's output folder.
+pub const TASK_DIR: &str = ".pyrograph-job";
+
+/// One file written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FileRecord {
+    /// The path, relative to the output folder when inside it.
+    pub path: String,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// SHA-256 of the contents, hex.
+    pub sha256: String,
+}
+
+/// What one render wrote.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Manifest {
+    /// The graph file rendered.
+    pub graph: String,
+    /// The frames asked for (`--frames`), all when absent.
+    pub frames: Option<String>,
+    /// Whether every node cooked.
+    pub ok: bool,
+    /// Wall time of the cook, seconds.
+    pub seconds: f64,
+    /// Peak resident memory of the process, MiB (Linux).
+    pub peak_rss_mib: Option<u64>,
+    /// Files written (or, with `--skip-existing`, found whole), in the order they were finished.
+    pub files: Vec<FileRecord>,
+}
+
+/// SHA-256 and size of a file, streamed.
+pub fn hash_file(path: &Path) -> std::io::Result<(u64, String)> {
+    let mut f = std::fs::File::open(path)?;
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    let mut total = 0u64;
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            break;
+        }
+        total += n as u64;
+        h.update(&buf[..n]);
+    }
+    let hex: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    Ok((total, hex))
+}
+
+/// Records `files` (hashing each) relative to `out`.
+pub fn records(files: &[PathBuf], out: &Path) -> std::io::Result<Vec<FileRecord>> {
+    let mut seen = BTreeSet::new();
+    let mut v = Vec::new();
+    for f in files {
+        if !seen.insert(f.clone()) {
+            continue;
+        }
+        let (bytes, sha256) = hash_file(f)?;
+        let path = f.strip_prefix(out).unwrap_or(f).to_string_lossy().into_owned();
+        v.push(FileRecord { path, bytes, sha256 });
+    }
+    Ok(v)
+}
+
+/// The merged record of a job, and what is wrong with it.
+#[derive(Debug, Serialize)]
+pub struct JobReport {
+    /// The frames the job asked for.
+    pub frames: String,
+    /// Task manifests found (finished or not).
+    pub tasks: usize,
+    /// Frames no finished task covered, in frame-set form (empty when complete).
+    pub missing: String,
+    /// Files listed by a manifest that are gone or changed since.
+    pub damaged: Vec<String>,
+    /// Every file of every finished task.
+    pub files: Vec<FileRecord>,
+    /// Sum of the tasks' cook times, seconds.
+    pub task_seconds: f64,
+    /// Largest peak memory of a task, MiB.
+    pub peak_rss_mib: Option<u64>,
+}
+
+impl JobReport {
+    /// Whether every frame was rendered and every file is as its task left it.
+    pub fn is_complete(&self) -> bool {
+        self.missing.is_empty() && self.damaged.is_empty()
+    }
+}
+
+/// Reads a bundle's `job_params.yaml` (written by `pyrograph job`: one `Name: "value"` a line).
+fn job_param(job_dir: &Path, name: &str) -> Result<String, String> {
+    let file = job_dir.join("job_params.yaml");
+    let text = std::fs::read_to_string(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    text.lines()
+        .find_map(|l| l.strip_prefix(name)?.strip_prefix(": ").map(str::to_string))
+        .and_then(|v| serde_json::from_str::<String>(&v).ok())
+        .ok_or_else(|| format!("{} has no {name} (was it written by `pyrograph job`?)", file.display()))
+}
+
+/// Merges the task manifests of the job in `job_dir` and checks them against its frames.
+pub fn collect(job_dir: &Path) -> Result<JobReport, String> {
+    let frames: FrameSet = job_param(job_dir, "Frames")?.parse()?;
+    let out = PathBuf::from(job_param(job_dir, "Out")?);
+    let dir = out.join(TASK_DIR);
+    let mut paths: Vec<PathBuf> = match std::fs::read_dir(&dir) {
+        Ok(rd) => rd.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "json")).collect(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+        Err(e) => return Err(format!("cannot read {}: {e}", dir.display())),
+    };
+    paths.sort();
+    let mut covered = BTreeSet::new();
+    let mut report = JobReport {
+        frames: frames.to_string(),
+        tasks: paths.len(),
+        missing: String::new(),
+        damaged: Vec::new(),
+        files: Vec::new(),
+        task_seconds: 0.0,
+        peak_rss_mib: None,
+    };
+    for p in &paths {
+        let text = std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| format!("{}: not a task manifest: {e}", p.display()))?;
+        report.task_seconds += m.seconds;
+        report.peak_rss_mib = report.peak_rss_mib.max(m.peak_rss_mib);
+        if !m.ok {
+            continue;
+        }
+        match m.frames.as_deref().map(str::parse::<FrameSet>) {
+            Some(Ok(set)) => covered.extend(set.frames()),
+            Some(Err(e)) => return Err(format!("{}: {e}", p.display())),
+            None => covered.extend(frames.frames()),
+        }
+        for f in m.files {
+            let on_disk = out.join(&f.path);
+            match hash_file(&on_disk) {
+                Ok((bytes, sha)) if bytes == f.bytes && sha == f.sha256 => report.files.push(f),
+                Ok(_) => report.damaged.push(format!("{} changed after its task wrote it", on_disk.display())),
+                Err(e) => report.damaged.push(format!("{}: {e}", on_disk.display())),
+            }
+        }
+    }
+    let missing: Vec<usize> = frames.frames().into_iter().filter(|f| !covered.contains(f)).collect();
+    if let Some(set) = FrameSet::from_list(&missing) {
+        report.missing = set.to_string();
+    }
+    report.files.sort_by(|a, b| a.path.cmp(&b.path));
+    report.files.dedup_by(|a, b| a.path == b.path);
+    Ok(report)
+}

@@ -3,9 +3,11 @@
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
-use pyrograph::core::{BuildOptions, CookCtx, CookResult, FrameSet, Registry};
+use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Registry};
+use pyrograph::wedge::{Variant, Wedges, cell_image};
+use rayon::prelude::*;
 
-use crate::{Failure, RenderOpts, load, memory_kib};
+use crate::{Failure, RenderOpts, apply_sets, explain, load, memory_kib};
 
 #[derive(Subcommand)]
 pub enum JobAction {
@@ -41,7 +43,7 @@ pub fn collect(job_dir: &Path, json_out: bool) -> Result<(), Failure> {
         );
     }
     if !report.missing.is_empty() {
-        eprintln!("error: frames {} of {} have no finished task", report.missing, report.frames);
+        eprintln!("error: {} of {} have no finished task", report.missing, report.frames);
     }
     for d in &report.damaged {
         eprintln!("error: {d}");
@@ -55,6 +57,8 @@ pub struct JobArgs {
     pub frames: FrameSet,
     pub chunk: usize,
     pub sets: Vec<String>,
+    pub wedge: Vec<String>,
+    pub wedge_zip: Vec<String>,
     pub task_chunking: bool,
 }
 
@@ -62,7 +66,15 @@ pub struct JobArgs {
 pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) -> Result<(), Failure> {
     let abs = |p: &Path| std::path::absolute(p).map_err(|e| Failure(format!("error: {}: {e}", p.display())));
     let options = BuildOptions { output_dir: Some(a.out.clone()), ..BuildOptions::default() };
-    load(registry, &a.graph, &a.sets, &options)?;
+    let wedges = Wedges::parse(&a.wedge, &a.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
+    let variants = wedges.variants();
+    if variants.is_empty() {
+        load(registry, &a.graph, &a.sets, &options)?;
+    }
+    // Every variant is checked here, so no task fails on a bad wedge value.
+    for v in &variants {
+        build_variant(registry, &a.graph, &a.sets, a.out.as_path(), false, v)?;
+    }
     if a.chunk == 0 {
         return Err(Failure("error: --chunk must be at least 1 frame".into()));
     }
@@ -76,6 +88,9 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
         frames: a.frames.clone(),
         chunk: a.chunk,
         sets: a.sets.clone(),
+        wedge: a.wedge.clone(),
+        wedge_zip: a.wedge_zip.clone(),
+        variants: variants.len(),
         task_chunking: a.task_chunking,
     };
     std::fs::create_dir_all(job_dir).map_err(|e| Failure(format!("error: cannot create {}: {e}", job_dir.display())))?;
@@ -90,34 +105,144 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
         pyrograph::core::document::write_atomic(&job_dir.join(f), text.as_bytes(), overwrite)
             .map_err(|e| Failure(format!("error: writing {}: {e}", job_dir.join(f).display())))?;
     }
-    let tasks = a.frames.chunks(a.chunk).len();
+    let tasks = a.frames.chunks(a.chunk).len() * variants.len().max(1);
     println!("job bundle {}: {tasks} tasks of up to {} frames ({})", job_dir.display(), a.chunk, a.frames);
     println!("run it here:  openjd run {0}/template.yaml --step Render -p file://{0}/job_params.yaml", abs(job_dir)?.display());
     println!("submit it:    deadline bundle submit {} (AWS Deadline Cloud)", job_dir.display());
     Ok(())
 }
 
+/// Writes a render's manifest: `files` hashed, relative to `out`.
+#[allow(clippy::too_many_arguments)]
 pub fn write_manifest(
     file: &Path,
     graph: &Path,
     out: &Path,
     o: &RenderOpts,
-    ctx: &CookCtx,
-    result: &CookResult,
+    wedge: Option<usize>,
+    ok: bool,
+    files: &[PathBuf],
     elapsed: std::time::Duration,
 ) -> Result<(), Failure> {
     let fail = |e: std::io::Error| Failure(format!("error: manifest {}: {e}", file.display()));
     let manifest = pyrograph::manifest::Manifest {
         graph: graph.display().to_string(),
         frames: o.frames.as_ref().map(ToString::to_string),
-        ok: result.root_errors().is_empty(),
+        wedge,
+        ok,
         seconds: elapsed.as_secs_f64(),
         peak_rss_mib: memory_kib("VmHWM").map(|k| k >> 10),
-        files: pyrograph::manifest::records(&ctx.written(), out).map_err(fail)?,
+        files: pyrograph::manifest::records(files, out).map_err(fail)?,
     };
     if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(fail)?;
     }
     let text = serde_json::to_string_pretty(&manifest).map_err(|e| Failure(format!("error: manifest: {e}")))?;
     pyrograph::core::document::write_atomic(file, text.as_bytes(), true).map_err(fail)
+}
+
+/// What one wedge variant's cook left.
+struct VariantRun {
+    variant: Variant,
+    out: PathBuf,
+    written: Vec<PathBuf>,
+    errors: Vec<String>,
+}
+
+/// Builds variant `v`'s graph (every variant is built before any cooks, so a bad value stops
+/// the wedge before it writes anything).
+fn build_variant(
+    registry: &Registry,
+    path: &Path,
+    sets: &[String],
+    out_root: &Path,
+    allow_outside_out: bool,
+    v: &Variant,
+) -> Result<(Graph, PathBuf), Failure> {
+    let mut doc = GraphDoc::load(path)?;
+    apply_sets(&mut doc, sets)?;
+    let used_tokens = v.apply(&mut doc).map_err(|e| Failure(format!("error: {e}")))?;
+    let out = if used_tokens { out_root.to_path_buf() } else { out_root.join(&v.name) };
+    let options = BuildOptions { output_dir: Some(out.clone()), allow_outside_out };
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let graph = Graph::build(&doc, registry, &dir, &options).map_err(|d| Failure::from(d.in_file(path)))?;
+    Ok((graph, out))
+}
+
+fn run_variant(graph: &Graph, out: PathBuf, o: &RenderOpts, v: &Variant) -> Result<VariantRun, Failure> {
+    let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
+    let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
+    let settings = CookSettings {
+        frames: o.frames.clone(),
+        skip_existing: o.skip_existing,
+        overwrite: o.overwrite,
+        cache_dir: o.cache_dir.clone(),
+    };
+    let ctx = CookCtx::new().with_settings(settings);
+    let result = Evaluator::new().cook(graph, &targets, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
+    let errors = result.root_errors().iter().map(|(n, e)| format!("error: wedge {}: {}", v.name, explain(n, e))).collect();
+    Ok(VariantRun { variant: v.clone(), out, written: ctx.written(), errors })
+}
+
+/// `render --wedge …`: every variant (or `--wedge-index`'s one), in parallel (the shared frame
+/// cache keeps them within one memory budget), then the manifest and the sheet.
+pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &Wedges) -> Result<(), Failure> {
+    let all = wedges.variants();
+    let chosen: Vec<Variant> = match o.wedge_index {
+        Some(k) if k < all.len() => vec![all[k].clone()],
+        Some(k) => {
+            return Err(Failure(format!("error: --wedge-index {k}: the wedge has {} variants (0-{})", all.len(), all.len() - 1)));
+        }
+        None => all.clone(),
+    };
+    let out_root = o.out.clone().unwrap_or_else(|| path.parent().map(Path::to_path_buf).unwrap_or_default());
+    let started = std::time::Instant::now();
+    let built: Vec<(Graph, PathBuf)> = chosen
+        .iter()
+        .map(|v| build_variant(registry, path, &o.set, &out_root, o.allow_outside_out, v))
+        .collect::<Result<_, _>>()?;
+    let runs: Vec<VariantRun> =
+        chosen.par_iter().zip(built).map(|(v, (graph, out))| run_variant(&graph, out, o, v)).collect::<Result<_, _>>()?;
+    let mut failed = false;
+    for r in &runs {
+        println!(
+            "wedge {}/{} {}: {} files in {}",
+            r.variant.index + 1,
+            all.len(),
+            r.variant.name,
+            r.written.len(),
+            r.out.display()
+        );
+        for e in &r.errors {
+            eprintln!("{e}");
+            failed = true;
+        }
+    }
+    if let Some(file) = &o.manifest {
+        let files: Vec<PathBuf> = runs.iter().flat_map(|r| r.written.clone()).collect();
+        write_manifest(file, path, &out_root, o, o.wedge_index, !failed, &files, started.elapsed())?;
+    }
+    if o.sheet && !failed {
+        let sheet_path = out_root.join("wedges.png");
+        write_sheet(&runs, wedges, &sheet_path, o.overwrite)?;
+        println!("wedge sheet: {}", sheet_path.display());
+    }
+    println!("cooked {} variants in {:.2} s", runs.len(), started.elapsed().as_secs_f64());
+    if failed { Err(Failure(String::new())) } else { Ok(()) }
+}
+
+fn write_sheet(runs: &[VariantRun], wedges: &Wedges, path: &Path, overwrite: bool) -> Result<(), Failure> {
+    let mut cells = Vec::new();
+    for r in runs {
+        let file = cell_image(&r.written)
+            .ok_or_else(|| Failure(format!("error: --sheet: wedge {} wrote no PNG or EXR image", r.variant.name)))?;
+        let img = pyrograph::imaging::io::load_image(file).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
+        let mut label = vec![format!("#{}", r.variant.index)];
+        label.extend(r.variant.label());
+        cells.push((img, label));
+    }
+    let columns = wedges.shape().last().copied().unwrap_or(1);
+    let sheet = pyrograph::wedge::sheet(&cells, columns, 320).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
+    let format = pyrograph::imaging::io::OutputFormat::Png { sixteen_bit: false };
+    pyrograph::imaging::io::write_image(&sheet, path, format, overwrite).map_err(|e| Failure(format!("error: --sheet: {e}")))
 }

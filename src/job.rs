@@ -33,6 +33,13 @@ pub struct JobSpec {
     pub chunk: usize,
     /// `--set node.param=value` overrides, passed to every task.
     pub sets: Vec<String>,
+    /// `--wedge` arguments, passed to every task.
+    pub wedge: Vec<String>,
+    /// `--wedge-zip` arguments, passed to every task.
+    pub wedge_zip: Vec<String>,
+    /// Number of wedge variants (0 without a wedge): a `Wedge` task parameter multiplies the
+    /// frame chunks, and each task renders one variant (`--wedge-index`).
+    pub variants: usize,
     /// Use the TASK_CHUNKING extension (`CHUNK[INT]`); without it the chunks are listed as a
     /// STRING task parameter, for schedulers that lack the extension.
     pub task_chunking: bool,
@@ -60,6 +67,7 @@ impl JobSpec {
                 ("template.yaml", self.template()),
                 ("parameter_values.yaml", self.parameter_values()),
                 ("job_params.yaml", self.job_params()),
+                ("pyrograph_job.json", self.job_json()),
             ],
         }
     }
@@ -102,6 +110,18 @@ impl JobSpec {
             let chunks: Vec<String> = self.frames.chunks(self.chunk).iter().map(|c| q(&c.to_string())).collect();
             t += &format!("    - name: Frame\n      type: STRING\n      range: [{}]\n", chunks.join(", "));
         }
+        if self.variants > 0 {
+            t += &format!("    - name: Wedge\n      type: INT\n      range: \"0-{}\"\n", self.variants - 1);
+            t += "    combination: \"Wedge * Frame\"\n";
+        }
+        let manifest = if self.variants > 0 {
+            format!(
+                "{{{{Param.Out}}}}/{}/task-w{{{{Task.Param.Wedge}}}}-{{{{Task.Param.Frame}}}}.json",
+                crate::manifest::TASK_DIR
+            )
+        } else {
+            format!("{{{{Param.Out}}}}/{}/task-{{{{Task.Param.Frame}}}}.json", crate::manifest::TASK_DIR)
+        };
         let mut args = vec![
             q("render"),
             q("{{Param.Graph}}"),
@@ -111,11 +131,17 @@ impl JobSpec {
             q("{{Task.Param.Frame}}"),
             q("--skip-existing"),
             q("--manifest"),
-            q(&format!("{{{{Param.Out}}}}/{}/task-{{{{Task.Param.Frame}}}}.json", crate::manifest::TASK_DIR)),
+            q(&manifest),
         ];
-        for s in &self.sets {
-            args.push(q("--set"));
-            args.push(q(s));
+        for (flag, values) in [("--set", &self.sets), ("--wedge", &self.wedge), ("--wedge-zip", &self.wedge_zip)] {
+            for v in values {
+                args.push(q(flag));
+                args.push(q(v));
+            }
+        }
+        if self.variants > 0 {
+            args.push(q("--wedge-index"));
+            args.push(q("{{Task.Param.Wedge}}"));
         }
         t += "  script:\n    actions:\n      onRun:\n        command: \"{{Param.Pyrograph}}\"\n";
         t += &format!("        args: [{}]\n", args.join(", "));
@@ -129,6 +155,17 @@ impl JobSpec {
             t += &format!("- name: {name}\n  value: {}\n", q(&value));
         }
         t
+    }
+
+    /// What `job collect` checks the tasks against.
+    pub fn job_json(&self) -> String {
+        let v = serde_json::json!({
+            "graph": path_text(&self.graph),
+            "out": path_text(&self.out),
+            "frames": self.frames.to_string(),
+            "variants": self.variants,
+        });
+        format!("{v:#}\n")
     }
 
     /// The same values as a map, for `openjd run -p file://job_params.yaml`.
@@ -150,6 +187,9 @@ mod tests {
             frames: frames.parse().unwrap(),
             chunk: 8,
             sets: vec!["spread.fps=12".into()],
+            wedge: Vec::new(),
+            wedge_zip: Vec::new(),
+            variants: 0,
             task_chunking: chunking,
         }
     }
@@ -169,6 +209,19 @@ mod tests {
         let t = spec("0-19", false).template();
         assert!(!t.contains("TASK_CHUNKING"), "{t}");
         assert!(t.contains(r#"range: ["0-7", "8-15", "16-19"]"#), "{t}");
+    }
+
+    #[test]
+    fn a_wedge_multiplies_the_chunks_and_picks_a_variant_per_task() {
+        let s = JobSpec { wedge: vec!["wind.seed=1,2,3".into()], variants: 3, ..spec("0-47", true) };
+        let t = s.template();
+        assert!(
+            t.contains("    - name: Wedge\n      type: INT\n      range: \"0-2\"\n    combination: \"Wedge * Frame\"\n"),
+            "{t}"
+        );
+        assert!(t.contains(r#""--wedge", "wind.seed=1,2,3", "--wedge-index", "{{Task.Param.Wedge}}""#), "{t}");
+        assert!(t.contains("task-w{{Task.Param.Wedge}}-{{Task.Param.Frame}}.json"), "{t}");
+        assert!(s.job_json().contains("\"variants\": 3"));
     }
 
     #[test]

@@ -10,6 +10,7 @@ pub mod demo;
 pub mod job;
 pub mod manifest;
 pub mod reference;
+pub mod wedge;
 
 pub use pyrograph_core as core;
 pub use pyrograph_nodes_cloth as cloth;

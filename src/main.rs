@@ -47,6 +47,19 @@ enum Command {
         /// Write a JSON manifest of the files written (size, SHA-256), the time and peak memory.
         #[arg(long, value_name = "FILE")]
         manifest: Option<PathBuf>,
+        /// Render once per value: node.param=v1,v2,… (repeat: every combination). Writer paths
+        /// may use {wedge} and {wedge.PARAM}; otherwise each variant writes into OUT/<variant>/.
+        #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
+        wedge: Vec<String>,
+        /// Parameters that vary together, as one wedge axis (equal value counts).
+        #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
+        wedge_zip: Vec<String>,
+        /// Render only this variant of the wedge (0-based; what a farm task does).
+        #[arg(long, value_name = "K")]
+        wedge_index: Option<usize>,
+        /// Also write OUT/wedges.png: a labelled contact sheet, one cell per variant.
+        #[arg(long)]
+        sheet: bool,
         /// Folder that relative output paths resolve against (default: the graph file's folder).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -101,6 +114,12 @@ enum Command {
         /// extension, for schedulers without it.
         #[arg(long)]
         no_chunking: bool,
+        /// A wedge axis, as `render --wedge`: each variant becomes its own tasks.
+        #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
+        wedge: Vec<String>,
+        /// Parameters that vary together, as `render --wedge-zip`.
+        #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
+        wedge_zip: Vec<String>,
         /// The bundle folder to write.
         #[arg(short = 'o', long = "output", value_name = "JOB_DIR", required = true)]
         job_dir: Option<PathBuf>,
@@ -191,6 +210,10 @@ fn main() -> ExitCode {
             skip_existing,
             allow_outside_out,
             manifest,
+            wedge,
+            wedge_zip,
+            wedge_index,
+            sheet,
             out,
             set,
             nodes,
@@ -202,20 +225,44 @@ fn main() -> ExitCode {
         }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
             pyrograph::core::FrameCache::global().set_compact(compact_cache);
-            let opts =
-                RenderOpts { frames, skip_existing, allow_outside_out, manifest, out, set, nodes, overwrite, cache_dir, json };
+            let opts = RenderOpts {
+                frames,
+                skip_existing,
+                allow_outside_out,
+                manifest,
+                wedge,
+                wedge_zip,
+                wedge_index,
+                sheet,
+                out,
+                set,
+                nodes,
+                overwrite,
+                cache_dir,
+                json,
+            };
             render(&registry, &graph, &opts)
         }
         Some(Command::Job { action: Some(JobAction::Collect { job_dir, json }), .. }) => collect(&job_dir, json),
-        Some(Command::Job { action: None, graph, out, frames, chunk, set, no_chunking, job_dir, overwrite }) => {
-            match (graph, out, frames, job_dir) {
-                (Some(graph), Some(out), Some(frames), Some(job_dir)) => {
-                    let spec = JobArgs { graph, out, frames, chunk, sets: set, task_chunking: !no_chunking };
-                    job(&registry, &spec, &job_dir, overwrite)
-                }
-                _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
+        Some(Command::Job {
+            action: None,
+            graph,
+            out,
+            frames,
+            chunk,
+            set,
+            no_chunking,
+            wedge,
+            wedge_zip,
+            job_dir,
+            overwrite,
+        }) => match (graph, out, frames, job_dir) {
+            (Some(graph), Some(out), Some(frames), Some(job_dir)) => {
+                let spec = JobArgs { graph, out, frames, chunk, sets: set, wedge, wedge_zip, task_chunking: !no_chunking };
+                job(&registry, &spec, &job_dir, overwrite)
             }
-        }
+            _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
+        },
         Some(Command::Check { graph, out, allow_outside_out, json }) => {
             check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out }, json)
         }
@@ -246,6 +293,10 @@ struct RenderOpts {
     skip_existing: bool,
     allow_outside_out: bool,
     manifest: Option<PathBuf>,
+    wedge: Vec<String>,
+    wedge_zip: Vec<String>,
+    wedge_index: Option<usize>,
+    sheet: bool,
     out: Option<PathBuf>,
     set: Vec<String>,
     nodes: Vec<String>,
@@ -303,6 +354,13 @@ fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
 }
 
 fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failure> {
+    let wedges = pyrograph::wedge::Wedges::parse(&o.wedge, &o.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
+    if !wedges.is_empty() {
+        return cli_farm::render_wedges(registry, path, o, &wedges);
+    }
+    if o.wedge_index.is_some() || o.sheet {
+        return Err(Failure("error: --wedge-index and --sheet need --wedge or --wedge-zip".into()));
+    }
     let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out };
     let (_, graph) = load(registry, path, &o.set, &options)?;
     let targets: Vec<String> = if o.nodes.is_empty() {
@@ -331,7 +389,8 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     let result = Evaluator::new().cook(&graph, &target_refs, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
     if let Some(file) = &o.manifest {
         let out = o.out.clone().unwrap_or_else(|| graph.dir.clone());
-        write_manifest(file, path, &out, o, &ctx, &result, started.elapsed())?;
+        let ok = result.root_errors().is_empty();
+        write_manifest(file, path, &out, o, None, ok, &ctx.written(), started.elapsed())?;
     }
     report(&graph, &targets, &result, started.elapsed(), o.json)
 }

@@ -31,6 +31,9 @@ pub struct Manifest {
     pub graph: String,
     /// The frames asked for (`--frames`), all when absent.
     pub frames: Option<String>,
+    /// The wedge variant rendered (`--wedge-index`), when the job is a wedge.
+    #[serde(default)]
+    pub wedge: Option<usize>,
     /// Whether every node cooked.
     pub ok: bool,
     /// Wall time of the cook, seconds.
@@ -81,7 +84,8 @@ pub struct JobReport {
     pub frames: String,
     /// Task manifests found (finished or not).
     pub tasks: usize,
-    /// Frames no finished task covered, in frame-set form (empty when complete).
+    /// Frames no finished task covered, in frame-set form, per wedge variant for a wedge job
+    /// (`frames 8-15`, `wedge 2 frames 8-15; wedge 3 frames 0-7`); empty when complete.
     pub missing: String,
     /// Files listed by a manifest that are gone or changed since.
     pub damaged: Vec<String>,
@@ -100,20 +104,25 @@ impl JobReport {
     }
 }
 
-/// Reads a bundle's `job_params.yaml` (written by `pyrograph job`: one `Name: "value"` a line).
-fn job_param(job_dir: &Path, name: &str) -> Result<String, String> {
-    let file = job_dir.join("job_params.yaml");
-    let text = std::fs::read_to_string(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    text.lines()
-        .find_map(|l| l.strip_prefix(name)?.strip_prefix(": ").map(str::to_string))
-        .and_then(|v| serde_json::from_str::<String>(&v).ok())
-        .ok_or_else(|| format!("{} has no {name} (was it written by `pyrograph job`?)", file.display()))
+/// What the bundle's `pyrograph_job.json` (written by `pyrograph job`) says the job renders.
+#[derive(Deserialize)]
+struct JobFile {
+    out: PathBuf,
+    frames: String,
+    #[serde(default)]
+    variants: usize,
 }
 
 /// Merges the task manifests of the job in `job_dir` and checks them against its frames.
 pub fn collect(job_dir: &Path) -> Result<JobReport, String> {
-    let frames: FrameSet = job_param(job_dir, "Frames")?.parse()?;
-    let out = PathBuf::from(job_param(job_dir, "Out")?);
+    let file = job_dir.join("pyrograph_job.json");
+    let text = std::fs::read_to_string(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let job: JobFile =
+        serde_json::from_str(&text).map_err(|e| format!("{}: not written by `pyrograph job`: {e}", file.display()))?;
+    let frames: FrameSet = job.frames.parse()?;
+    let out = job.out;
+    // Wedge variant k of a wedge job, or the one "variant" of a plain job.
+    let variants: Vec<Option<usize>> = if job.variants == 0 { vec![None] } else { (0..job.variants).map(Some).collect() };
     let dir = out.join(TASK_DIR);
     let mut paths: Vec<PathBuf> = match std::fs::read_dir(&dir) {
         Ok(rd) => rd.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "json")).collect(),
@@ -139,10 +148,15 @@ pub fn collect(job_dir: &Path) -> Result<JobReport, String> {
         if !m.ok {
             continue;
         }
-        match m.frames.as_deref().map(str::parse::<FrameSet>) {
-            Some(Ok(set)) => covered.extend(set.frames()),
+        let done = match m.frames.as_deref().map(str::parse::<FrameSet>) {
+            Some(Ok(set)) => set.frames(),
             Some(Err(e)) => return Err(format!("{}: {e}", p.display())),
-            None => covered.extend(frames.frames()),
+            None => frames.frames(),
+        };
+        // A task without a wedge index rendered every variant (a local `render --wedge`).
+        let which: Vec<Option<usize>> = if m.wedge.is_some() { vec![m.wedge] } else { variants.clone() };
+        for w in which {
+            covered.extend(done.iter().map(|f| (w, *f)));
         }
         for f in m.files {
             let on_disk = out.join(&f.path);
@@ -153,10 +167,17 @@ pub fn collect(job_dir: &Path) -> Result<JobReport, String> {
             }
         }
     }
-    let missing: Vec<usize> = frames.frames().into_iter().filter(|f| !covered.contains(f)).collect();
-    if let Some(set) = FrameSet::from_list(&missing) {
-        report.missing = set.to_string();
+    let mut gaps = Vec::new();
+    for w in &variants {
+        let missing: Vec<usize> = frames.frames().into_iter().filter(|f| !covered.contains(&(*w, *f))).collect();
+        if let Some(set) = FrameSet::from_list(&missing) {
+            gaps.push(match w {
+                Some(k) => format!("wedge {k} frames {set}"),
+                None => format!("frames {set}"),
+            });
+        }
     }
+    report.missing = gaps.join("; ");
     report.files.sort_by(|a, b| a.path.cmp(&b.path));
     report.files.dedup_by(|a, b| a.path == b.path);
     Ok(report)

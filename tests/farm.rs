@@ -194,3 +194,63 @@ fn job_collect_merges_manifests_and_reports_missing_frames_and_changed_files() {
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("changed after its task wrote it"), "{}", text(&o));
 }
+
+#[test]
+#[ignore = "needs openjd: set PYROGRAPH_OPENJD or put openjd-cli on PATH (.ci/run installs it)"]
+fn a_wedge_job_on_openjd_matches_a_local_wedge_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = root().join("graphs/candles.ron");
+    let (single, farm, job) = (dir.path().join("single"), dir.path().join("farm"), dir.path().join("job"));
+    let wedge = ["--wedge", "wind.noise_c=0.01,0.04", "--wedge", "wind.seed=1,2,3"];
+    let o = ok(
+        bin().arg("render").arg(&graph).arg("--out").arg(&single).args(["--frames", "0-47"]).args(wedge).output().unwrap(),
+        "local wedge",
+    );
+    assert!(text(&o).contains("cooked 6 variants"), "{}", text(&o));
+    let args = ["--frames", "0-47", "--chunk", "24", "-o"];
+    let o = ok(
+        bin().arg("job").arg(&graph).arg("--out").arg(&farm).args(wedge).args(args).arg(&job).output().unwrap(),
+        "pyrograph job",
+    );
+    assert!(text(&o).contains("12 tasks of up to 24 frames"), "{}", text(&o));
+    ok(openjd().arg("check").arg(job.join("template.yaml")).output().unwrap(), "openjd check");
+    let params = format!("file://{}", job.join("job_params.yaml").display());
+    let o = ok(
+        openjd().arg("run").arg(job.join("template.yaml")).args(["--step", "Render", "-p", &params]).output().unwrap(),
+        "openjd run",
+    );
+    assert!(text(&o).contains("Chunks run: 12"), "{}", text(&o));
+    let (a, b) = (tree(&single), tree(&farm));
+    assert_eq!(a.len(), 6 * 48, "six variants of 48 frames, each in its own folder");
+    assert!(a == b, "every wedge frame from the farm is byte-identical to the local wedge render");
+    let o = ok(bin().args(["job", "collect"]).arg(&job).output().unwrap(), "job collect");
+    assert!(text(&o).contains("12 tasks, 288 files"), "{}", text(&o));
+    std::fs::remove_file(farm.join(".pyrograph-job/task-w4-24-47.json")).unwrap();
+    let o = bin().args(["job", "collect"]).arg(&job).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("wedge 4 frames 24-47 of 0-47 have no finished task"), "{}", text(&o));
+}
+
+#[test]
+fn a_local_wedge_writes_variants_apart_and_a_labelled_sheet() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = root().join("graphs/candles.ron");
+    let out = dir.path().join("out");
+    let wedge = ["--wedge-zip", "wind.seed=1,2", "--wedge-zip", "flames.steps=10,30"];
+    let o = ok(
+        bin().arg("render").arg(&graph).arg("--out").arg(&out).args(["--frames", "0-3", "--sheet"]).args(wedge).output().unwrap(),
+        "wedge",
+    );
+    assert!(text(&o).contains("cooked 2 variants"), "{}", text(&o));
+    for name in ["wind.seed-1_flames.steps-10", "wind.seed-2_flames.steps-30"] {
+        assert_eq!(tree(&out.join(name)).len(), 4, "{name}");
+    }
+    let sheet = pyrograph::imaging::io::load_image(&out.join("wedges.png")).unwrap();
+    assert_eq!(sheet.width(), 2 * (320 + 8) + 8, "two cells across (the zipped axis)");
+    // A bad value stops the wedge before anything is written.
+    let bad = dir.path().join("bad");
+    let o = bin().arg("render").arg(&graph).arg("--out").arg(&bad).args(["--wedge", "wind.noise_c=0.01,9"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o).contains("node 'wind', port 'noise_c': 9 is outside the range"), "{}", text(&o));
+    assert!(!bad.exists(), "nothing was written");
+}

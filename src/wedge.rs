@@ -136,7 +136,13 @@ impl Wedges {
 
 /// `v` with every character outside `A-Za-z0-9.-` replaced, for file names.
 fn safe(v: &str) -> String {
-    let s: String = v.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect();
+    let mut s = String::new();
+    for c in v.chars() {
+        let c = if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' };
+        if !(c == '_' && s.ends_with('_')) {
+            s.push(c);
+        }
+    }
     s.trim_matches('_').to_string()
 }
 

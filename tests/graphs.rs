@@ -53,11 +53,29 @@ fn the_unversioned_shape_migrates_and_cooks() {
     assert_eq!(GraphDoc::from_ron(&text).unwrap(), doc);
 }
 
+/// Whether the goldens (and docs/nodes.md) are to be rewritten: only for `REGENERATE=1`, so a
+/// stray `REGENERATE=0` or empty value cannot turn the comparisons into copies.
+fn regenerate() -> bool {
+    regenerate_from(std::env::var("REGENERATE").ok().as_deref())
+}
+
+fn regenerate_from(value: Option<&str>) -> bool {
+    value == Some("1")
+}
+
+#[test]
+fn only_regenerate_1_regenerates() {
+    assert!(regenerate_from(Some("1")));
+    for v in [None, Some("0"), Some(""), Some("true"), Some("yes")] {
+        assert!(!regenerate_from(v), "{v:?}");
+    }
+}
+
 #[test]
 fn docs_nodes_md_is_current() {
     let expected = pyrograph::reference::markdown(&pyrograph::registry());
     let path = root().join("docs/nodes.md");
-    if std::env::var_os("REGENERATE").is_some() {
+    if regenerate() {
         std::fs::write(&path, &expected).unwrap();
     }
     let actual = std::fs::read_to_string(&path).unwrap_or_default();
@@ -90,7 +108,7 @@ fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
     for f in files {
         let made = out.path().join(f);
         let want = golden_dir.join(Path::new(f).file_name().unwrap());
-        if std::env::var_os("REGENERATE").is_some() {
+        if regenerate() {
             std::fs::create_dir_all(&golden_dir).unwrap();
             std::fs::copy(&made, &want).unwrap();
         }

@@ -241,6 +241,11 @@ impl<'a> Inputs<'a> {
         Inputs { desc, values }
     }
 
+    /// The description of input port `name`.
+    pub fn port(&self, name: &str) -> Option<&'a PortDesc> {
+        self.desc.input_index(name).map(|i| &self.desc.inputs[i])
+    }
+
     /// The raw value of port `name`.
     pub fn get(&self, name: &str) -> Result<&'a Value, NodeError> {
         self.desc

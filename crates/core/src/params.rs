@@ -58,7 +58,22 @@ impl<T: Port> Field for T {
 
     fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> {
         let name = port_name(name);
-        T::from_value(inputs.get(name)?).map_err(|e| NodeError::port(name, e))
+        let value = inputs.get(name)?;
+        // The loader checks ranges of values written in the file; a value that arrives over an
+        // edge (or a frame of a lifted clip) is checked here, so no node clamps it silently.
+        if let Some((lo, hi)) = inputs.port(name).and_then(|p| p.range) {
+            let x = match value {
+                Value::Float(x) => Some(*x),
+                Value::Int(i) => Some(*i as f64),
+                _ => None,
+            };
+            if let Some(x) = x
+                && !(lo..=hi).contains(&x)
+            {
+                return Err(NodeError::port(name, format!("{x} is outside the range {lo}..={hi}")));
+            }
+        }
+        T::from_value(value).map_err(|e| NodeError::port(name, e))
     }
 }
 

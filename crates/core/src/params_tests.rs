@@ -100,7 +100,7 @@ fn a_bad_value_names_its_port() {
     let mut values = defaults(&d, img);
     values[3] = Value::Int(-1);
     let e = Declared1::read(&Inputs::new(&d, &values)).unwrap_err().to_string();
-    assert!(e.contains("left") && e.contains("-1 is outside 0..="), "{e}");
+    assert!(e.contains("left") && e.contains("-1 is outside the range 0..=10"), "{e}");
     values[3] = Value::Int(1);
     values[2] = Value::Enum("dim".into());
     let e = Declared1::read(&Inputs::new(&d, &values)).unwrap_err().to_string();
@@ -109,6 +109,20 @@ fn a_bad_value_names_its_port() {
     values[1] = Value::Bool(true);
     let e = Declared1::read(&Inputs::new(&d, &values)).unwrap_err().to_string();
     assert!(e.contains("gain") && e.contains("needs Float, got Bool"), "{e}");
+}
+
+#[test]
+fn a_value_over_an_edge_is_range_checked_like_one_from_the_file() {
+    let d = Declared1::desc();
+    let img = Value::Image(Arc::new(Image::new(2, 1, crate::Channels::Gray)));
+    let mut values = defaults(&d, img);
+    for (bad, shown) in [(Value::Float(3.0), "3"), (Value::Float(f64::NAN), "NaN"), (Value::Int(-1), "-1")] {
+        values[1] = bad;
+        let e = Declared1::read(&Inputs::new(&d, &values)).unwrap_err().to_string();
+        assert!(e.contains("port 'gain'") && e.contains(&format!("{shown} is outside the range 0..=2")), "{e}");
+    }
+    values[1] = Value::Float(2.0);
+    assert!(Declared1::read(&Inputs::new(&d, &values)).is_ok(), "the ends of the range are in it");
 }
 
 #[test]

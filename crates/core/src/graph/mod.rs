@@ -44,8 +44,9 @@ pub struct BuildOptions {
 pub enum InputSource {
     /// A constant: the parameter from the file, or the port's default.
     Const(Value),
-    /// A required input that is neither set nor connected (only inside sub-graphs, whose
-    /// interface inputs are fed when the include cooks; validation rejects it anywhere else).
+    /// A required input that is neither set nor connected (only at a graph's interface inputs,
+    /// which the including graph sets or connects when it flattens the include; validation
+    /// rejects it anywhere else).
     Missing,
     /// A parameter whose value was rejected (already reported; the graph does not build).
     Invalid,
@@ -226,7 +227,8 @@ impl Graph {
             .collect()
     }
 
-    /// Replaces input `port` of node `idx` by a constant (used to feed a sub-graph's inputs).
+    /// Replaces input `port` of node `idx` by a constant (to feed a graph built on its own, as a
+    /// test feeds a preset's interface inputs).
     pub fn set_const(&mut self, idx: NodeIndex, port: usize, value: Value) {
         self.g[idx].inputs[port] = InputSource::Const(value);
     }

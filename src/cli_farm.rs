@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
-use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Registry};
+use pyrograph::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
 use pyrograph::wedge::{Variant, Wedges, cell_image};
 use rayon::prelude::*;
 
@@ -172,13 +172,7 @@ fn build_variant(
 fn run_variant(graph: &Graph, out: PathBuf, o: &RenderOpts, v: &Variant) -> Result<VariantRun, Failure> {
     let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
-    let settings = CookSettings {
-        frames: o.frames.clone(),
-        skip_existing: o.skip_existing,
-        overwrite: o.overwrite,
-        cache_dir: o.cache_dir.clone(),
-    };
-    let ctx = CookCtx::new().with_settings(settings);
+    let ctx = CookCtx::new().with_settings(o.settings());
     let result = Evaluator::new().cook(graph, &targets, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
     let errors = result.root_errors().iter().map(|(n, e)| format!("error: wedge {}: {}", v.name, explain(n, e))).collect();
     Ok(VariantRun { variant: v.clone(), out, written: ctx.written(), errors })

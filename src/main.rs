@@ -34,44 +34,8 @@ enum Command {
     Render {
         /// The graph file (RON).
         graph: PathBuf,
-        /// Frames to write: 12, 0-99, 0-99:2 (or 0-99x2, every second), lists like 1,5,9-12.
-        #[arg(long, value_parser = parse_frames)]
-        frames: Option<FrameSet>,
-        /// Leave frames whose files already exist (a re-run after a crash writes only what is
-        /// missing; files are written atomically, so an existing file is a whole one).
-        #[arg(long)]
-        skip_existing: bool,
-        /// Let writer paths leave --out (or the graph's folder): absolute paths and `..`.
-        #[arg(long)]
-        allow_outside_out: bool,
-        /// Write a JSON manifest of the files written (size, SHA-256), the time and peak memory.
-        #[arg(long, value_name = "FILE")]
-        manifest: Option<PathBuf>,
-        /// Render once per value: node.param=v1,v2,… (repeat: every combination). Writer paths
-        /// may use {wedge} and {wedge.PARAM}; otherwise each variant writes into OUT/<variant>/.
-        #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
-        wedge: Vec<String>,
-        /// Parameters that vary together, as one wedge axis (equal value counts).
-        #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
-        wedge_zip: Vec<String>,
-        /// Render only this variant of the wedge (0-based; what a farm task does).
-        #[arg(long, value_name = "K")]
-        wedge_index: Option<usize>,
-        /// Also write OUT/wedges.png: a labelled contact sheet, one cell per variant.
-        #[arg(long)]
-        sheet: bool,
-        /// Folder that relative output paths resolve against (default: the graph file's folder).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Override a parameter: node.param=value (value in RON: 0.5, "text", (1, 0, 0)).
-        #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
-        set: Vec<String>,
-        /// Cook only these nodes (and what they need).
-        #[arg(long = "node", value_name = "ID")]
-        nodes: Vec<String>,
-        /// Replace existing output files.
-        #[arg(long)]
-        overwrite: bool,
+        #[command(flatten)]
+        opts: RenderOpts,
         /// Memory for cached frames, in MiB, shared by every clip of the graph (least recently
         /// used frames are dropped and recomputed when needed again).
         #[arg(long, value_name = "MIB", default_value_t = pyrograph::core::frame_cache::DEFAULT_BUDGET >> 20)]
@@ -80,13 +44,6 @@ enum Command {
         /// budget, for graphs that revisit frames; costs a pass over each frame cached).
         #[arg(long)]
         compact_cache: bool,
-        /// Folder for scratch files of out-of-core work (Eigenfires training on databases larger
-        /// than its memory_mb); the system's temp folder (TMPDIR) when not given.
-        #[arg(long, value_name = "DIR")]
-        cache_dir: Option<PathBuf>,
-        /// Print a JSON report instead of text.
-        #[arg(long)]
-        json: bool,
     },
     /// Write an Open Job Description job bundle that renders the graph on a render farm (AWS
     /// Deadline Cloud) or locally with `openjd run`: one task per chunk of frames.
@@ -204,43 +161,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
-        Some(Command::Render {
-            graph,
-            frames,
-            skip_existing,
-            allow_outside_out,
-            manifest,
-            wedge,
-            wedge_zip,
-            wedge_index,
-            sheet,
-            out,
-            set,
-            nodes,
-            overwrite,
-            cache_mb,
-            compact_cache,
-            cache_dir,
-            json,
-        }) => {
+        Some(Command::Render { graph, opts, cache_mb, compact_cache }) => {
             pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
             pyrograph::core::FrameCache::global().set_compact(compact_cache);
-            let opts = RenderOpts {
-                frames,
-                skip_existing,
-                allow_outside_out,
-                manifest,
-                wedge,
-                wedge_zip,
-                wedge_index,
-                sheet,
-                out,
-                set,
-                nodes,
-                overwrite,
-                cache_dir,
-                json,
-            };
             render(&registry, &graph, &opts)
         }
         Some(Command::Job { action: Some(JobAction::Collect { job_dir, json }), .. }) => collect(&job_dir, json),
@@ -288,21 +211,66 @@ fn main() -> ExitCode {
     }
 }
 
+/// What `render` does beyond which graph: frames, outputs, overrides, wedges, reports.
+#[derive(clap::Args)]
 struct RenderOpts {
+    /// Frames to write: 12, 0-99, 0-99:2 (or 0-99x2, every second), lists like 1,5,9-12.
+    #[arg(long, value_parser = parse_frames)]
     frames: Option<FrameSet>,
+    /// Leave frames whose files already exist (a re-run after a crash writes only what is
+    /// missing; files are written atomically, so an existing file is a whole one).
+    #[arg(long)]
     skip_existing: bool,
+    /// Let writer paths leave --out (or the graph's folder): absolute paths and `..`.
+    #[arg(long)]
     allow_outside_out: bool,
+    /// Write a JSON manifest of the files written (size, SHA-256), the time and peak memory.
+    #[arg(long, value_name = "FILE")]
     manifest: Option<PathBuf>,
+    /// Render once per value: node.param=v1,v2,… (repeat: every combination). Writer paths
+    /// may use {wedge} and {wedge.PARAM}; otherwise each variant writes into OUT/<variant>/.
+    #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
     wedge: Vec<String>,
+    /// Parameters that vary together, as one wedge axis (equal value counts).
+    #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
     wedge_zip: Vec<String>,
+    /// Render only this variant of the wedge (0-based; what a farm task does).
+    #[arg(long, value_name = "K")]
     wedge_index: Option<usize>,
+    /// Also write OUT/wedges.png: a labelled contact sheet, one cell per variant.
+    #[arg(long)]
     sheet: bool,
+    /// Folder that relative output paths resolve against (default: the graph file's folder).
+    #[arg(long)]
     out: Option<PathBuf>,
+    /// Override a parameter: node.param=value (value in RON: 0.5, "text", (1, 0, 0)).
+    #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
     set: Vec<String>,
+    /// Cook only these nodes (and what they need).
+    #[arg(long = "node", value_name = "ID")]
     nodes: Vec<String>,
+    /// Replace existing output files.
+    #[arg(long)]
     overwrite: bool,
+    /// Folder for scratch files of out-of-core work (Eigenfires training on databases larger
+    /// than its memory_mb); the system's temp folder (TMPDIR) when not given.
+    #[arg(long, value_name = "DIR")]
     cache_dir: Option<PathBuf>,
+    /// Print a JSON report instead of text.
+    #[arg(long)]
     json: bool,
+}
+
+impl RenderOpts {
+    /// The settings writers obey.
+    fn settings(&self) -> CookSettings {
+        CookSettings {
+            frames: self.frames.clone(),
+            skip_existing: self.skip_existing,
+            overwrite: self.overwrite,
+            cache_dir: self.cache_dir.clone(),
+        }
+    }
 }
 
 fn apply_sets(doc: &mut GraphDoc, sets: &[String]) -> Result<(), Failure> {
@@ -375,13 +343,7 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     {
         return Err(Failure(format!("error: --cache-dir {}: not a folder", dir.display())));
     }
-    let settings = CookSettings {
-        frames: o.frames.clone(),
-        skip_existing: o.skip_existing,
-        overwrite: o.overwrite,
-        cache_dir: o.cache_dir.clone(),
-    };
-    let mut ctx = CookCtx::new().with_settings(settings);
+    let mut ctx = CookCtx::new().with_settings(o.settings());
     if let Some(p) = progress_bars(!o.json) {
         ctx = ctx.with_progress(p);
     }

@@ -241,17 +241,17 @@ impl<'a> Inputs<'a> {
         Inputs { desc, values }
     }
 
-    /// The description of input port `name`.
-    pub fn port(&self, name: &str) -> Option<&'a PortDesc> {
-        self.desc.input_index(name).map(|i| &self.desc.inputs[i])
+    /// The raw value of port `name` with the port's description (one lookup for both).
+    pub fn get_port(&self, name: &str) -> Result<(&'a Value, &'a PortDesc), NodeError> {
+        self.desc
+            .input_index(name)
+            .and_then(|i| Some((self.values.get(i)?, &self.desc.inputs[i])))
+            .ok_or_else(|| NodeError::port(name, "no such input on this node"))
     }
 
     /// The raw value of port `name`.
     pub fn get(&self, name: &str) -> Result<&'a Value, NodeError> {
-        self.desc
-            .input_index(name)
-            .and_then(|i| self.values.get(i))
-            .ok_or_else(|| NodeError::port(name, "no such input on this node"))
+        self.get_port(name).map(|(v, _)| v)
     }
 
     fn wrong(&self, name: &str, wanted: &str, got: &Value) -> NodeError {

@@ -58,10 +58,10 @@ impl<T: Port> Field for T {
 
     fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> {
         let name = port_name(name);
-        let value = inputs.get(name)?;
+        let (value, port) = inputs.get_port(name)?;
         // The loader checks ranges of values written in the file; a value that arrives over an
         // edge (or a frame of a lifted clip) is checked here, so no node clamps it silently.
-        if let Some((lo, hi)) = inputs.port(name).and_then(|p| p.range) {
+        if let Some((lo, hi)) = port.range {
             let x = match value {
                 Value::Float(x) => Some(*x),
                 Value::Int(i) => Some(*i as f64),

@@ -164,8 +164,7 @@ fn build_variant(
     let used_tokens = v.apply(&mut doc).map_err(|e| Failure(format!("error: {e}")))?;
     let out = if used_tokens { out_root.to_path_buf() } else { out_root.join(&v.name) };
     let options = BuildOptions { output_dir: Some(out.clone()), allow_outside_out };
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let graph = Graph::build(&doc, registry, &dir, &options).map_err(|d| Failure::from(d.in_file(path)))?;
+    let graph = Graph::build_file(&doc, path, registry, &options)?;
     Ok((graph, out))
 }
 

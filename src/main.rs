@@ -13,8 +13,8 @@ mod cli_farm;
 
 use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use pyrograph::core::{
-    BuildOptions, CookCtx, CookResult, CookSettings, Diagnostic, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError,
-    ParamValue, Progress, Registry, TimeDep,
+    BuildOptions, CookCtx, CookResult, CookSettings, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError, ParamValue,
+    Progress, Registry,
 };
 
 #[derive(Parser)]
@@ -98,6 +98,21 @@ enum Command {
         /// Print a JSON report instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Write a graph back out in the current format (older versions migrated), after --set:
+    /// byte for byte what the editor and Python's `Graph.save` write.
+    Save {
+        /// The graph file (RON).
+        graph: PathBuf,
+        /// Where to write.
+        #[arg(short = 'o', long = "output", value_name = "FILE")]
+        output: PathBuf,
+        /// Override a parameter: node.param=value.
+        #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
+        set: Vec<String>,
+        /// Replace the output file if it exists.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// The node reference.
     Nodes {
@@ -189,6 +204,7 @@ fn main() -> ExitCode {
         Some(Command::Check { graph, out, allow_outside_out, json }) => {
             check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out }, json)
         }
+        Some(Command::Save { graph, output, set, overwrite }) => save(&graph, &output, &set, overwrite),
         Some(Command::Nodes { markdown, json }) => {
             nodes(&registry, markdown, json);
             Ok(())
@@ -286,9 +302,7 @@ fn apply_sets(doc: &mut GraphDoc, sets: &[String]) -> Result<(), Failure> {
 fn load(registry: &Registry, path: &Path, sets: &[String], options: &BuildOptions) -> Result<(GraphDoc, Graph), Failure> {
     let mut doc = GraphDoc::load(path)?;
     apply_sets(&mut doc, sets)?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut graph = Graph::build(&doc, registry, &dir, options).map_err(|d| Failure::from(d.in_file(path)))?;
-    graph.file = Some(path.to_path_buf());
+    let graph = Graph::build_file(&doc, path, registry, options)?;
     Ok((doc, graph))
 }
 
@@ -415,10 +429,7 @@ fn memory_kib(field: &str) -> Option<u64> {
 }
 
 fn explain(node: &str, e: &NodeError) -> String {
-    match e {
-        NodeError::InNode { .. } => e.to_string(),
-        other => format!("node '{node}': {other}"),
-    }
+    pyrograph::check::explain(node, e)
 }
 
 fn output_map(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> serde_json::Value {
@@ -458,84 +469,50 @@ fn demo(registry: &Registry, out: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-fn diag_json(d: &Diagnostic) -> serde_json::Value {
+fn problem_json(p: &pyrograph::check::Problem) -> serde_json::Value {
     json!({
-        "file": d.file.as_ref().map(|f| f.display().to_string()),
-        "location": d.location.to_string(),
-        "kind": format!("{:?}", d.kind),
-        "message": d.message,
+        "file": p.file.as_ref().map(|f| f.display().to_string()),
+        "location": p.location,
+        "node": p.node,
+        "port": p.port,
+        "kind": p.kind,
+        "message": p.message,
     })
 }
 
 fn check(registry: &Registry, path: &Path, options: &BuildOptions, json_out: bool) -> Result<(), Failure> {
     let built = Graph::load(path, registry, options).map(|(_, g)| g);
-    let (graph, problems) = match built {
-        Ok(g) => {
-            let errs = probe_sources(&g);
-            (Some(g), errs)
-        }
-        Err(d) => (None, d.0.iter().map(|d| (diag_json(d), format!("error: {d}"))).collect()),
-    };
+    let problems = pyrograph::check::problems(built.as_ref());
     if json_out {
-        let list: Vec<_> = problems.iter().map(|p| p.0.clone()).collect();
-        let counts = graph.as_ref().map(|g| json!({"nodes": g.node_count(), "edges": g.edge_count()}));
+        let list: Vec<_> = problems.iter().map(problem_json).collect();
+        let counts = built.as_ref().ok().map(|g| json!({"nodes": g.node_count(), "edges": g.edge_count()}));
         println!("{}", json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list}));
-    } else if let (Some(g), true) = (&graph, problems.is_empty()) {
+    } else if let (Ok(g), true) = (&built, problems.is_empty()) {
         println!("ok: {}: {} nodes, {} edges", path.display(), g.node_count(), g.edge_count());
     } else {
         for p in &problems {
-            eprintln!("{}", p.1);
+            eprintln!("error: {p}");
         }
         eprintln!("{}: {} problem(s)", path.display(), problems.len());
     }
     if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
 }
 
-/// Cooks the source nodes (loaders), which open and probe their files, so `check` reports a
-/// missing or corrupt input without rendering anything.
-fn probe_sources(graph: &Graph) -> Vec<(serde_json::Value, String)> {
-    let sources: Vec<String> = graph
-        .topo_order()
-        .iter()
-        .map(|i| graph.node(*i))
-        .filter(|n| n.node.desc().time == TimeDep::Source)
-        .map(|n| n.id.to_string())
-        .collect();
-    let refs: Vec<&str> = sources.iter().map(String::as_str).collect();
-    let file = graph.file.as_ref().map(|f| f.display().to_string());
-    match Evaluator::new().cook(graph, &refs, &CookCtx::new()) {
-        Ok(res) => res
-            .root_errors()
-            .into_iter()
-            .map(|(n, e)| {
-                let msg = explain(n, e);
-                (
-                    json!({"file": file, "location": format!("node '{n}'"), "kind": "Cook", "message": msg}),
-                    format!("error: {msg}"),
-                )
-            })
-            .collect(),
-        Err(e) => vec![(json!({"file": file, "kind": "Cook", "message": e.to_string()}), format!("error: {e}"))],
-    }
+/// `pyrograph save`: the document as the current writer writes it (what the editor and Python's
+/// `Graph.save` write), after `--set`; migrates files of older versions.
+fn save(path: &Path, output: &Path, sets: &[String], overwrite: bool) -> Result<(), Failure> {
+    let mut doc = GraphDoc::load(path)?;
+    apply_sets(&mut doc, sets)?;
+    doc.save(output, overwrite).map_err(|e| Failure(format!("error: cannot write {}: {e}", output.display())))?;
+    println!("saved {}", output.display());
+    Ok(())
 }
 
 fn nodes(registry: &Registry, markdown: bool, json_out: bool) {
     if markdown {
         print!("{}", pyrograph::reference::markdown(registry));
     } else if json_out {
-        let list: Vec<_> = registry
-            .descs()
-            .map(|d| {
-                let port = |p: &pyrograph::core::PortDesc| {
-                    json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary()),
-                           "range": p.range, "options": p.options, "doc": p.doc})
-                };
-                json!({"type": d.type_name, "category": d.category, "time": d.time.name(), "doc": d.doc,
-                       "inputs": d.inputs.iter().map(port).collect::<Vec<_>>(),
-                       "outputs": d.outputs.iter().map(port).collect::<Vec<_>>()})
-            })
-            .collect();
-        println!("{}", serde_json::Value::Array(list));
+        println!("{}", pyrograph::reference::json(registry));
     } else {
         for d in registry.descs() {
             println!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());

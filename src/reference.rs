@@ -52,6 +52,14 @@ fn node_section(out: &mut String, d: &NodeDesc) {
     }
 }
 
+/// One node type's reference as Markdown (its section of docs/nodes.md): what Python's
+/// `pyrograph.describe(type)` returns.
+pub fn node_markdown(d: &NodeDesc) -> String {
+    let mut out = String::new();
+    node_section(&mut out, d);
+    out
+}
+
 /// The whole node reference as Markdown, grouped by category.
 pub fn markdown(registry: &Registry) -> String {
     let mut descs: Vec<&NodeDesc> = registry.descs().collect();
@@ -69,4 +77,22 @@ pub fn markdown(registry: &Registry) -> String {
         node_section(&mut out, d);
     }
     out
+}
+
+/// The node reference as JSON (`pyrograph nodes --json`, Python's `pyrograph.nodes()`): per
+/// type its category, time dependence, doc and ports with types, defaults, ranges and options.
+pub fn json(registry: &Registry) -> serde_json::Value {
+    let port = |p: &PortDesc| {
+        serde_json::json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary()),
+                           "range": p.range, "options": p.options, "doc": p.doc})
+    };
+    let list: Vec<_> = registry
+        .descs()
+        .map(|d| {
+            serde_json::json!({"type": d.type_name, "category": d.category, "time": d.time.name(), "doc": d.doc,
+                               "inputs": d.inputs.iter().map(port).collect::<Vec<_>>(),
+                               "outputs": d.outputs.iter().map(port).collect::<Vec<_>>()})
+        })
+        .collect();
+    serde_json::Value::Array(list)
 }

@@ -201,3 +201,34 @@ fn info_describes_a_graph() {
     let t = text(&o);
     assert!(t.contains("particles.render_fire") && t.contains("Clip<Image>") && t.contains("per frame over a clip"), "{t}");
 }
+
+#[test]
+fn save_migrates_applies_set_and_refuses_to_overwrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cards.ron");
+    let out_s = out.to_str().unwrap();
+    let graph = root().join("graphs/flame-cards.ron");
+    let graph = graph.to_str().unwrap();
+    let o = run(&["save", graph, "-o", out_s, "--set", "calm.turbulence=0.8"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let saved = pyrograph::core::GraphDoc::load(&out).expect("the saved file loads");
+    let mut expected = pyrograph::core::GraphDoc::load(std::path::Path::new(graph)).unwrap();
+    expected.set_param("calm", "turbulence", pyrograph::core::ParamValue::Float(0.8)).unwrap();
+    assert_eq!(saved, expected);
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), expected.to_ron(), "what the editor and Python write");
+
+    std::fs::write(&out, "mine").unwrap();
+    let again = run(&["save", graph, "-o", out_s]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(text(&again).contains(out_s), "{}", text(&again));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "mine", "nothing was overwritten");
+    assert!(run(&["save", graph, "-o", out_s, "--overwrite"]).status.success());
+
+    // A pre-release (unversioned) file comes out in the current format.
+    let old = root().join("tests/fixtures/migrate/v0.ron");
+    let migrated = dir.path().join("migrated.ron");
+    assert!(run(&["save", old.to_str().unwrap(), "-o", migrated.to_str().unwrap()]).status.success());
+    let text = std::fs::read_to_string(&migrated).unwrap();
+    assert!(text.contains("version: 1") && text.contains("type: \"imaging.constant_color\""), "{text}");
+    assert!(!text.contains("kind:") && !text.contains("settings:"), "the old field names are gone: {text}");
+}

@@ -142,7 +142,9 @@ impl CookCtx {
             f(&p);
         }
     }
-    pub(crate) fn for_node(&self, id: &Arc<str>) -> CookCtx {
+    /// This context as node `id` uses it: its frame progress is reported under that id (front
+    /// ends pulling a clip's frames report them for the node that made the clip).
+    pub fn for_node(&self, id: &Arc<str>) -> CookCtx {
         CookCtx { node: Some(id.clone()), ..self.clone() }
     }
 }

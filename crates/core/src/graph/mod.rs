@@ -131,13 +131,21 @@ impl Graph {
     /// Loads, migrates, validates and type-checks a graph file.
     pub fn load(path: &Path, registry: &Registry, options: &BuildOptions) -> Result<(GraphDoc, Graph), Diagnostics> {
         let doc = GraphDoc::load(path)?;
+        let graph = Graph::build_file(&doc, path, registry, options)?;
+        Ok((doc, graph))
+    }
+
+    /// Builds `doc` as the document of file `path` (perhaps edited since it was read): relative
+    /// paths resolve against the file's folder, diagnostics name the file and an include of the
+    /// file itself is a cycle.
+    pub fn build_file(doc: &GraphDoc, path: &Path, registry: &Registry, options: &BuildOptions) -> Result<Graph, Diagnostics> {
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let stack = vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())];
         let root = options.output_dir.clone().unwrap_or_else(|| dir.clone());
         let ctx = LoadCtx { registry, dir, options, include_stack: stack, root };
-        let mut graph = build(&doc, &ctx).map_err(|d| d.in_file(path))?;
+        let mut graph = build(doc, &ctx).map_err(|d| d.in_file(path))?;
         graph.file = Some(path.to_path_buf());
-        Ok((doc, graph))
+        Ok(graph)
     }
 
     /// Validates and type-checks a document whose relative paths resolve against `dir`.

@@ -1,0 +1,58 @@
+//! Parameters between Python and graph documents: Python values become the `ParamValue`s a
+//! graph file holds, and back.
+
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use pyrograph::core::ParamValue;
+
+/// A Python value as a graph parameter: bool, int, float, str, a path-like, or a tuple/list of
+/// those (colours, vectors).
+pub fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<ParamValue> {
+    // bool first: Python's bool is an int.
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(ParamValue::Bool(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        return Ok(ParamValue::Int(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        return Ok(ParamValue::Float(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyString>() {
+        return Ok(ParamValue::String(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyTuple>() || obj.is_instance_of::<PyList>() {
+        return obj.try_iter()?.map(|item| from_py(&item?)).collect::<PyResult<Vec<_>>>().map(ParamValue::List);
+    }
+    if obj.hasattr("__fspath__")? {
+        let path: std::path::PathBuf = obj.extract()?;
+        return Ok(ParamValue::String(path.to_string_lossy().into_owned()));
+    }
+    // numpy scalars and other number-likes.
+    if obj.hasattr("__index__")? {
+        return Ok(ParamValue::Int(obj.call_method0("__index__")?.extract()?));
+    }
+    if obj.hasattr("__float__")? {
+        return Ok(ParamValue::Float(obj.call_method0("__float__")?.extract()?));
+    }
+    Err(PyTypeError::new_err(format!(
+        "a parameter must be a bool, int, float, str, path or a tuple of those, not {}",
+        obj.get_type().name()?
+    )))
+}
+
+/// A graph parameter as a Python value (lists become tuples, as the file writes them).
+pub fn to_py<'py>(py: Python<'py>, v: &ParamValue) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        ParamValue::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        ParamValue::Int(i) => i.into_pyobject(py)?.into_any(),
+        ParamValue::Float(f) => f.into_pyobject(py)?.into_any(),
+        ParamValue::String(s) => s.into_pyobject(py)?.into_any(),
+        ParamValue::List(items) => {
+            let items = items.iter().map(|i| to_py(py, i)).collect::<PyResult<Vec<_>>>()?;
+            PyTuple::new(py, items)?.into_any()
+        }
+    })
+}

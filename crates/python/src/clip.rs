@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyList, PySlice, PyString};
+use pyo3::types::{PyList, PyRange, PySlice, PyString};
 use rayon::prelude::*;
 
 use pyrograph::core::{Clip as RustClip, CookCtx, CookSettings, FrameSet, NodeError, Value};
@@ -67,7 +67,7 @@ impl Clip {
         selection: &Bound<'py, PyAny>,
         progress: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let list = frame_list(selection)?;
+        let list = frame_selection(selection)?.resolve(self.clip.len()).map_err(|e| from_node_error(py, &self.node, &e))?;
         self.pull(py, list, progress)
     }
     fn __repr__(&self) -> String {
@@ -112,22 +112,81 @@ pub fn frames_to_py<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bound<'p
     Ok(PyList::new(py, items)?.into_any())
 }
 
-/// A frame selection: an int, an iterable of ints (a range, a list) or a string in the CLI's
-/// `--frames` grammar (`"0-99"`, `"0-99:2"`, `"1,5,9-12"`).
-pub fn frame_list(sel: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
+/// A frame selection as Python gives it: an int, a `range` or a string in the CLI's `--frames`
+/// grammar (`"0-99"`, `"0-99:2"`, `"1,5,9-12"`) stay a compact [`FrameSet`] until the clip's
+/// length is known, so a mistyped `"0-4000000000"` is an error, not a 30 GB list; any other
+/// iterable of ints is taken as the list it already is.
+pub enum Selection {
+    /// A set of frame ranges, expanded only once checked against a length.
+    Set(FrameSet),
+    /// Frames in the order asked (repeats allowed).
+    List(Vec<usize>),
+}
+
+impl Selection {
+    /// The frames, checked against a clip of `len` frames.
+    pub fn resolve(&self, len: usize) -> Result<Vec<usize>, NodeError> {
+        let last = match self {
+            Selection::Set(set) => set.last(),
+            Selection::List(list) => list.iter().copied().max().unwrap_or(0),
+        };
+        if last >= len && !self.is_empty() {
+            return Err(NodeError::msg(format!("frame {last} is past the end of a {len}-frame clip")));
+        }
+        Ok(match self {
+            Selection::Set(set) => set.frames(),
+            Selection::List(list) => list.clone(),
+        })
+    }
+
+    fn is_empty(&self) -> bool {
+        match self {
+            // The grammar has no empty set.
+            Selection::Set(_) => false,
+            Selection::List(list) => list.is_empty(),
+        }
+    }
+
+    /// The frames as a set, for writers.
+    pub fn to_frame_set(&self) -> Option<FrameSet> {
+        match self {
+            Selection::Set(set) => Some(set.clone()),
+            Selection::List(list) => FrameSet::from_list(list),
+        }
+    }
+}
+
+fn negative(f: i64) -> PyErr {
+    pyo3::exceptions::PyValueError::new_err(format!("frame {f} is negative"))
+}
+
+/// Reads a frame selection (see [`Selection`]).
+pub fn frame_selection(sel: &Bound<'_, PyAny>) -> PyResult<Selection> {
+    let parse = |text: &str| -> PyResult<Selection> {
+        text.parse::<FrameSet>().map(Selection::Set).map_err(pyo3::exceptions::PyValueError::new_err)
+    };
     if sel.is_instance_of::<PyString>() {
-        let set: FrameSet = sel.extract::<String>()?.parse().map_err(pyo3::exceptions::PyValueError::new_err)?;
-        return Ok(set.frames());
+        return parse(&sel.extract::<String>()?);
     }
     if let Ok(one) = sel.extract::<i64>() {
-        return usize::try_from(one)
-            .map(|f| vec![f])
-            .map_err(|_| pyo3::exceptions::PyValueError::new_err(format!("frame {one} is negative")));
+        return usize::try_from(one).map(|f| Selection::List(vec![f])).map_err(|_| negative(one));
+    }
+    if sel.is_instance_of::<PyRange>() {
+        let (start, stop, step): (i64, i64, i64) =
+            (sel.getattr("start")?.extract()?, sel.getattr("stop")?.extract()?, sel.getattr("step")?.extract()?);
+        if step > 0 && start >= 0 {
+            if stop <= start {
+                return Ok(Selection::List(Vec::new()));
+            }
+            // The last frame the range reaches, in the grammar's inclusive form.
+            let last = start + (stop - 1 - start) / step * step;
+            return parse(&format!("{start}-{last}:{step}"));
+        }
     }
     let mut out = Vec::new();
     for item in sel.try_iter()? {
         let f: i64 = item?.extract()?;
-        out.push(usize::try_from(f).map_err(|_| pyo3::exceptions::PyValueError::new_err(format!("frame {f} is negative")))?);
+        out.push(usize::try_from(f).map_err(|_| negative(f))?);
     }
-    Ok(out)
+    Ok(Selection::List(out))
 }

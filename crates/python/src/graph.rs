@@ -11,10 +11,10 @@ use pyo3::types::{PyDict, PyTuple};
 
 use pyrograph::core::document::split_endpoint;
 use pyrograph::core::{
-    BuildOptions, CookSettings, Diagnostics, Evaluator, FrameSet, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, Value,
+    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, Value,
 };
 
-use crate::clip::{Clip, frame_list, frames_to_py, pull_frames};
+use crate::clip::{Clip, frame_selection, frames_to_py, pull_frames};
 use crate::errors::{from_diagnostics, from_node_error, graph_error};
 use crate::registry;
 
@@ -94,6 +94,8 @@ impl Graph {
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Graph> {
         let doc = GraphDoc::load(&path).map_err(|d| from_diagnostics(py, &d))?;
+        // Absolute, so a later os.chdir() (DCC hosts change folders) does not move the graph.
+        let path = std::path::absolute(&path)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(Graph::with_doc(doc, Some(path), dir))
     }
@@ -105,7 +107,7 @@ impl Graph {
     fn from_ron(py: Python<'_>, text: &str, base_dir: Option<PathBuf>) -> PyResult<Graph> {
         let doc = GraphDoc::from_ron(text).map_err(|d| from_diagnostics(py, &d))?;
         let dir = match base_dir {
-            Some(d) => d,
+            Some(d) => std::path::absolute(d)?,
             None => std::env::current_dir()?,
         };
         Ok(Graph::with_doc(doc, None, dir))
@@ -122,6 +124,7 @@ impl Graph {
     #[pyo3(signature = (path, overwrite=false))]
     fn save(&mut self, path: PathBuf, overwrite: bool) -> PyResult<()> {
         self.doc.save(&path, overwrite)?;
+        let path = std::path::absolute(&path)?;
         self.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         self.file = Some(path);
         self.edited();
@@ -278,9 +281,9 @@ impl Graph {
 
     /// Parameter `endpoint` ("node.param") as written in the graph, else its default (None for
     /// a preset's parameter that is not written).
-    fn get<'py>(&mut self, py: Python<'py>, endpoint: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+    fn get<'py>(&self, py: Python<'py>, endpoint: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
         let (id, param) = self::endpoint(py, endpoint)?;
-        let node = self.node_doc(py, id)?;
+        let node = self.doc.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
         if let Some(v) = node.params.get(param) {
             return crate::params::to_py(py, v).map(Some);
         }
@@ -311,24 +314,26 @@ impl Graph {
             let msg = format!("node '{id}' has no output '{port}' (outputs: {})", names.join(", "));
             return Err(graph_error(py, Some(id), Some(port), &msg));
         }
-        let wanted = frames.map(frame_list).transpose()?;
-        let eval = &self.eval;
-        let (log, cooked) = crate::run::run(py, CookSettings::default(), progress, |ctx| {
+        let wanted = frames.map(frame_selection).transpose()?;
+        let (eval, last_cooked) = (&self.eval, &self.last_cooked);
+        let cooked = crate::run::run(py, CookSettings::default(), progress, |ctx| {
             let mut ev = lock(eval);
             let result = ev.cook(&graph, &[id], ctx);
-            let log = ev.take_log();
+            // Kept even when the caller raises (Ctrl-C): what did cook is cached from now on.
+            *lock(last_cooked) = ev.take_log();
             drop(ev);
             let value = result.and_then(|r| r.output(&graph, id, port));
-            let cooked = value.and_then(|v| match (&wanted, v) {
+            value.and_then(|v| match (&wanted, v) {
                 (None, v) => Ok(Cooked::One(v)),
-                (Some(list), Value::Clip(clip)) => pull_frames(&clip, list, &ctx.for_node(&Arc::from(id))).map(Cooked::Frames),
+                (Some(sel), Value::Clip(clip)) => {
+                    let list = sel.resolve(clip.len())?;
+                    pull_frames(&clip, &list, &ctx.for_node(&Arc::from(id))).map(Cooked::Frames)
+                }
                 (Some(_), other) => {
                     Err(NodeError::port(port, format!("is a {}, not a clip: frames= applies to clip outputs", other.type_name())))
                 }
-            });
-            (log, cooked)
+            })
         })?;
-        *lock(&self.last_cooked) = log;
         match cooked.map_err(|e| from_node_error(py, id, &e))? {
             Cooked::One(Value::Clip(clip)) => Ok(Bound::new(py, Clip::new(clip, id, port))?.into_any()),
             Cooked::One(v) => crate::values::to_py(py, &v),
@@ -357,7 +362,8 @@ impl Graph {
         let graph = self.build_with(&options).map_err(|d| from_diagnostics(py, &d))?;
         let frames = match frames {
             Some(sel) => Some(
-                FrameSet::from_list(&frame_list(sel)?)
+                frame_selection(sel)?
+                    .to_frame_set()
                     .ok_or_else(|| pyo3::exceptions::PyValueError::new_err("frames= selects no frame"))?,
             ),
             None => None,
@@ -370,14 +376,14 @@ impl Graph {
             }
         };
         let settings = CookSettings { frames, skip_existing, overwrite, cache_dir: None };
-        let eval = &self.eval;
-        let (log, result, written) = crate::run::run(py, settings, progress, |ctx| {
+        let (eval, last_cooked) = (&self.eval, &self.last_cooked);
+        let (result, written) = crate::run::run(py, settings, progress, |ctx| {
             let refs: Vec<&str> = targets.iter().map(String::as_str).collect();
             let mut ev = lock(eval);
             let result = ev.cook(&graph, &refs, ctx);
-            (ev.take_log(), result, ctx.written())
+            *lock(last_cooked) = ev.take_log();
+            (result, ctx.written())
         })?;
-        *lock(&self.last_cooked) = log;
         let result = result.map_err(|e| graph_error(py, None, None, &e.to_string()))?;
         let errors = result.root_errors();
         if let Some((node, e)) = errors.first() {

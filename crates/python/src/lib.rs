@@ -30,10 +30,11 @@ fn nodes(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// The reference of node type `type_name` as Markdown (its doc citing the paper section, then
+/// The reference of node type `type` as Markdown (its doc citing the paper section, then
 /// its inputs and outputs with types, defaults and ranges): its section of docs/nodes.md.
 #[pyfunction]
-fn describe(py: Python<'_>, type_name: &str) -> PyResult<String> {
+fn describe(py: Python<'_>, r#type: &str) -> PyResult<String> {
+    let type_name = r#type;
     let reg = registry();
     match reg.desc(type_name) {
         Some(d) => Ok(pyrograph::reference::node_markdown(d)),

@@ -7,12 +7,21 @@ use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use pyrograph::core::ParamValue;
 
+/// How deeply tuples may nest in a parameter (a colour or vector is one level); deeper, or
+/// self-containing, lists are refused instead of exhausting the stack.
+const MAX_DEPTH: usize = 4;
+
 /// A Python value as a graph parameter: bool, int, float, str, a path-like, or a tuple/list of
 /// those (colours, vectors).
 pub fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<ParamValue> {
-    // bool first: Python's bool is an int.
-    if obj.is_instance_of::<PyBool>() {
-        return Ok(ParamValue::Bool(obj.extract()?));
+    from_py_at(obj, 0)
+}
+
+fn from_py_at(obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<ParamValue> {
+    // bool first: Python's bool is an int. numpy's bool (what `arr.any()` returns) is no int
+    // but has `__float__`, so it is recognised by name before the number fallbacks.
+    if obj.is_instance_of::<PyBool>() || is_numpy_bool(obj)? {
+        return Ok(ParamValue::Bool(obj.is_truthy()?));
     }
     if obj.is_instance_of::<PyInt>() {
         return Ok(ParamValue::Int(obj.extract()?));
@@ -24,7 +33,10 @@ pub fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<ParamValue> {
         return Ok(ParamValue::String(obj.extract()?));
     }
     if obj.is_instance_of::<PyTuple>() || obj.is_instance_of::<PyList>() {
-        return obj.try_iter()?.map(|item| from_py(&item?)).collect::<PyResult<Vec<_>>>().map(ParamValue::List);
+        if depth >= MAX_DEPTH {
+            return Err(PyTypeError::new_err(format!("a parameter's tuples may nest at most {MAX_DEPTH} deep")));
+        }
+        return obj.try_iter()?.map(|item| from_py_at(&item?, depth + 1)).collect::<PyResult<Vec<_>>>().map(ParamValue::List);
     }
     if obj.hasattr("__fspath__")? {
         let path: std::path::PathBuf = obj.extract()?;
@@ -41,6 +53,13 @@ pub fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<ParamValue> {
         "a parameter must be a bool, int, float, str, path or a tuple of those, not {}",
         obj.get_type().name()?
     )))
+}
+
+fn is_numpy_bool(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+    let ty = obj.get_type();
+    let module: String = ty.module()?.extract()?;
+    let name: String = ty.name()?.extract()?;
+    Ok(module == "numpy" && (name == "bool_" || name == "bool"))
 }
 
 /// A graph parameter as a Python value (lists become tuples, as the file writes them).

@@ -50,7 +50,7 @@ where
                 && let Some(cb) = progress
             {
                 for e in &events {
-                    if let Err(err) = cb.call1((event_dict(py, e)?,)) {
+                    if let Err(err) = event_dict(py, e).and_then(|d| cb.call1((d,))) {
                         token.cancel();
                         pending = Some(err);
                         break;
@@ -73,7 +73,7 @@ where
             && let Some(cb) = progress
         {
             for e in rx.try_iter() {
-                if let Err(err) = cb.call1((event_dict(py, &e)?,)) {
+                if let Err(err) = event_dict(py, &e).and_then(|d| cb.call1((d,))) {
                     pending = Some(err);
                     break;
                 }

@@ -31,9 +31,12 @@ def test_flame_cards_equal_the_pngs_the_cli_writes(cli, tmp_path):
     assert np.abs(g.cook("calm.clip", frames=[5])[0] - g.cook("wild.clip", frames=[5])[0]).max() > 0.1
 
 
-def test_render_writes_like_the_cli(tmp_path):
+def test_render_writes_like_the_cli(cli, tmp_path):
     g = pyrograph.Graph.load(CARDS)
     written = g.render(out=tmp_path, frames="0-3")
+    subprocess.run([cli, "render", CARDS, "--out", tmp_path / "cli", "--frames", "0-3"], check=True, capture_output=True)
+    for p in written:
+        assert p.read_bytes() == (tmp_path / "cli" / "flame-cards" / p.name).read_bytes(), p.name
     names = sorted(p.name for p in written)
     assert names == sorted([f"calm_{i:04d}.png" for i in range(4)] + [f"wild_{i:04d}.png" for i in range(4)])
     assert all(p.is_file() and str(p).startswith(str(tmp_path)) for p in written)
@@ -184,13 +187,81 @@ def test_progress_callback_sees_every_frame_and_can_cancel():
     g.cook("small.image", frames=range(5), progress=events.append)
     frames = [e for e in events if e["event"] == "frame"]
     assert sorted(e["done"] for e in frames) == [1, 2, 3, 4, 5] and all(e["total"] == 5 for e in frames)
+    # Reading the graph from the callback is fine.
+    g.cook("small.image", frames=[5], progress=lambda e: g.get("small.width"))
+
+    # The uncancelled time of frames 6–23 on a fresh graph …
+    started = time.monotonic()
+    slow_graph(frames=24).cook("small.image", frames=range(6, 24))
+    full = time.monotonic() - started
 
     def stop(event):
         raise RuntimeError("artist pressed stop")
 
+    # … and a callback that raises at the first event cancels the rest.
+    started = time.monotonic()
     with pytest.raises(RuntimeError, match="artist pressed stop"):
         g.cook("small.image", frames=range(6, 24), progress=stop)
+    stopped = time.monotonic() - started
+    assert stopped < 0.5 * full, (stopped, full)
+    # The nodes that did cook before the stop are in the log (and cached from now on).
+    assert g.last_cooked == [] or set(g.last_cooked) <= {"flame", "glow", "small"}
     assert len(g.cook("small.image", frames=[23])) == 1
+
+
+def test_frame_selections():
+    g = pyrograph.Graph.load(CARDS)
+    clip = g.cook("calm.clip")
+    as_range = g.cook("calm.clip", frames=range(1, 12, 3))
+    as_text = g.cook("calm.clip", frames="1-10:3")
+    as_list = g.cook("calm.clip", frames=[1, 4, 7, 10])
+    assert len(as_range) == len(as_text) == len(as_list) == 4
+    for a, b, c, i in zip(as_range, as_text, as_list, [1, 4, 7, 10]):
+        assert np.array_equal(a, b) and np.array_equal(b, c) and np.array_equal(c, clip[i])
+    assert len(clip.frames("0-11:2")) == 6 and len(clip[::-3]) == 4
+    # A mistyped range is an error at once, not a 4-billion-frame list.
+    started = time.monotonic()
+    with pytest.raises(pyrograph.GraphError, match="past the end of a 12-frame clip"):
+        g.cook("calm.clip", frames="0-4000000000")
+    with pytest.raises(pyrograph.GraphError, match="past the end"):
+        g.cook("calm.clip", frames=range(0, 4_000_000_000))
+    with pytest.raises(pyrograph.GraphError, match="past the end"):
+        clip.frames("5-4000000000")
+    assert time.monotonic() - started < 2
+    with pytest.raises(ValueError):
+        g.cook("calm.clip", frames=[-1])
+    with pytest.raises(ValueError):
+        g.cook("calm.clip", frames="ten")
+
+
+def test_parameters_from_python_values(tmp_path):
+    g = pyrograph.Graph.from_ron(BAD)
+    g.set("small.width", np.int64(8))
+    assert g.get("small.width") == 8 and isinstance(g.get("small.width"), int)
+    g.add_node("flame", "imaging.turbulence_flame", width=16, height=16, frames=2)
+    g.set("flame.frames", np.int32(3))
+    loop = []
+    loop.append(loop)
+    with pytest.raises(TypeError, match="nest"):
+        g.set("card.color", loop)
+    with pytest.raises(TypeError):
+        g.set("card.color", {"r": 1})
+    g.set("card.color", [0.5, 0.25, 0.0, 1.0])  # a list is a tuple
+    assert g.check() == [] and g.get("card.color") == (0.5, 0.25, 0.0, 1.0)
+
+
+def test_numpy_bools_are_bools():
+    g = pyrograph.Graph()
+    g.add_node("mask", "imaging.hsv_mask", layer2_enabled=np.bool_(True))
+    assert g.get("mask.layer2_enabled") is True
+
+
+def test_relative_paths_survive_chdir(tmp_path, monkeypatch):
+    monkeypatch.chdir(CARDS.parent.parent)
+    g = pyrograph.Graph.load("graphs/flame-cards.ron")
+    monkeypatch.chdir(tmp_path)
+    g.set("calm.turbulence", 0.5)  # an edit: the next cook rebuilds the graph
+    assert g.file == CARDS and len(g.cook("calm.clip", frames=[0])) == 1
 
 
 def test_values_of_every_kind():

@@ -39,3 +39,34 @@ def test_every_public_name_is_in_the_stub():
             public = {"node", "port", "message"}
         assert public <= members | {"description"}, (name, public - members)
         assert members - {"__init__", "__len__", "__getitem__"} <= public | {"node", "port", "message"}, (name, members - public)
+
+
+def stub_signatures():
+    """Parameter names per function and method of the stub: {"describe": [...], "Graph.cook": [...]}."""
+    out = {}
+    tree = ast.parse(STUB.read_text())
+    for node in tree.body:
+        items = [(node.name + ".", item) for item in node.body] if isinstance(node, ast.ClassDef) else [("", node)]
+        for prefix, item in items:
+            if isinstance(item, ast.FunctionDef) and not any(isinstance(d, ast.Name) and d.id == "property" for d in item.decorator_list):
+                if any(isinstance(d, ast.Attribute) for d in item.decorator_list):
+                    continue  # property setters
+                args = [a.arg for a in item.args.args + item.args.kwonlyargs]
+                out[prefix + item.name] = [a for a in args if a not in ("self", "cls")]
+    return out
+
+
+def test_stub_parameters_match_the_module():
+    import inspect
+
+    checked = 0
+    for name, params in stub_signatures().items():
+        if name.endswith("__init__") or name.split(".")[-1].startswith("__"):
+            continue
+        owner, _, attr = name.rpartition(".")
+        obj = getattr(getattr(_native, owner) if owner else _native, attr)
+        real = [p.name for p in inspect.signature(obj).parameters.values() if p.name not in ("self", "cls") and p.kind is not p.VAR_KEYWORD]
+        stub = [p for p in params if p != "params"]
+        assert real == stub, (name, real, stub)
+        checked += 1
+    assert checked >= 15

@@ -10,12 +10,14 @@ __version__: str
 
 Frames = Union[int, str, Iterable[int]]
 """A frame selection: an index, an iterable of indices (a range, a list) or a string in the CLI's
-`--frames` grammar ("0-99", "0-99:2", "1,5,9-12")."""
+`--frames` grammar ("0-99", "0-99:2", "1,5,9-12"). Frames past the clip's end are an error."""
 
 ProgressCallback = Callable[[dict], Any]
-"""Called on the cooking thread with one dict per event: {"event": "node_started", "node"},
+"""Called on the thread that called cook/render (never on a cooking thread), with one dict per
+event as it arrives (in batches every ~20 ms): {"event": "node_started", "node"},
 {"event": "node_finished", "node", "ok"} or {"event": "frame", "node", "done", "total"}. An
-exception raised by the callback cancels the cook and propagates."""
+exception raised by the callback cancels the cook and propagates. The graph cannot be edited
+from the callback (RuntimeError: already borrowed); reading it (get, nodes) is fine."""
 
 Param = Union[bool, int, float, str, "os.PathLike[str]", Sequence[Any]]
 Cooked = Union[

@@ -9,6 +9,7 @@ pub mod bench;
 pub mod check;
 pub mod demo;
 pub mod job;
+pub mod look;
 pub mod manifest;
 pub mod reference;
 pub mod wedge;

@@ -132,6 +132,12 @@ fn candles_match_their_golden_frame() {
 }
 
 #[test]
+fn campfire_matches_its_golden_frame() {
+    // Flames on logs, sparks, lit logs and ground, bloom: every part of the campfire preset.
+    golden("campfire.ron", (24, 24), &["campfire/campfire_0024.png"]);
+}
+
+#[test]
 fn mass_spring_flames_match_their_golden_frame() {
     golden("mass-spring-9.ron", (30, 30), &["mass-spring-9/mass_spring_9_0030.png"]);
 }

@@ -34,6 +34,9 @@ pub struct Particles {
     pub sides: u32,
     /// Simulation time, in frames.
     pub time: f32,
+    /// The particles of one group, in order, are the successive steps of one trajectory (Perry's
+    /// long exposure, §3.2.2): a renderer may draw each group as one continuous swept shape.
+    pub trails: bool,
 }
 
 impl ValueType for Particles {
@@ -44,7 +47,7 @@ impl ValueType for Particles {
     };
 
     fn hash_into(&self, h: &mut Fingerprinter) {
-        (self.particles.len(), self.sides, self.time.to_bits()).hash(h);
+        (self.particles.len(), self.sides, self.time.to_bits(), self.trails).hash(h);
         for q in &self.particles {
             let floats = [q.position.as_slice(), &q.velocity, &q.size, &q.center, &q.edge, &[q.weight]];
             floats.iter().for_each(|f| hash_f32s(h, f));

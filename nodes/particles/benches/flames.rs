@@ -7,6 +7,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::Vec3;
 use pyrograph_nodes_particles::flame::{FlameParams, Layout, Root, layout_roots, simulate_frame};
 use pyrograph_nodes_particles::render::render_particles;
+use pyrograph_nodes_particles::swept::Exposure;
 use pyrograph_nodes_particles::types::WindField;
 use pyrograph_render::Particles;
 use pyrograph_render::{Blend, Camera, View};
@@ -44,13 +45,29 @@ fn flames(c: &mut Criterion) {
         let frame = simulate_frame(&roots, &wind, &params, 7).expect("simulates");
         group.bench_with_input(BenchmarkId::new("render", n), &n, |b, _| {
             b.iter(|| {
-                black_box(render_particles(&view, &frame, Blend::Additive, [0.0, 0.0, 0.0, 1.0], None, &Particles::default()))
+                black_box(render_particles(
+                    &view,
+                    &frame,
+                    Exposure::Continuous,
+                    Blend::Additive,
+                    [0.0, 0.0, 0.0, 1.0],
+                    None,
+                    &Particles::default(),
+                ))
             })
         });
         group.bench_with_input(BenchmarkId::new("simulate+render", n), &n, |b, _| {
             b.iter(|| {
                 let frame = simulate_frame(&roots, &wind, &params, 7).expect("simulates");
-                black_box(render_particles(&view, &frame, Blend::Additive, [0.0, 0.0, 0.0, 1.0], None, &Particles::default()))
+                black_box(render_particles(
+                    &view,
+                    &frame,
+                    Exposure::Continuous,
+                    Blend::Additive,
+                    [0.0, 0.0, 0.0, 1.0],
+                    None,
+                    &Particles::default(),
+                ))
             })
         });
     }

@@ -94,7 +94,7 @@ pub fn char_particles(state: &SpreadState, p: &CharParams) -> Particles {
             }
         })
         .collect();
-    Particles { particles, sides: 12, time: state.time }
+    Particles { particles, sides: 12, time: state.time, trails: false }
 }
 
 pyrograph_core::node! {

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use pyrograph_core::params::Cook;
 use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
 use pyrograph_render::ports::CameraPorts;
@@ -12,7 +12,8 @@ use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace, validate_params};
-use crate::render::{LightParams, flame_lights, no_particles};
+use crate::render::{LightParams, flame_lights, no_particles, particle_lists};
+use crate::swept::Exposure;
 use crate::types::{Mesh, SpreadState, WindField};
 use crate::wind::{WindSampler, validate_wind};
 use pyrograph_render::{Particle, Particles};
@@ -70,6 +71,8 @@ pyrograph_core::ports! {
         height_ramp: Ramp<1> = Ramp::preset(HEIGHT_RAMP),
         /// The particles' colours.
         colors: FlameColors,
+        /// Flames as one continuous swept shape each (the long exposure), or as their discrete steps.
+        exposure: Exposure = Exposure::Continuous,
         /// Fraction of a root's life over which its flame grows in.
         #[range(0.0, 1.0)]
         grow: f32 = 0.15,
@@ -171,7 +174,7 @@ pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> 
                 .collect()
         })
         .collect();
-    Particles { particles: per_root.concat(), sides: p.triangles, time: t }
+    Particles { particles: per_root.concat(), sides: p.triangles, time: t, trails: true }
 }
 
 /// Flame lights as columns (position, and colour times intensity), so the sum over them in
@@ -201,7 +204,7 @@ impl LightColumns {
 
 /// Light arriving at `p` with normal `n`: key light plus Σ I·rgb·cosθ / (1 + d²) over `lights`
 /// (cosθ taken as 1 for a light exactly at `p`).
-fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) -> Vec3 {
+fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &MeshShading) -> Vec3 {
     // Eight partial sums over fixed-size chunks, so the loop runs eight lights at a time
     // (floats do not reassociate on their own).
     const LANES: usize = 8;
@@ -226,7 +229,7 @@ fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) ->
         add(i - full, c.map(|col| col[i]));
     }
     let [r, g, b] = sums.map(|lanes| lanes.iter().sum::<f32>());
-    Vec3::splat(look.ambient + look.sun * n.dot(sun).max(0.0)) + Vec3::new(r, g, b)
+    Vec3::splat(look.ambient + look.sun * n.dot(look.sun_direction).max(0.0)) + Vec3::new(r, g, b)
 }
 
 /// A mesh corner's shading key: its position's and its face normal's bits (flat-shaded faces
@@ -234,9 +237,22 @@ fn shade(p: Vec3, n: Vec3, lights: &LightColumns, look: &FireLook, sun: Vec3) ->
 /// the mesh repeats the vertex per triangle).
 type CornerKey = ([u32; 3], [u32; 3]);
 
-fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> Vec<DrawList> {
-    let sun = Vec3::from_array(look.sun_direction).normalize_or_zero();
-    let albedo = Vec3::new(look.mesh_color[0], look.mesh_color[1], look.mesh_color[2]);
+/// How [`draw_mesh`] lights a mesh: albedo × (ambient + key light + flame lights).
+#[derive(Clone, Copy, Debug)]
+pub struct MeshShading {
+    /// Albedo.
+    pub albedo: Vec3,
+    /// Ambient light.
+    pub ambient: f32,
+    /// Unit direction towards the key light.
+    pub sun_direction: Vec3,
+    /// Key light strength.
+    pub sun: f32,
+}
+
+/// `mesh` as opaque Gouraud triangles lit by `look` and the point `lights` (§3.2.4).
+pub fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &MeshShading) -> Vec<DrawList> {
+    let albedo = look.albedo;
     let key =
         |t: usize, i: u32| -> CornerKey { (mesh.positions[i as usize].map(f32::to_bits), mesh.normals[t].map(f32::to_bits)) };
     // Shading sums over every flame light, so it is done once per distinct (vertex, normal)
@@ -250,7 +266,7 @@ fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &FireLook) -> V
         .par_iter()
         .map(|&(p, n)| {
             let p = Vec3::from_array(p.map(f32::from_bits));
-            let c = albedo * shade(p, Vec3::from_array(n.map(f32::from_bits)), &lights, look, sun);
+            let c = albedo * shade(p, Vec3::from_array(n.map(f32::from_bits)), &lights, look);
             [c.x, c.y, c.z, 1.0]
         })
         .collect();
@@ -288,23 +304,6 @@ fn draw_char(view: &View, chars: &Particles) -> DrawList {
     list
 }
 
-fn draw_flames(view: &View, flames: &Particles) -> Vec<DrawList> {
-    let sides = flames.sides.max(3);
-    let chunk = (flames.particles.len() / (rayon::current_num_threads() * 4)).max(512);
-    flames
-        .particles
-        .par_chunks(chunk)
-        .map(|c| {
-            let mut list = DrawList::new(view);
-            list.reserve_particles(c.len(), sides);
-            for q in c {
-                list.particle(Vec3::from_array(q.position), Vec2::from_array(q.size), sides, q.center, q.edge, Blend::Additive);
-            }
-            list
-        })
-        .collect()
-}
-
 /// One frame of a burning mesh (Perry §3.4): the mesh shaded by a key light and the flame lights,
 /// char discs laid on the surface (blended "over"), and the root flames added to saturation.
 pub fn render_fire(
@@ -326,9 +325,15 @@ pub fn render_fire(
         Some(lp) => flame_lights(&flames, &lp),
         None => Particles::default(),
     };
-    let mut lists = draw_mesh(view, mesh, &lights, look);
+    let shading = MeshShading {
+        albedo: Vec3::new(look.mesh_color[0], look.mesh_color[1], look.mesh_color[2]),
+        ambient: look.ambient,
+        sun_direction: Vec3::from_array(look.sun_direction).normalize_or_zero(),
+        sun: look.sun,
+    };
+    let mut lists = draw_mesh(view, mesh, &lights, &shading);
     lists.push(draw_char(view, chars));
-    lists.extend(draw_flames(view, &flames));
+    lists.extend(particle_lists(view, &flames, look.exposure, Blend::Additive));
     Ok(render_image(view, &lists, look.background))
 }
 

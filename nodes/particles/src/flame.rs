@@ -6,6 +6,7 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use noise::{NoiseFn, Perlin};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::params::{Cook, Port};
 use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Registry, Value, port};
@@ -174,6 +175,13 @@ pyrograph_core::ports! {
         /// Frames of fade-in after birth and fade-out before death.
         #[range(0, 1000)]
         fade: u32 = 0,
+        /// Relative amplitude of each flame's flicker: the flame (trajectory and particles) grows and
+        /// shrinks about its root with band-limited noise over time, as a real flame does (0: steady).
+        #[range(0.0, 0.9)]
+        flicker: f32 = 0.0,
+        /// Flicker rate in noise cycles per frame.
+        #[range(0.0, 10.0)]
+        flicker_rate: f32 = 0.2,
         /// Seed of the per-flame variations.
         #[range(0, u32::MAX)]
         seed: u32 = 0,
@@ -294,7 +302,7 @@ pub fn simulate_frame(roots: &[Root], wind: &WindField, p: &FlameParams, frame: 
         .enumerate()
         .map(|(i, root)| flame_particles(i, root, &sampler, p, frame, t))
         .collect::<Result<_, _>>()?;
-    Ok(Particles { particles: per_flame.concat(), sides: p.triangles, time: t })
+    Ok(Particles { particles: per_flame.concat(), sides: p.triangles, time: t, trails: true })
 }
 
 /// Lifetime of flame `i` and its age at `frame`, or `None` when it is not alive.
@@ -309,6 +317,17 @@ pub fn flame_age(i: usize, p: &FlameParams, frame: usize) -> Option<(u32, u32)> 
     }
 }
 
+/// How much flame `i` is scaled about its root at time `t` (frames): 1 + flicker × 1-D Perlin
+/// noise of `t · flicker_rate`, a different stretch of noise per flame.
+pub fn flicker(i: usize, p: &FlameParams, t: f32) -> f32 {
+    if p.flicker == 0.0 {
+        return 1.0;
+    }
+    let noise = Perlin::new(p.seed ^ 0x5EED_F11C);
+    let n = noise.get([(t * p.flicker_rate) as f64, i as f64 * 7.31 + 0.5, 0.25]) as f32;
+    (1.0 + p.flicker * n).max(0.05)
+}
+
 fn flame_particles(
     i: usize,
     root: &Root,
@@ -320,8 +339,12 @@ fn flame_particles(
     let Some((life, age)) = flame_age(i, p, frame) else { return Ok(Vec::new()) };
     let fade =
         if p.fade == 0 { 1.0 } else { ((age + 1) as f32 / p.fade as f32).min((life - age) as f32 / p.fade as f32).min(1.0) };
-    let size = p.size * (1.0 + p.size_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, i, 3) - 1.0));
-    let path = trace(root, wind, p, t);
+    let stretch = flicker(i, p, t);
+    let size = stretch * p.size * (1.0 + p.size_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, i, 3) - 1.0));
+    let mut path = trace(root, wind, p, t);
+    if stretch != 1.0 {
+        path.iter_mut().for_each(|(q, _)| *q = root.position + (*q - root.position) * stretch);
+    }
     if path.iter().any(|(q, v)| !q.is_finite() || !v.is_finite()) {
         return Err(NodeError::port(
             port!(ParticleFlame, wind),
@@ -462,7 +485,7 @@ impl Cook for Roots {
                 ..Particle::default()
             })
             .collect();
-        Ok(RootsOut { roots: Arc::new(Particles { particles, sides: 0, time: 0.0 }) })
+        Ok(RootsOut { roots: Arc::new(Particles { particles, sides: 0, time: 0.0, trails: false }) })
     }
 }
 

@@ -6,11 +6,14 @@
 #![deny(missing_docs)]
 
 pub mod char;
+pub mod embers;
 pub mod fire;
 pub mod flame;
 pub mod mesh;
+pub mod mesh_roots;
 pub mod render;
 pub mod spread;
+pub mod swept;
 pub mod types;
 pub mod wind;
 
@@ -25,6 +28,8 @@ pub fn register(registry: &mut Registry) {
     spread::register(registry);
     char::register(registry);
     fire::register(registry);
+    mesh_roots::register(registry);
+    embers::register(registry);
 }
 
 #[cfg(test)]

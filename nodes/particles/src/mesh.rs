@@ -196,6 +196,55 @@ pub fn house(size: f32) -> PolygonSoup {
     soup
 }
 
+/// A closed log: a prism of `segments` sides and `radius` around the horizontal axis at `yaw`
+/// radians from +x through `centre`, `length` long, cut into `rows` along its length (so flame
+/// light on it varies along the log), with flat end caps; outward, counter-clockwise.
+pub fn log(centre: Vec3, yaw: f32, length: f32, radius: f32, segments: usize, rows: usize) -> PolygonSoup {
+    let (segs, rows) = (segments.max(3), rows.max(1));
+    let axis = Vec3::new(yaw.cos(), 0.0, -yaw.sin());
+    // A right-handed frame (u, v, axis): u × v = axis.
+    let u = Vec3::Y;
+    let v = axis.cross(u);
+    let mut soup = PolygonSoup::default();
+    for r in 0..=rows {
+        let along = length * (r as f32 / rows as f32 - 0.5);
+        for k in 0..segs {
+            let th = std::f32::consts::TAU * k as f32 / segs as f32;
+            soup.vertex(centre + axis * along + (u * th.cos() + v * th.sin()) * radius);
+        }
+    }
+    let id = |r: usize, k: usize| (r * segs + k % segs) as u32;
+    for r in 0..rows {
+        for k in 0..segs {
+            soup.polygons.push(vec![id(r, k), id(r, k + 1), id(r + 1, k + 1), id(r + 1, k)]);
+        }
+    }
+    soup.polygons.push((0..segs).rev().map(|k| id(0, k)).collect());
+    soup.polygons.push((0..segs).map(|k| id(rows, k)).collect());
+    soup
+}
+
+/// A campfire's logs, `size` across, resting on y = 0: two crossed layers of two logs (a log
+/// cabin) and two shorter logs leaning diagonally on top, each a closed [`log`] (separate
+/// components that interpenetrate a little where they rest on each other).
+pub fn logs(size: f32, segments: usize) -> PolygonSoup {
+    let r = size * 0.08;
+    let mut soup = PolygonSoup::default();
+    let q = std::f32::consts::FRAC_PI_4;
+    let placed = [
+        (Vec3::new(0.0, r, size * 0.24), 0.0, size),
+        (Vec3::new(0.0, r, -size * 0.24), 0.0, size),
+        (Vec3::new(size * 0.24, r * 2.6, 0.0), 2.0 * q, size),
+        (Vec3::new(-size * 0.24, r * 2.6, 0.0), 2.0 * q, size),
+        (Vec3::new(0.0, r * 4.1, 0.0), q, size * 0.7),
+        (Vec3::new(0.0, r * 4.6, 0.0), -q, size * 0.7),
+    ];
+    for (centre, yaw, length) in placed {
+        soup.append(&log(centre, yaw, length, r, segments.max(6), 6));
+    }
+    soup
+}
+
 /// Splits every polygon into triangles (fans), then every triangle into four `levels` times
 /// (edge midpoints shared between neighbours, so the mesh stays watertight). Polygon ids are kept.
 fn subdivide(positions: &mut Vec<Vec3>, tris: &mut Vec<[u32; 3]>, polys: &mut Vec<u32>, levels: usize) {
@@ -443,13 +492,15 @@ pyrograph_core::choice! {
         Cylinder = "cylinder",
         /// [`house`].
         House = "house",
+        /// [`logs`]: a campfire's log pile.
+        Logs = "logs",
     }
 }
 
 pyrograph_core::node! {
     /// A polygon mesh for fire spread (Perry 1994 §3.3.2): a Wavefront OBJ (through tobj; triangles and
     /// polygons, fan-triangulated) or a primitive (cube, plane grid, sphere, open cylinder, a house with a
-    /// garage). Face normals are computed from the winding (an OBJ face wound against its vertex normals is
+    /// garage, a campfire's log pile). Face normals are computed from the winding (an OBJ face wound against its vertex normals is
     /// flipped); the loader builds face adjacency and, per edge, the rotation that takes one face's normal to
     /// its neighbour's, which carries spread headings across edges. Degenerate faces and non-manifold or
     /// inconsistently wound edges are errors naming the face (strict), or are dropped / made boundaries.
@@ -459,7 +510,7 @@ pyrograph_core::node! {
         source: MeshSource = MeshSource::Cube,
         /// OBJ file (source = obj).
         path: InputPath = "".into(),
-        /// Primitive size: cube side, plane side, sphere radius, cylinder radius, house width.
+        /// Primitive size: cube side, plane side, sphere radius, cylinder radius, house width, log pile width.
         #[range(1e-6, 1e6)]
         size: f32 = 1.0,
         /// Cylinder height.
@@ -500,6 +551,7 @@ impl Cook for MeshLoad {
             MeshSource::Sphere => sphere(size, div),
             MeshSource::Cylinder => cylinder(size, self.height, 4 * div, div),
             MeshSource::House => house(size),
+            MeshSource::Logs => logs(size, 2 * div + 2),
             MeshSource::Cube => cube(size, div),
         };
         let t = Vec3::from_array(self.translate);
@@ -524,7 +576,8 @@ mod tests {
 
     #[test]
     fn primitives_are_watertight_and_consistently_wound() {
-        for (name, soup) in [("cube", cube(1.0, 3)), ("sphere", sphere(1.0, 6)), ("house", house(2.0))] {
+        let one_log = log(Vec3::new(0.3, 0.2, -0.1), 0.7, 1.5, 0.1, 8, 3);
+        for (name, soup) in [("cube", cube(1.0, 3)), ("sphere", sphere(1.0, 6)), ("house", house(2.0)), ("log", one_log)] {
             let m = build_mesh(&soup, 0, true).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert!(closed(&m), "{name} is closed");
             // Outward normals: the face centre moves away from the mesh centre along the normal.
@@ -536,6 +589,9 @@ mod tests {
                 }
             }
         }
+        let pile = build_mesh(&logs(1.0, 10), 0, true).unwrap();
+        assert!(closed(&pile), "every log is closed");
+        assert_eq!(pile.triangles.len(), 6 * (10 * 6 * 2 + 2 * 8), "six logs of 10 sides, 6 rows, two 10-gon caps");
         let plane = build_mesh(&plane(2.0, 4), 0, true).unwrap();
         assert_eq!(plane.triangles.len(), 32);
         assert!(plane.normals.iter().all(|n| (Vec3::from_array(*n) - Vec3::Y).length() < 1e-6));

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use noise::{NoiseFn, Perlin};
 use pyrograph_core::params::Cook;
 use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
@@ -12,6 +12,10 @@ use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use pyrograph_render::{Particle, Particles};
 use rayon::prelude::*;
+
+use crate::fire::{MeshShading, draw_mesh};
+use crate::swept::{Exposure, SweptScratch, draw_steps, swept_flame, trails};
+use crate::types::Mesh;
 
 /// Adds `particles.render_flames` and `particles.flame_lights`.
 pub fn register(registry: &mut Registry) {
@@ -82,31 +86,67 @@ fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Part
     list.mesh(&verts, &tris, None, Blend::Opaque);
 }
 
+/// Draw lists of `particles` as camera-facing fuzzy N-gons (Perry 1994 §3.2.1), trajectories
+/// (`particles.trails`) as one swept shape each when `exposure` is continuous (see
+/// [`crate::swept`]), built in parallel chunks.
+pub fn particle_lists(view: &View, particles: &Particles, exposure: Exposure, blend: Blend) -> Vec<DrawList> {
+    let sides = particles.sides.max(3);
+    let all = &particles.particles;
+    if particles.trails && exposure == Exposure::Continuous {
+        let runs = trails(all);
+        let chunk = (runs.len() / (rayon::current_num_threads() * 4)).max(16);
+        runs.par_chunks(chunk)
+            .map(|c| {
+                let mut list = DrawList::new(view);
+                let mut scratch = SweptScratch::default();
+                for run in c {
+                    swept_flame(&mut list, &all[run.clone()], sides, blend, &mut scratch);
+                }
+                list
+            })
+            .collect()
+    } else {
+        let chunk = (all.len() / (rayon::current_num_threads() * 4)).max(512);
+        all.par_chunks(chunk)
+            .map(|c| {
+                let mut list = DrawList::new(view);
+                list.reserve_particles(c.len(), sides);
+                draw_steps(&mut list, c, sides, blend);
+                list
+            })
+            .collect()
+    }
+}
+
 /// Renders `particles` as camera-facing fuzzy N-gons (Perry 1994 §3.2.1) over `background`
-/// (straight RGBA), with an optional lit ground plane. Geometry is built in parallel chunks and
-/// rasterized in parallel bands.
+/// (straight RGBA), with an optional lit ground plane. Trajectories (`particles.trails`) are
+/// drawn as one swept shape each when `exposure` is continuous (see [`crate::swept`]). Geometry
+/// is built in parallel chunks and rasterized in parallel bands.
 pub fn render_particles(
     view: &View,
     particles: &Particles,
+    exposure: Exposure,
     blend: Blend,
     background: [f32; 4],
     ground: Option<&Ground>,
     lights: &Particles,
 ) -> Image {
-    let sides = particles.sides.max(3);
-    let chunk = (particles.particles.len() / (rayon::current_num_threads() * 4)).max(512);
-    let mut lists: Vec<DrawList> = particles
-        .particles
-        .par_chunks(chunk)
-        .map(|c| {
-            let mut list = DrawList::new(view);
-            list.reserve_particles(c.len(), sides);
-            for q in c {
-                list.particle(Vec3::from_array(q.position), Vec2::from_array(q.size), sides, q.center, q.edge, blend);
-            }
-            list
-        })
-        .collect();
+    render_with(view, particles, exposure, blend, background, ground, lights, Vec::new())
+}
+
+/// [`render_particles`] with more draw lists (a mesh, sparks) drawn first.
+#[allow(clippy::too_many_arguments)]
+fn render_with(
+    view: &View,
+    particles: &Particles,
+    exposure: Exposure,
+    blend: Blend,
+    background: [f32; 4],
+    ground: Option<&Ground>,
+    lights: &Particles,
+    mut lists: Vec<DrawList>,
+) -> Image {
+    lists.extend(particle_lists(view, particles, exposure, blend));
     if let Some(g) = ground {
         let mut list = DrawList::new(view);
         draw_ground(&mut list, g, view.camera().target(), lights);
@@ -143,18 +183,29 @@ pub(crate) fn no_particles() -> Arc<Particles> {
 pyrograph_core::node! {
     /// Renders particle flames through a perspective camera (Perry 1994 §3.2.1–3.2.2): every particle is a
     /// camera-facing N-gon of Gouraud triangles, blended additively to saturation (as Perry's Figure 3-3)
-    /// or with "over". An optional ground plane is lit by the flame lights of §3.2.4 (connect
+    /// or with "over". A flame's trajectory is drawn as its long exposure, one continuous swept shape with
+    /// the particle's cross-section and half N-gon caps (exposure = continuous), or as its discrete steps.
+    /// Sparks (particles.embers) are drawn the same way, and an optional mesh (logs) opaque, lit like the
+    /// ground. An optional ground plane is lit by the flame lights of §3.2.4 (connect
     /// particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).
     #[node("particles.render_flames", "Particles", PerFrame)]
     pub struct RenderFlames {
         /// The particles to draw (particles.particle_flame).
         flames: Arc<Particles>,
-        /// Point lights for the ground (particles.flame_lights); default none.
+        /// Point lights for the ground and the mesh (particles.flame_lights); default none.
         lights: Arc<Particles> = no_particles(),
+        /// A second particle family drawn with the flames: sparks (particles.embers); default none.
+        sparks: Arc<Particles> = no_particles(),
+        /// An opaque mesh lit by `lights` — the logs under a campfire (particles.mesh_load); default none.
+        mesh: Arc<Mesh> = Arc::new(Mesh::default()),
+        /// The mesh's albedo.
+        mesh_color: [f32; 4] = [0.3, 0.2, 0.14, 1.0],
         /// The camera.
         camera: CameraPorts = CameraPorts::looking(640, 480, [0.0, 3.0, 14.0], [0.0, 2.5, 0.0]),
         /// Additive to saturation (Perry) or over.
         blend: FlameBlend = FlameBlend::Additive,
+        /// Flames as one continuous swept shape each (the long exposure), or as their discrete steps.
+        exposure: Exposure = Exposure::Continuous,
         /// Background colour (straight RGBA).
         background: [f32; 4] = [0.0, 0.0, 0.0, 0.0],
         /// Draw a ground plane lit by `lights`.
@@ -171,13 +222,32 @@ pyrograph_core::node! {
 impl Cook for RenderFlames {
     fn cook(self, ctx: &CookCtx) -> Result<RenderFlamesOut, NodeError> {
         let view = self.camera.view()?;
-        let flames = &self.flames;
-        if let Some(k) = flames.particles.iter().position(|q| !q.position.iter().chain(&q.size).all(|x| x.is_finite())) {
-            return Err(NodeError::port(port!(RenderFlames, flames), format!("particle {k} has a non-finite position or size")));
+        for (set, name) in [(&self.flames, port!(RenderFlames, flames)), (&self.sparks, port!(RenderFlames, sparks))] {
+            if let Some(k) = set.particles.iter().position(|q| !q.position.iter().chain(&q.size).all(|x| x.is_finite())) {
+                return Err(NodeError::port(name, format!("particle {k} has a non-finite position or size")));
+            }
+        }
+        if self.mesh.normals.len() != self.mesh.triangles.len() {
+            return Err(NodeError::port(
+                port!(RenderFlames, mesh),
+                "the mesh has no face normals: load it with particles.mesh_load",
+            ));
         }
         let ground = self.ground.then_some(&self.ground_plane);
         ctx.check_cancel()?;
-        let image = render_particles(&view, flames, self.blend.blend(), self.background, ground, &self.lights);
+        let blend = self.blend.blend();
+        let mut lists = Vec::new();
+        if !self.mesh.triangles.is_empty() {
+            let shading = MeshShading {
+                albedo: Vec3::new(self.mesh_color[0], self.mesh_color[1], self.mesh_color[2]),
+                ambient: self.ground_plane.ambient,
+                sun_direction: Vec3::Y,
+                sun: 0.0,
+            };
+            lists.extend(draw_mesh(&view, &self.mesh, &self.lights, &shading));
+        }
+        lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
+        let image = render_with(&view, &self.flames, self.exposure, blend, self.background, ground, &self.lights, lists);
         Ok(RenderFlamesOut { image: Arc::new(image) })
     }
 }
@@ -236,7 +306,7 @@ pub fn flame_lights(flames: &Particles, p: &LightParams) -> Particles {
             }
         })
         .collect();
-    Particles { particles, sides: 0, time: flames.time }
+    Particles { particles, sides: 0, time: flames.time, trails: false }
 }
 
 pyrograph_core::node! {
@@ -283,8 +353,15 @@ mod tests {
 
     #[test]
     fn a_candle_renders_bright_in_its_core_and_dark_away_from_it() {
-        let img =
-            render_particles(&view(80, 60), &candle_frame(0), Blend::Additive, [0.0, 0.0, 0.0, 1.0], None, &Particles::default());
+        let img = render_particles(
+            &view(80, 60),
+            &candle_frame(0),
+            Exposure::Continuous,
+            Blend::Additive,
+            [0.0, 0.0, 0.0, 1.0],
+            None,
+            &Particles::default(),
+        );
         let core = view(80, 60).project(Vec3::new(0.0, 2.5, 0.0)).unwrap();
         let px = img.pixel(core.x as u32, core.y as u32);
         assert!(px[0] > 0.6 && px[1] > 0.25, "core {px:?}");
@@ -320,6 +397,7 @@ mod tests {
             }],
             sides: 0,
             time: 0.0,
+            trails: false,
         };
         let near = light_at(Vec3::ZERO, &light);
         let far = light_at(Vec3::new(5.0, 0.0, 0.0), &light);

@@ -1,0 +1,54 @@
+//! The candle graph against the shared candle footage (issue 28): the flames' area, height and
+//! width vary over time like the real candle's (coefficient of variation within 30 %, lag-1
+//! autocorrelation within 0.15), and show no more banding than the footage does, at the graph's
+//! step count and at half of it.
+
+use std::path::PathBuf;
+
+use pyrograph::look::{ClipLook, FlameLook, Series, footage_look, graph_look};
+
+/// Luminance above which a pixel is flame, in the footage and in the renders.
+const THRESHOLD: f32 = 0.25;
+
+/// One measured quantity of a flame.
+type Quantity = fn(&FlameLook) -> Series;
+
+fn footage() -> PathBuf {
+    std::env::var_os("PYROGRAPH_FOOTAGE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
+}
+
+fn candles(sets: &[&str], steps: usize) -> ClipLook {
+    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/candles.ron");
+    let mut all = vec!["render.ground=false"];
+    all.extend(sets);
+    graph_look(&graph, "render.image", &all, THRESHOLD, steps).expect("the candle graph cooks")
+}
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn candle_graph_moves_like_the_candle_footage_and_shows_no_bands() {
+    let real = footage_look(&footage().join("candle-black/frames"), usize::MAX, THRESHOLD, 25).expect("footage frames");
+    assert_eq!(real.flames.len(), 1, "one candle in the footage: {real:?}");
+    let ours = candles(&[], 25);
+    let half = candles(&["flames.steps=12"], 12);
+    println!("footage    {}", real.summary());
+    println!("candles    {}", ours.summary());
+    println!("half steps {}", half.summary());
+    let quantities: [(&str, Quantity); 3] = [("area", |l| l.area), ("height", |l| l.height), ("width", |l| l.width)];
+    for (name, q) in quantities {
+        let (cv_real, cv_ours) = (real.mean(|l| q(l).cv), ours.mean(|l| q(l).cv));
+        let (lag_real, lag_ours) = (real.mean(|l| q(l).lag1), ours.mean(|l| q(l).lag1));
+        assert!(
+            (cv_ours - cv_real).abs() <= 0.3 * cv_real,
+            "{name}: coefficient of variation {cv_ours:.3} against the footage's {cv_real:.3}"
+        );
+        assert!((lag_ours - lag_real).abs() <= 0.15, "{name}: lag-1 autocorrelation {lag_ours:.3} against {lag_real:.3}");
+    }
+    let footage_banding = real.mean(|l| l.banding);
+    for (look, steps) in [(&ours, 25), (&half, 12)] {
+        let b = look.mean(|l| l.banding);
+        assert!(b <= footage_banding, "{steps} steps: banding {b:.2e} above the footage's {footage_banding:.2e}");
+    }
+}

@@ -6,7 +6,7 @@
 //!
 //! Defaults: `../shared/footage/candle-black/frames` against `graphs/candles.ron render.image`
 //! (without its lit table), at its own step count and at half of it, and drawn as discrete steps.
-//! The learned candle beside them: `... FRAMES_DIR graphs/learning-flames-candle.ron render.image`
+//! The learned candle beside them: `... FRAMES_DIR graphs/learning-flames-candle.ron render.color`
 //! with `PYROGRAPH_FOOTAGE` set.
 
 use std::path::{Path, PathBuf};

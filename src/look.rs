@@ -128,6 +128,9 @@ pub fn banding(profile: &[f64], cycles: usize) -> f64 {
         .enumerate()
         .map(|(i, v)| (v - mean) * (0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / (n - 1) as f64).cos()))
         .collect();
+    // The window gives the profile a mean again: remove it, so Parseval below counts k ≥ 1 only.
+    let windowed_mean = x.iter().sum::<f64>() / n as f64;
+    let x: Vec<f64> = x.iter().map(|v| v - windowed_mean).collect();
     let total: f64 = x.iter().map(|v| v * v).sum();
     if total <= 0.0 {
         return 0.0;
@@ -317,7 +320,8 @@ mod tests {
             .map(|(i, s)| s * (1.0 + 0.2 * (std::f64::consts::TAU * 70.0 * i as f64 / n as f64).sin()))
             .collect();
         assert!(banding(&other, 25) < 1e-3);
-        assert_eq!(banding(&[1.0; 10], 25), 0.0);
+        assert_eq!(banding(&[1.0; 10], 25), 0.0, "too short");
+        assert_eq!(banding(&[1.0; 64], 25), 0.0, "no variation");
     }
 
     #[test]

@@ -52,3 +52,35 @@ fn candle_graph_moves_like_the_candle_footage_and_shows_no_bands() {
         assert!(b <= footage_banding, "{steps} steps: banding {b:.2e} above the footage's {footage_banding:.2e}");
     }
 }
+
+/// The learned candle (Stich & Magnor, `graphs/learning-flames-candle.ron`) against the clip it
+/// was trained on, in image space: the AR(2) fit reproduces its parameters' statistics by
+/// construction, so the check that matters is what the rendered flames do — their area, height,
+/// width and energy vary like the real flame's (coefficient of variation within 30 %, lag-1 and
+/// lag-2 autocorrelation within 0.15).
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn learned_candle_moves_like_its_training_clip_in_image_space() {
+    let frames = footage().join("candle-black/frames");
+    let real = footage_look(&frames, usize::MAX, THRESHOLD, 25).expect("footage frames");
+    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
+    let path = format!("frames.path={:?}", frames.display().to_string());
+    let learned =
+        graph_look(&graph, "render.color", &[&path, "sample.frames=300"], THRESHOLD, 25).expect("the learned candle cooks");
+    println!("footage {}", real.summary());
+    println!("learned {}", learned.summary());
+    assert_eq!(learned.flames.len(), 1, "{learned:?}");
+    let quantities: [(&str, Quantity); 4] =
+        [("area", |l| l.area), ("height", |l| l.height), ("width", |l| l.width), ("energy", |l| l.energy)];
+    for (name, q) in quantities {
+        let (a, b) = (q(&real.flames[0]), q(&learned.flames[0]));
+        assert!(
+            (b.cv - a.cv).abs() <= 0.3 * a.cv,
+            "{name}: coefficient of variation {:.3} against the footage's {:.3}",
+            b.cv,
+            a.cv
+        );
+        assert!((b.lag1 - a.lag1).abs() <= 0.15, "{name}: lag-1 {:.3} against {:.3}", b.lag1, a.lag1);
+        assert!((b.lag2 - a.lag2).abs() <= 0.15, "{name}: lag-2 {:.3} against {:.3}", b.lag2, a.lag2);
+    }
+}

@@ -85,7 +85,9 @@ fn candle_black_fits_a_26_parameter_model_and_renders_back() {
     let mean = errors.iter().sum::<f64>() / errors.len() as f64;
     let worst = errors.iter().cloned().fold(0.0, f64::max);
     println!("relative L2 reconstruction error (N_e = 5) over {} frames: mean {mean:.3}, worst {worst:.3}", errors.len());
-    assert!(mean < 0.25 && worst < 0.35, "mean {mean}, worst {worst}");
+    // Measured 0.054 mean and 0.072 worst (2026-11-25): limits a third above that, so a regression
+    // of the fit or the renderer shows (the earlier 0.25 / 0.35 let a 4× regression pass).
+    assert!(mean < 0.07 && worst < 0.10, "mean {mean}, worst {worst}");
 }
 
 /// Mean, standard deviation and lag-1 / lag-2 autocorrelation of one column.

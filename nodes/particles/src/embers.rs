@@ -75,9 +75,10 @@ impl Default for EmberParams {
 /// Integration steps per frame: sparks are fast and small, so the path is stepped finely.
 const SUBSTEPS: usize = 4;
 
-/// Where spark `id` born at `birth` (frames) is at every substep from birth, until `until`
-/// (frames): explicit Euler with a = wind_scale · u∞(p, t) − drag · v.
-#[allow(clippy::too_many_arguments)]
+/// Where a spark born at `root` at `birth` (frames), heading `dir`, is at every substep from
+/// birth until `until` (frames): the wind's acceleration `wind_scale · u∞(p, t)` stepped
+/// explicitly, the drag exactly (`v · e^(−drag·h)`), so a strong drag at a low frame rate damps
+/// instead of overshooting.
 fn spark_path(root: Vec3, dir: Vec3, birth: f64, until: f64, fps: f64, wind: &WindSampler, p: &EmberParams) -> Vec<Vec3> {
     let h = 1.0 / (fps * SUBSTEPS as f64);
     let steps = ((until - birth) * SUBSTEPS as f64).ceil().max(0.0) as usize;
@@ -86,8 +87,7 @@ fn spark_path(root: Vec3, dir: Vec3, birth: f64, until: f64, fps: f64, wind: &Wi
     out.push(pos);
     for k in 0..steps {
         let t = (birth + k as f64 / SUBSTEPS as f64) as f32;
-        let a = wind.at(pos, root, t) * p.wind_scale - vel * p.drag;
-        vel += a * h as f32;
+        vel = vel * (-p.drag * h as f32).exp() + wind.at(pos, root, t) * (p.wind_scale * h as f32);
         pos += vel * h as f32;
         out.push(pos);
     }
@@ -252,6 +252,15 @@ mod tests {
         let young = frame.particles.iter().min_by(|a, b| a.weight.total_cmp(&b.weight)).unwrap();
         let old = frame.particles.iter().max_by(|a, b| a.weight.total_cmp(&b.weight)).unwrap();
         assert!(old.position[1] > young.position[1] && old.center[1] < young.center[1] && old.center[3] < young.center[3]);
+    }
+
+    #[test]
+    fn strong_drag_at_a_low_frame_rate_stays_finite() {
+        let roots = [(Vec3::ZERO, Vec3::Y)];
+        let p = EmberParams { drag: 100.0, ..EmberParams::default() };
+        let frame = simulate_embers(&roots, &calm(), &p, 1.0, 20).unwrap();
+        assert!(!frame.particles.is_empty());
+        assert!(frame.particles.iter().all(|q| q.position.iter().all(|x| x.is_finite() && x.abs() < 100.0)));
     }
 
     #[test]

@@ -516,7 +516,8 @@ pyrograph_core::node! {
         /// Cylinder height.
         #[range(1e-6, 1e6)]
         height: f32 = 2.0,
-        /// Primitive resolution: quads per cube edge / plane side, sphere rings, cylinder rows.
+        /// Primitive resolution: quads per cube edge / plane side, sphere rings, cylinder rows; a log has
+        /// 2·divisions + 2 sides.
         #[range(1, 512)]
         divisions: usize = 4,
         /// Split every triangle into four this many times (smoother lighting).

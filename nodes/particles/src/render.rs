@@ -181,10 +181,10 @@ pub(crate) fn no_particles() -> Arc<Particles> {
 }
 
 pyrograph_core::node! {
-    /// Renders particle flames through a perspective camera (Perry 1994 §3.2.1–3.2.2): every particle is a
-    /// camera-facing N-gon of Gouraud triangles, blended additively to saturation (as Perry's Figure 3-3)
-    /// or with "over". A flame's trajectory is drawn as its long exposure, one continuous swept shape with
-    /// the particle's cross-section and half N-gon caps (exposure = continuous), or as its discrete steps.
+    /// Renders particle flames through a perspective camera (Perry 1994 §3.2.1–3.2.2), blended additively to
+    /// saturation (as Perry's Figure 3-3) or with "over". A flame's trajectory is drawn as its long exposure:
+    /// one continuous camera-facing swept shape with the particle's cross-section and half N-gon caps
+    /// (exposure = continuous), or as its discrete steps, each a camera-facing N-gon of Gouraud triangles.
     /// Sparks (particles.embers) are drawn the same way, and an optional mesh (logs) opaque, lit like the
     /// ground. An optional ground plane is lit by the flame lights of §3.2.4 (connect
     /// particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).

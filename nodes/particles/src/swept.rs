@@ -62,6 +62,8 @@ struct StepFrame {
     across: Vec3,
     /// World offset from the end particle's centre to its cap tip, along the path.
     along: Vec3,
+    /// Whether the path moves on screen at this step (its tangent is its own).
+    moved: bool,
 }
 
 /// The colours the path and rim vertices of one step carry so that one layer of the swept shape
@@ -106,12 +108,9 @@ pub fn swept_flame(list: &mut DrawList, path: &[Particle], sides: u32, blend: Bl
         let size = Vec2::from_array(q.size).abs();
         let scale = size.max_element().max(1e-12);
         let chord = before + after;
-        let tangent = if chord.length() > 1e-6 * scale {
-            moved = true;
-            chord.normalize()
-        } else {
-            last_tangent
-        };
+        let step_moved = chord.length() > 1e-6 * scale;
+        let tangent = if step_moved { chord.normalize() } else { last_tangent };
+        moved |= step_moved;
         last_tangent = tangent;
         let normal = Vec2::new(-tangent.y, tangent.x);
         // The particle's ellipse measured across and along the path.
@@ -124,14 +123,35 @@ pub fn swept_flame(list: &mut DrawList, path: &[Particle], sides: u32, blend: Bl
         };
         // A cone of half-extent `reach` integrates to `reach` along the path; particles every
         // `step` sum to `reach / step` on average, never more than all of them at once.
-        let exposure = if step > 0.0 { (reach / step).min(n as f32) } else { n as f32 };
+        let mut exposure = if step > 0.0 { (reach / step).min(n as f32) } else { coincident(path, k) as f32 };
+        if k == 0 || k + 1 == n {
+            // At an end of the path only the particles on one side overlap: about half as many,
+            // plus the end particle itself.
+            exposure = (0.5 * (exposure + 1.0)).min(exposure);
+        }
         let world = |v: Vec2| r * v.x + u * v.y;
         let [centre, rim] = exposed(q.center, q.edge, exposure, blend).map(Vec4::from_array);
-        frames.push(StepFrame { at: pos(k), centre, rim, across: world(normal) * width, along: world(tangent) * reach });
+        frames.push(StepFrame {
+            at: pos(k),
+            centre,
+            rim,
+            across: world(normal) * width,
+            along: world(tangent) * reach,
+            moved: step_moved,
+        });
     }
     if !moved {
         draw_steps(list, path, sides, blend);
         return;
+    }
+    // Steps before the path first moves (particles stacked at its start) take its first
+    // direction, not the default.
+    if let Some(first) = frames.iter().position(|f| f.moved) {
+        let (across, along) = (frames[first].across.normalize_or_zero(), frames[first].along.normalize_or_zero());
+        for f in &mut frames[..first] {
+            let (w, r) = (f.across.length(), f.along.length());
+            (f.across, f.along) = (across * w, along * r);
+        }
     }
     let (verts, tris) = (&mut scratch.verts, &mut scratch.tris);
     verts.clear();
@@ -236,7 +256,13 @@ fn spline(frames: &[StepFrame], k: usize, t: f32) -> StepFrame {
         rim: p0.rim * w[0] + p1.rim * w[1] + p2.rim * w[2] + p3.rim * w[3],
         across: p0.across * w[0] + p1.across * w[1] + p2.across * w[2] + p3.across * w[3],
         along: p1.along,
+        moved: true,
     }
+}
+
+/// How many particles of `path` sit exactly where particle `k` does (itself included).
+fn coincident(path: &[Particle], k: usize) -> usize {
+    path.iter().filter(|q| q.position == path[k].position).count()
 }
 
 /// Every particle of `path` as its own fuzzy N-gon.
@@ -305,6 +331,27 @@ mod tests {
         assert!(rs < 0.25 * rd, "swept roughness {rs} against the steps' {rd}");
         let ratio = swept_total / steps_total;
         assert!((0.75..1.33).contains(&ratio), "total light {swept_total} against the steps' {steps_total}");
+    }
+
+    #[test]
+    fn far_flames_and_over_blending_keep_the_steps_light() {
+        // Far away the strip has 3 vertices across and few-sided caps; "over" uses its own exposure.
+        let far = View::new(
+            Camera::new(Vec3::new(0.0, 1.5, 60.0), Vec3::new(0.0, 1.5, 0.0), Vec3::Y, 40.0, 0.1, 100.0).unwrap(),
+            160,
+            240,
+        )
+        .unwrap();
+        let flame = candle();
+        for (view, blend) in [(&far, Blend::Additive), (&view(), Blend::Over), (&far, Blend::Over)] {
+            let total = |exposure| {
+                let img = render_particles(view, &flame, exposure, blend, [0.0, 0.0, 0.0, 1.0], None, &Particles::default());
+                assert!(img.data().iter().all(|v| v.is_finite()));
+                img.data().chunks_exact(4).map(|p| p[0] + p[1] + p[2]).sum::<f32>()
+            };
+            let (swept, steps) = (total(Exposure::Continuous), total(Exposure::Steps));
+            assert!(steps > 0.0 && (0.6..1.5).contains(&(swept / steps)), "{blend:?}: {swept} against {steps}");
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ mod cli_farm;
 use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use pyrograph::core::{
     BuildOptions, CookCtx, CookResult, CookSettings, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError, ParamValue,
-    Progress, Registry,
+    Progress, Registry, Warning,
 };
 
 #[derive(Parser)]
@@ -368,17 +368,19 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
         let ok = result.root_errors().is_empty();
         write_manifest(file, path, &out, o, None, ok, &ctx.written(), started.elapsed())?;
     }
-    report(&graph, &targets, &result, started.elapsed(), o.json)
+    report(&graph, &targets, &result, &ctx.warnings(), started.elapsed(), o.json)
 }
 
 fn report(
     graph: &Graph,
     targets: &[String],
     result: &CookResult,
+    warnings: &[Warning],
     elapsed: std::time::Duration,
     json: bool,
 ) -> Result<(), Failure> {
     let errors = result.root_errors();
+    let warning_node = |w: &Warning| w.node.as_deref().unwrap_or("").to_string();
     if json {
         let nodes: serde_json::Map<String, serde_json::Value> = targets
             .iter()
@@ -402,6 +404,7 @@ fn report(
                 "frame_cache": cache,
                 "targets": nodes,
                 "errors": errs,
+                "warnings": warnings.iter().map(|w| json!({"node": warning_node(w), "message": w.message})).collect::<Vec<_>>(),
             })
         );
     } else {
@@ -409,6 +412,9 @@ fn report(
             if let Some(Ok(values)) = result.node(t) {
                 println!("{t}: {}", describe_outputs(graph, t, values));
             }
+        }
+        for w in warnings {
+            eprintln!("warning: node '{}': {}", warning_node(w), w.message);
         }
         for (node, e) in &errors {
             eprintln!("error: {}", explain(node, e));

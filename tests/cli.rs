@@ -232,3 +232,46 @@ fn save_migrates_applies_set_and_refuses_to_overwrite() {
     assert!(text.contains("version: 1") && text.contains("type: \"imaging.constant_color\""), "{text}");
     assert!(!text.contains("kind:") && !text.contains("settings:"), "the old field names are gone: {text}");
 }
+
+/// Frames of an orange flame on black whose base is cut by the bottom edge in every frame,
+/// masked by `imaging.hsv_auto_mask` and framed by `imaging.auto_crop`: the render succeeds and
+/// says why its result may be wrong, in text and in `--json`.
+#[test]
+fn render_reports_a_flame_cut_by_the_bottom_edge_as_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in 0..6u32 {
+        let img = image::RgbaImage::from_fn(64, 48, |x, y| {
+            let inside = (24 + f % 3..40).contains(&x) && y >= 10 + f;
+            if inside { image::Rgba([255, 140, 25, 255]) } else { image::Rgba([6, 3, 2, 255]) }
+        });
+        img.save(dir.path().join(format!("cut_{f:04}.png"))).unwrap();
+    }
+    let graph = dir.path().join("cut.ron");
+    std::fs::write(
+        &graph,
+        r#"(version: 1, nodes: {
+            "shots": (type: "imaging.load_sequence", params: {"path": "cut_####.png"}),
+            "mask": (type: "imaging.hsv_auto_mask", params: {"stride": 1}),
+            "crop": (type: "imaging.auto_crop"),
+            "write": (type: "imaging.write_sequence", params: {"pattern": "out/crop_####.png"}),
+        }, edges: [
+            ("shots.clip", "mask.clip"), ("shots.clip", "crop.clip"), ("mask.mask", "crop.mask"), ("crop.clip", "write.clip"),
+        ])"#,
+    )
+    .unwrap();
+    let o = run(&["render", graph.to_str().unwrap(), "--out", dir.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(
+            "warning: node 'crop': the flame touches the bottom edge in 100 % of frames: its base is outside the picture"
+        ),
+        "{stderr}"
+    );
+    let written = image::open(dir.path().join("out/crop_0000.png")).unwrap();
+    assert_eq!((written.width() % 8, written.height() % 8), (0, 0), "cropped to multiples of 8");
+    let o = run(&["render", graph.to_str().unwrap(), "--out", dir.path().to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let warnings = v["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w["node"] == "crop" && w["message"].as_str().unwrap().contains("bottom edge")), "{v}");
+}

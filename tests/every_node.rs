@@ -67,6 +67,17 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
             }
             "s_mask.mask".to_string()
         }
+        "Clip<Mask>" => {
+            add(doc, "s_flame", flame);
+            let mask = NodeDoc::new("imaging.hsv_mask")
+                .param("layer1_enabled", ParamValue::Bool(false))
+                .param("layer2_enabled", ParamValue::Bool(true))
+                .param("layer3_enabled", ParamValue::Bool(true));
+            if add(doc, "s_clip_mask", mask) {
+                doc.connect("s_flame.clip", "s_clip_mask.image");
+            }
+            "s_clip_mask.mask".to_string()
+        }
         "Contours" => {
             let mask = supply(doc, &PortType::Mask, consumer, files)?;
             if add(doc, "s_contours", NodeDoc::new("imaging.contours")) {

@@ -74,6 +74,16 @@ pub struct CookSettings {
     pub cache_dir: Option<std::path::PathBuf>,
 }
 
+/// Something a node noticed that does not stop the cook but may make its result not what the
+/// user wants ("the flame touches the bottom edge in 87 % of frames"), with what to change.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning {
+    /// The node that reported it.
+    pub node: Option<Arc<str>>,
+    /// What it noticed.
+    pub message: String,
+}
+
 /// Context of a cook: cancellation, progress, render settings and the node being cooked.
 #[derive(Clone, Default)]
 pub struct CookCtx {
@@ -82,6 +92,7 @@ pub struct CookCtx {
     settings: Arc<CookSettings>,
     node: Option<Arc<str>>,
     written: Arc<std::sync::Mutex<Vec<std::path::PathBuf>>>,
+    warnings: Arc<std::sync::Mutex<Vec<Warning>>>,
 }
 
 impl CookCtx {
@@ -127,6 +138,21 @@ impl CookCtx {
     pub fn written(&self) -> Vec<std::path::PathBuf> {
         self.written.lock().map(|w| w.clone()).unwrap_or_default()
     }
+    /// Reports a warning for the node being cooked; the same warning of the same node is kept
+    /// once, however many times it is reported (a per-frame node may report it every frame).
+    pub fn warn(&self, message: impl Into<String>) {
+        let warning = Warning { node: self.node.clone(), message: message.into() };
+        if let Ok(mut w) = self.warnings.lock()
+            && !w.contains(&warning)
+        {
+            w.push(warning);
+        }
+    }
+    /// The warnings of cooks with this context (and contexts made from it), in the order they
+    /// were first reported. Nodes served from a cache do not report theirs again.
+    pub fn warnings(&self) -> Vec<Warning> {
+        self.warnings.lock().map(|w| w.clone()).unwrap_or_default()
+    }
     /// The id of the node being cooked, if any.
     pub fn node_id(&self) -> Option<&str> {
         self.node.as_deref()
@@ -146,5 +172,23 @@ impl CookCtx {
     /// ends pulling a clip's frames report them for the node that made the clip).
     pub fn for_node(&self, id: &Arc<str>) -> CookCtx {
         CookCtx { node: Some(id.clone()), ..self.clone() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn warnings_name_their_node_and_are_kept_once() {
+        let ctx = CookCtx::new();
+        let crop = ctx.for_node(&Arc::from("crop"));
+        crop.warn("the flame touches the bottom edge");
+        crop.warn("the flame touches the bottom edge");
+        ctx.for_node(&Arc::from("mask")).warn("the flame touches the bottom edge");
+        let w = ctx.warnings();
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert_eq!(w[0].node.as_deref(), Some("crop"));
+        assert_eq!(w[1].node.as_deref(), Some("mask"));
     }
 }

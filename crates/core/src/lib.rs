@@ -23,7 +23,7 @@ pub use value::{clip, frame_cache};
 
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
-pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progress, ProgressFn};
+pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progress, ProgressFn, Warning};
 pub use frame_cache::{CacheStats, FrameCache};
 pub use frames::FrameSet;
 pub use graph::{BuildOptions, Graph};

@@ -30,6 +30,8 @@ pub struct Graph {
     built: Mutex<Option<Arc<RustGraph>>>,
     eval: Mutex<Evaluator>,
     last_cooked: Mutex<Vec<String>>,
+    /// `(node, message)` of every warning of the last cook or render.
+    last_warnings: Mutex<Vec<(String, String)>>,
 }
 
 /// What a cook produced before it is handed to Python.
@@ -49,7 +51,15 @@ fn endpoint<'a>(py: Python<'_>, text: &'a str) -> PyResult<(&'a str, &'a str)> {
 
 impl Graph {
     fn with_doc(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Graph {
-        Graph { doc, file, dir, built: Mutex::new(None), eval: Mutex::new(Evaluator::new()), last_cooked: Mutex::new(Vec::new()) }
+        Graph {
+            doc,
+            file,
+            dir,
+            built: Mutex::new(None),
+            eval: Mutex::new(Evaluator::new()),
+            last_cooked: Mutex::new(Vec::new()),
+            last_warnings: Mutex::new(Vec::new()),
+        }
     }
 
     fn build_with(&self, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
@@ -202,6 +212,14 @@ impl Graph {
         lock(&self.last_cooked).clone()
     }
 
+    /// `(node, message)` of every warning nodes reported in the last `cook` or `render` — what
+    /// a node noticed that did not stop it ("the flame touches the bottom edge in 90 % of
+    /// frames: …"). Nodes served from the cache do not report theirs again.
+    #[getter]
+    fn last_warnings(&self) -> Vec<(String, String)> {
+        lock(&self.last_warnings).clone()
+    }
+
     /// Adds node `id` of type `type` (see `pyrograph.nodes()`; `graph.include` for a preset)
     /// with parameters given as keywords.
     #[pyo3(signature = (id, r#type, **params))]
@@ -315,12 +333,13 @@ impl Graph {
             return Err(graph_error(py, Some(id), Some(port), &msg));
         }
         let wanted = frames.map(frame_selection).transpose()?;
-        let (eval, last_cooked) = (&self.eval, &self.last_cooked);
+        let (eval, last_cooked, last_warnings) = (&self.eval, &self.last_cooked, &self.last_warnings);
         let cooked = crate::run::run(py, CookSettings::default(), progress, |ctx| {
             let mut ev = lock(eval);
             let result = ev.cook(&graph, &[id], ctx);
             // Kept even when the caller raises (Ctrl-C): what did cook is cached from now on.
             *lock(last_cooked) = ev.take_log();
+            *lock(last_warnings) = warning_pairs(ctx);
             drop(ev);
             let value = result.and_then(|r| r.output(&graph, id, port));
             value.and_then(|v| match (&wanted, v) {
@@ -376,12 +395,13 @@ impl Graph {
             }
         };
         let settings = CookSettings { frames, skip_existing, overwrite, cache_dir: None };
-        let (eval, last_cooked) = (&self.eval, &self.last_cooked);
+        let (eval, last_cooked, last_warnings) = (&self.eval, &self.last_cooked, &self.last_warnings);
         let (result, written) = crate::run::run(py, settings, progress, |ctx| {
             let refs: Vec<&str> = targets.iter().map(String::as_str).collect();
             let mut ev = lock(eval);
             let result = ev.cook(&graph, &refs, ctx);
             *lock(last_cooked) = ev.take_log();
+            *lock(last_warnings) = warning_pairs(ctx);
             (result, ctx.written())
         })?;
         let result = result.map_err(|e| graph_error(py, None, None, &e.to_string()))?;
@@ -420,4 +440,9 @@ fn check_param(py: Python<'_>, id: &str, ty: &str, name: &str) -> PyResult<()> {
     let names: Vec<&str> = desc.inputs.iter().map(|p| p.name.as_str()).collect();
     let msg = format!("node '{id}' ({ty}) has no parameter '{name}' (it has: {})", names.join(", "));
     Err(graph_error(py, Some(id), Some(name), &msg))
+}
+
+/// `(node, message)` of the warnings reported so far in the cook with `ctx`.
+fn warning_pairs(ctx: &pyrograph::core::CookCtx) -> Vec<(String, String)> {
+    ctx.warnings().into_iter().map(|w| (w.node.as_deref().unwrap_or("").to_string(), w.message)).collect()
 }

@@ -298,3 +298,25 @@ def test_values_of_every_kind():
     # Pixels carry the parameters set from Python.
     g.set("card.color", (0.0, 0.0, 1.0, 1.0))
     assert g.cook("card.image")[0, 0].tolist() == [0.0, 0.0, 1.0, 1.0]
+
+
+def test_warnings_of_the_last_cook_name_their_node(tmp_path):
+    """A flame cut by the bottom edge: auto_crop still frames it, and says so."""
+    for f in range(4):
+        img = np.zeros((48, 64, 4), dtype=np.uint8)
+        img[..., 3] = 255
+        img[..., :3] = (6, 3, 2)
+        img[10 + f :, 24:40, :3] = (255, 140, 25)
+        Image.fromarray(img, "RGBA").save(tmp_path / f"cut_{f:04d}.png")
+    g = pyrograph.Graph()
+    g.add_node("shots", "imaging.load_sequence", path=str(tmp_path / "cut_####.png"))
+    g.add_node("mask", "imaging.hsv_auto_mask", stride=1)
+    g.add_node("crop", "imaging.auto_crop")
+    g.connect("shots.clip", "mask.clip")
+    g.connect("shots.clip", "crop.clip")
+    g.connect("mask.mask", "crop.mask")
+    assert g.cook("crop.width") % 8 == 0
+    assert any(node == "crop" and "bottom edge in 100 % of frames" in message for node, message in g.last_warnings), g.last_warnings
+    # Served from the cache, the node does not cook, so it does not warn again.
+    g.cook("crop.width")
+    assert g.last_warnings == []

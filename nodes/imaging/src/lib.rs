@@ -2,6 +2,7 @@
 //! pre-processing chain (thesis ch. 3).
 #![deny(missing_docs)]
 
+pub mod auto_crop;
 pub mod basic;
 pub mod bloom;
 pub mod color;
@@ -22,6 +23,7 @@ use pyrograph_core::Registry;
 pub fn register(registry: &mut Registry) {
     io::register(registry);
     basic::register(registry);
+    auto_crop::register(registry);
     masks::register(registry);
     preprocess::register(registry);
     procedural::register(registry);

@@ -91,6 +91,9 @@ class Graph:
     @property
     def last_cooked(self) -> list[str]:
         """Node ids that actually cooked in the last cook or render (not served from the cache)."""
+    @property
+    def last_warnings(self) -> list[tuple[str, str]]:
+        """(node, message) of every warning of the last cook or render (cached nodes do not repeat theirs)."""
     def add_node(self, id: str, type: str, **params: Param) -> None:
         """Adds a node of a registered type (see `nodes()`), with parameters as keywords."""
     def remove_node(self, id: str) -> None: ...

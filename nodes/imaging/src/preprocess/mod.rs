@@ -7,6 +7,7 @@
 pub mod contours;
 pub mod hermite;
 pub mod hsv;
+pub mod hsv_auto;
 pub mod morphology;
 pub mod pose;
 
@@ -15,6 +16,7 @@ use pyrograph_core::{Cook, Registry};
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
     registry.add(hsv::HsvMask::node());
+    registry.add(hsv_auto::HsvAutoMask::node());
     registry.add(morphology::Morphology::node());
     registry.add(morphology::GaussianBlur::node());
     registry.add(contours::TraceContours::node());

@@ -1,0 +1,293 @@
+//! `imaging.auto_crop`: the flame framed automatically, so a clip pyrograph has never seen needs
+//! no hand-tuned crop rectangle.
+
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
+
+use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Registry, Value, port};
+
+use crate::basic::crop;
+
+/// Adds `imaging.auto_crop`.
+pub fn register(registry: &mut Registry) {
+    registry.add(AutoCrop::node());
+}
+
+pyrograph_core::choice! {
+    /// How `imaging.auto_crop` combines the per-frame boxes of the flame.
+    pub enum BoxCombine {
+        /// The smallest box holding the flame in every frame.
+        Union = "union",
+        /// Each edge at a percentile of the frames' edges: a stray flare in a few frames is left out.
+        Percentile = "percentile",
+    }
+}
+
+pyrograph_core::node! {
+    /// Crops a clip around its flame without a hand-set rectangle (Eigenfires thesis §3.1 and §4.2: footage
+    /// is cropped around the fire, centred on its fuel, to drop the static background). The box around the
+    /// flame mask of each frame is combined over the clip — their union, or each edge at a percentile of the
+    /// frames' edges — grown by a margin, optionally made square, its size rounded up to a multiple, and
+    /// kept inside the frame. Outputs the cropped clip and the box, so an artist can freeze it in
+    /// imaging.crop. Frames with an empty mask are left out of the box and listed in a warning, as is a flame
+    /// that touches an edge of the picture in a quarter of the frames or more (its base or tip outside it); a
+    /// mask empty in every frame is an error.
+    #[node("imaging.auto_crop", "Pre-processing", WholeClip)]
+    pub struct AutoCrop {
+        /// The clip to crop.
+        clip: ClipOf<Arc<Image>>,
+        /// The flame mask of each frame (imaging.hsv_mask), the size of the clip's frames.
+        mask: ClipOf<Arc<Mask>>,
+        /// Union of the boxes, or each edge at a percentile.
+        combine: BoxCombine = BoxCombine::Union,
+        /// Percentile mode: the share of frames (percent) whose flame edge the box reaches.
+        #[range(50.0, 100.0)]
+        percentile: f64 = 98.0,
+        /// Margin on every side, as a fraction of the box's larger side.
+        #[range(0.0, 10.0)]
+        margin: f64 = 0.1,
+        /// Make the box square (about its centre).
+        square: bool = false,
+        /// Round the box's width and height up to a multiple of this (1: exact).
+        #[range(1, 1024)]
+        multiple: u32 = 8,
+    }
+    pub struct AutoCropOut {
+        /// The cropped clip.
+        clip: ClipOf<Arc<Image>>,
+        /// Left edge of the box, in pixels.
+        x: u32,
+        /// Top edge of the box, in pixels.
+        y: u32,
+        /// Width of the box.
+        width: u32,
+        /// Height of the box.
+        height: u32,
+    }
+}
+
+/// A box `[left, top, right, bottom)` in pixels.
+type PixelBox = [u32; 4];
+
+/// The box around the set pixels of `mask`, `None` when it has none.
+pub fn mask_box(mask: &Mask) -> Option<PixelBox> {
+    let w = mask.width() as usize;
+    let (mut left, mut top, mut right, mut bottom) = (u32::MAX, u32::MAX, 0, 0);
+    for (i, _) in mask.data().iter().enumerate().filter(|(_, v)| **v != 0) {
+        let (x, y) = ((i % w) as u32, (i / w) as u32);
+        (left, top, right, bottom) = (left.min(x), top.min(y), right.max(x + 1), bottom.max(y + 1));
+    }
+    (left != u32::MAX).then_some([left, top, right, bottom])
+}
+
+/// The value at `fraction` (0..1) of sorted `v` (nearest rank).
+fn rank(v: &[u32], fraction: f64) -> u32 {
+    let i = ((v.len() - 1) as f64 * fraction.clamp(0.0, 1.0)).round() as usize;
+    v[i.min(v.len() - 1)]
+}
+
+/// Combines per-frame boxes (at least one) into one (see `imaging.auto_crop`).
+pub fn combine_boxes(boxes: &[PixelBox], combine: BoxCombine, percentile: f64) -> PixelBox {
+    let edge = |k: usize| {
+        let mut v: Vec<u32> = boxes.iter().map(|b| b[k]).collect();
+        v.sort_unstable();
+        v
+    };
+    let p = percentile / 100.0;
+    match combine {
+        BoxCombine::Union => {
+            let [l, t, r, b] = [0, 1, 2, 3].map(edge);
+            [l[0], t[0], r[r.len() - 1], b[b.len() - 1]]
+        }
+        // Left and top edges low, right and bottom edges high: the box reaches the flame's edge
+        // in `percentile` % of the frames on every side.
+        BoxCombine::Percentile => [rank(&edge(0), 1.0 - p), rank(&edge(1), 1.0 - p), rank(&edge(2), p), rank(&edge(3), p)],
+    }
+}
+
+/// Grows `b` by `margin` × its larger side, optionally squares it, rounds its size up to a
+/// multiple of `multiple`, and fits it inside a `width × height` frame (shifted in, and shrunk to
+/// the frame — to a multiple where the frame allows — when larger). Returns `(x, y, w, h)`.
+pub fn frame_box(b: PixelBox, margin: f64, square: bool, multiple: u32, width: u32, height: u32) -> (u32, u32, u32, u32) {
+    let (cx, cy) = (f64::from(b[0] + b[2]) / 2.0, f64::from(b[1] + b[3]) / 2.0);
+    let (mut w, mut h) = (f64::from(b[2] - b[0]), f64::from(b[3] - b[1]));
+    let grow = margin * w.max(h);
+    (w, h) = (w + 2.0 * grow, h + 2.0 * grow);
+    if square {
+        (w, h) = (w.max(h), w.max(h));
+    }
+    let m = f64::from(multiple.max(1));
+    let fit = |size: f64, frame: u32| {
+        let rounded = (size / m).ceil() * m;
+        if rounded <= f64::from(frame) {
+            rounded as u32
+        } else {
+            // The frame is smaller: the largest multiple inside it, or the whole frame.
+            let inside = (f64::from(frame) / m).floor() * m;
+            if inside >= 1.0 { inside as u32 } else { frame }
+        }
+    };
+    let (w, h) = (fit(w, width), fit(h, height));
+    let place =
+        |centre: f64, size: u32, frame: u32| (centre - f64::from(size) / 2.0).round().clamp(0.0, f64::from(frame - size)) as u32;
+    (place(cx, w, width), place(cy, h, height), w, h)
+}
+
+/// What the masks say about the footage that the user should know: frames without a flame, and
+/// a flame cut by an edge of the picture (its base below the frame, its tip above it).
+pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (width, height): (u32, u32)) -> Vec<String> {
+    let mut out = Vec::new();
+    if !empty.is_empty() {
+        let listed: Vec<String> = empty.iter().take(12).map(|f| f.to_string()).collect();
+        let more = if empty.len() > listed.len() { format!(" and {} more", empty.len() - listed.len()) } else { String::new() };
+        out.push(format!(
+            "the mask is empty in {} of {frames} frames ({}{more}): those frames have no flame in the box",
+            empty.len(),
+            listed.join(", ")
+        ));
+    }
+    let share = |f: &dyn Fn(&PixelBox) -> bool| boxes.iter().filter(|b| f(b)).count() as f64 / boxes.len().max(1) as f64;
+    let edges: [(&str, f64, &str); 4] = [
+        (
+            "bottom",
+            share(&|b| b[3] >= height),
+            "its base is outside the picture; crop lower or use a clip where the base is visible",
+        ),
+        ("top", share(&|b| b[1] == 0), "its tip is outside the picture; the flame's height is cut"),
+        ("left", share(&|b| b[0] == 0), "the flame is cut at the side"),
+        ("right", share(&|b| b[2] >= width), "the flame is cut at the side"),
+    ];
+    for (edge, s, what) in edges {
+        // A flame grazing an edge now and then is a flare; most of the time, a framing problem.
+        if s >= 0.25 {
+            out.push(format!("the flame touches the {edge} edge in {:.0} % of frames: {what}", 100.0 * s));
+        }
+    }
+    out
+}
+
+/// Frames of a clip, cropped to one box.
+struct CropSource {
+    clip: Clip,
+    rect: (u32, u32, u32, u32),
+}
+
+impl FrameSource for CropSource {
+    fn len(&self) -> usize {
+        self.clip.len()
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        let Value::Image(img) = self.clip.get(index, ctx)? else {
+            return Err(NodeError::port(port!(AutoCrop, clip), format!("frame {index} is not an image")));
+        };
+        let (x, y, w, h) = self.rect;
+        if x + w > img.width() || y + h > img.height() {
+            return Err(NodeError::port(
+                port!(AutoCrop, clip),
+                format!(
+                    "frame {index} is {}x{}, smaller than the {w}x{h} box at ({x}, {y}) found in the masks: the mask and the clip must be the same size",
+                    img.width(),
+                    img.height()
+                ),
+            ));
+        }
+        Ok(Value::Image(Arc::new(crop(&img, x, y, w, h)?)))
+    }
+}
+
+impl Cook for AutoCrop {
+    fn cook(self, ctx: &CookCtx) -> Result<AutoCropOut, NodeError> {
+        let masks: &Clip = &self.mask;
+        let mut boxes = Vec::new();
+        let mut empty = Vec::new();
+        let mut size = None;
+        for i in 0..masks.len() {
+            ctx.check_cancel()?;
+            let Value::Mask(mask) = masks.get(i, ctx)? else {
+                return Err(NodeError::port(port!(AutoCrop, mask), format!("frame {i} is not a mask")));
+            };
+            size.get_or_insert((mask.width(), mask.height()));
+            match mask_box(&mask) {
+                Some(b) => boxes.push(b),
+                None => empty.push(i),
+            }
+        }
+        let Some((width, height)) = size else {
+            return Err(NodeError::port(port!(AutoCrop, mask), "the mask clip has no frames"));
+        };
+        if boxes.is_empty() {
+            return Err(NodeError::port(
+                port!(AutoCrop, mask),
+                format!("the mask is empty in all {} frames: no flame to frame (check the HSV mask's thresholds)", masks.len()),
+            ));
+        }
+        for warning in framing_warnings(&boxes, &empty, masks.len(), (width, height)) {
+            ctx.warn(warning);
+        }
+        let b = combine_boxes(&boxes, self.combine, self.percentile);
+        let rect = frame_box(b, self.margin, self.square, self.multiple, width, height);
+        let clip: &Clip = &self.clip;
+        let mut h = Fingerprinter::new();
+        ("imaging.auto_crop", clip.fingerprint(), rect).hash(&mut h);
+        let cropped =
+            Clip::new(clip.element().clone(), clip.fps(), h.finish(), Arc::new(CropSource { clip: clip.clone(), rect }));
+        Ok(AutoCropOut { clip: ClipOf::new(cropped), x: rect.0, y: rect.1, width: rect.2, height: rect.3 })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mask_with(w: u32, h: u32, rect: PixelBox) -> Mask {
+        let data = (0..w * h)
+            .map(|i| u8::from((rect[0]..rect[2]).contains(&(i % w)) && (rect[1]..rect[3]).contains(&(i / w))))
+            .collect();
+        Mask::from_vec(w, h, data).unwrap()
+    }
+
+    #[test]
+    fn a_flame_cut_by_the_bottom_edge_and_empty_frames_are_reported() {
+        let cut: Vec<PixelBox> = (0..10).map(|i| [10, 20, 30, if i < 9 { 60 } else { 50 }]).collect();
+        let w = framing_warnings(&cut, &[3, 17], 12, (80, 60));
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w[0].contains("empty in 2 of 12 frames (3, 17)"), "{}", w[0]);
+        assert!(w[1].contains("bottom edge in 90 % of frames") && w[1].contains("base is outside"), "{}", w[1]);
+        let whole: Vec<PixelBox> = vec![[10, 5, 30, 50]; 10];
+        assert!(framing_warnings(&whole, &[], 10, (80, 60)).is_empty());
+    }
+
+    #[test]
+    fn the_box_of_a_mask_is_its_set_pixels() {
+        assert_eq!(mask_box(&mask_with(40, 30, [5, 7, 12, 20])), Some([5, 7, 12, 20]));
+        assert_eq!(mask_box(&Mask::new(8, 8)), None);
+    }
+
+    #[test]
+    fn union_holds_every_box_and_a_percentile_leaves_out_a_stray_flare() {
+        let mut boxes = vec![[10, 10, 20, 40]; 99];
+        boxes.push([0, 0, 60, 45]);
+        assert_eq!(combine_boxes(&boxes, BoxCombine::Union, 98.0), [0, 0, 60, 45]);
+        assert_eq!(combine_boxes(&boxes, BoxCombine::Percentile, 98.0), [10, 10, 20, 40]);
+    }
+
+    #[test]
+    fn the_frame_box_has_its_margin_multiple_and_stays_inside_the_frame() {
+        // 10 × 30 box, margin 0.1 × 30 = 3 a side: 16 × 36, up to multiples of 8: 16 × 40.
+        let (x, y, w, h) = frame_box([20, 10, 30, 40], 0.1, false, 8, 100, 100);
+        assert_eq!((w, h), (16, 40));
+        assert_eq!((x, y), (17, 5), "centred on (25, 25)");
+        // Square, at the frame's corner: shifted inside.
+        let (x, y, w, h) = frame_box([0, 0, 10, 30], 0.0, true, 8, 100, 100);
+        assert_eq!((x, y, w, h), (0, 0, 32, 32));
+        // Larger than the frame: the largest multiple inside it.
+        let (x, y, w, h) = frame_box([0, 0, 90, 60], 0.5, false, 8, 100, 70);
+        assert_eq!((x, y, w, h), (0, 0, 96, 64));
+        for (b, m) in [([3, 4, 9, 11], 1), ([50, 60, 99, 99], 8), ([0, 0, 1, 1], 16)] {
+            let (x, y, w, h) = frame_box(b, 0.2, true, m, 100, 100);
+            assert!(x + w <= 100 && y + h <= 100 && w > 0 && h > 0, "{b:?}: {x} {y} {w} {h}");
+            assert!(x <= b[0] && y <= b[1] && x + w >= b[2] && y + h >= b[3], "{b:?} inside ({x}, {y}, {w}, {h})");
+        }
+    }
+}

@@ -1,0 +1,222 @@
+//! `imaging.hsv_auto_mask`: the HSV flame mask of the Eigenfires thesis (§3.2) with its value and
+//! saturation thresholds chosen per clip, so new footage needs no hand-tuned layers.
+
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
+
+use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, PortType, Value, port};
+
+use super::hsv::{Blend, HsvLayer, HsvRange, hsv_mask, rgb_to_hsv};
+
+/// The threshold of Otsu's method on a 256-bin histogram: the level `t` that maximizes the
+/// between-class variance of `< t` against `≥ t`; `None` for an empty histogram or one level.
+///
+/// Written here rather than taken from imageproc: its `otsu_level` takes an image, and this
+/// histogram is of the pixels of a hue band gathered over many frames.
+pub fn otsu(hist: &[u64; 256]) -> Option<u8> {
+    let total: u64 = hist.iter().sum();
+    let sum: f64 = hist.iter().enumerate().map(|(i, &n)| i as f64 * n as f64).sum();
+    let (mut below, mut below_sum) = (0u64, 0.0f64);
+    let mut best: Option<(f64, u8)> = None;
+    for t in 1..256 {
+        below += hist[t - 1];
+        below_sum += (t - 1) as f64 * hist[t - 1] as f64;
+        let above = total - below;
+        if below == 0 || above == 0 {
+            continue;
+        }
+        let (m0, m1) = (below_sum / below as f64, (sum - below_sum) / above as f64);
+        let between = below as f64 * above as f64 * (m0 - m1).powi(2);
+        if best.is_none_or(|(b, _)| between > b) {
+            best = Some((between, t as u8));
+        }
+    }
+    best.map(|(_, t)| t)
+}
+
+/// Value and saturation thresholds for the flame pixels of `frames` (RGBA): Otsu's threshold on
+/// the value of the pixels whose hue lies in `hues` (wrapping when min > max), then Otsu's on the
+/// saturation of those at or above it, never below `s_floor`. `None` when no pixel has a hue in
+/// the band.
+pub fn auto_thresholds<'a>(frames: impl Iterator<Item = &'a Image>, hues: (f32, f32), s_floor: f32) -> Option<(f32, f32)> {
+    let band = HsvRange { h_min: hues.0, h_max: hues.1, s_min: 0.0, s_max: 255.0, v_min: 0.0, v_max: 255.0 };
+    // Saturation histograms per value level, so the second pass needs no second read.
+    let mut v_hist = [0u64; 256];
+    let mut s_by_v = vec![[0u64; 256]; 256];
+    for img in frames {
+        for px in img.data().chunks_exact(4) {
+            let hsv = rgb_to_hsv(px[0], px[1], px[2]);
+            if hsv[1] > 0.0 && band.contains(hsv) {
+                v_hist[hsv[2] as usize] += 1;
+                s_by_v[hsv[2] as usize][hsv[1] as usize] += 1;
+            }
+        }
+    }
+    let v_min = otsu(&v_hist)?;
+    let mut s_hist = [0u64; 256];
+    for row in &s_by_v[v_min as usize..] {
+        for (a, b) in s_hist.iter_mut().zip(row) {
+            *a += b;
+        }
+    }
+    let s_min = otsu(&s_hist).map_or(s_floor, |s| f32::from(s).max(s_floor));
+    Some((f32::from(v_min), s_min))
+}
+
+pyrograph_core::node! {
+    /// The HSV flame mask of the Eigenfires thesis (§3.2, eq. 3–4) with thresholds chosen per clip: Otsu's
+    /// method on the value of the pixels whose hue lies in the flame's band (sampled every `stride` frames)
+    /// splits flame from background, then Otsu's on their saturation drops pale glare (glowing wax and glass
+    /// are bright but unsaturated), never below `s_min_floor`. Every frame is masked with one layer of that
+    /// band and, when `blue_base` is on, one of the blue base (200–260°), both at the chosen thresholds.
+    /// The chosen thresholds are outputs, so an artist can freeze them in imaging.hsv_mask.
+    #[node("imaging.hsv_auto_mask", "Pre-processing", WholeClip)]
+    pub struct HsvAutoMask {
+        /// RGBA frames to segment.
+        clip: ClipOf<Arc<Image>>,
+        /// Lowest hue of the flame band, in degrees (above hue_max wraps past red).
+        #[range(0.0, 360.0)]
+        hue_min: f32 = 340.0,
+        /// Highest hue of the flame band, in degrees.
+        #[range(0.0, 360.0)]
+        hue_max: f32 = 70.0,
+        /// Also keep the flame's blue base (hues 200–260) at the chosen thresholds.
+        blue_base: bool = true,
+        /// Lowest saturation threshold the method may choose (0–255).
+        #[range(0.0, 255.0)]
+        s_min_floor: f32 = 40.0,
+        /// Frames sampled for the thresholds: every stride-th.
+        #[range(1, 100_000)]
+        stride: usize = 5,
+    }
+    pub struct HsvAutoMaskOut {
+        /// 255 where the flame is, per frame.
+        mask: ClipOf<Arc<Mask>>,
+        /// The value threshold chosen (0–255): imaging.hsv_mask's v_min.
+        value_threshold: f32,
+        /// The saturation threshold chosen (0–255): imaging.hsv_mask's s_min.
+        saturation_threshold: f32,
+    }
+}
+
+/// Masks every frame of a clip with fixed layers.
+struct MaskSource {
+    clip: Clip,
+    layers: Vec<HsvLayer>,
+}
+
+impl FrameSource for MaskSource {
+    fn len(&self) -> usize {
+        self.clip.len()
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        let Value::Image(img) = self.clip.get(index, ctx)? else {
+            return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {index} is not an image")));
+        };
+        Ok(Value::Mask(Arc::new(hsv_mask(&img, &self.layers)?)))
+    }
+}
+
+impl Cook for HsvAutoMask {
+    fn cook(self, ctx: &CookCtx) -> Result<HsvAutoMaskOut, NodeError> {
+        let clip: &Clip = &self.clip;
+        let mut sampled = Vec::new();
+        for i in (0..clip.len()).step_by(self.stride.max(1)) {
+            ctx.check_cancel()?;
+            let Value::Image(img) = clip.get(i, ctx)? else {
+                return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {i} is not an image")));
+            };
+            if img.channels() != Channels::Rgba {
+                return Err(NodeError::port(port!(HsvAutoMask, clip), "needs RGBA frames: hue is undefined for gray ones"));
+            }
+            sampled.push(img);
+        }
+        let (v_min, s_min) = auto_thresholds(sampled.iter().map(|i| i.as_ref()), (self.hue_min, self.hue_max), self.s_min_floor)
+            .ok_or_else(|| {
+                NodeError::port(
+                    port!(HsvAutoMask, hue_min),
+                    format!(
+                        "no pixel of the {} sampled frames has a hue in {}–{}°: widen the band",
+                        sampled.len(),
+                        self.hue_min,
+                        self.hue_max
+                    ),
+                )
+            })?;
+        drop(sampled);
+        let layer = |h_min, h_max| HsvLayer {
+            range: HsvRange { h_min, h_max, s_min, s_max: 255.0, v_min, v_max: 255.0 },
+            blend: Blend::Add,
+        };
+        let mut layers = vec![layer(self.hue_min, self.hue_max)];
+        if self.blue_base {
+            layers.push(layer(200.0, 260.0));
+        }
+        let mut h = Fingerprinter::new();
+        ("imaging.hsv_auto_mask", clip.fingerprint(), format!("{layers:?}")).hash(&mut h);
+        let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(MaskSource { clip: clip.clone(), layers }));
+        Ok(HsvAutoMaskOut { mask: ClipOf::new(masks), value_threshold: v_min, saturation_threshold: s_min })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn otsu_splits_two_clusters_between_them() {
+        let mut hist = [0u64; 256];
+        hist[20] = 1000;
+        hist[21] = 500;
+        hist[200] = 300;
+        hist[210] = 200;
+        let t = otsu(&hist).unwrap();
+        assert!((22..=200).contains(&t), "{t}");
+        assert_eq!(otsu(&[0; 256]), None);
+        let mut one = [0u64; 256];
+        one[7] = 9;
+        assert_eq!(otsu(&one), None);
+    }
+
+    /// A frame of dim reddish noise (background lit by the flame), a bright saturated orange flame
+    /// and a bright pale pink glare (glowing wax).
+    fn frame(brightness: f32) -> Image {
+        let (w, h) = (60u32, 40u32);
+        let mut data = Vec::with_capacity((w * h * 4) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let rgb = if (20..35).contains(&x) && (5..30).contains(&y) {
+                    [1.0, 0.55, 0.1]
+                } else if (45..55).contains(&x) && (10..20).contains(&y) {
+                    [1.0, 0.85, 0.85]
+                } else {
+                    let n = ((x * 7 + y * 13) % 10) as f32 / 100.0;
+                    [0.06 + n, 0.03 + n / 2.0, 0.02]
+                };
+                data.extend(rgb.map(|c| c * brightness));
+                data.push(1.0);
+            }
+        }
+        Image::from_vec(w, h, Channels::Rgba, data).unwrap()
+    }
+
+    #[test]
+    fn thresholds_keep_the_flame_and_drop_the_background_and_the_pale_glare_at_any_exposure() {
+        for brightness in [1.0, 0.25] {
+            let img = frame(brightness);
+            let (v, s) = auto_thresholds(std::iter::once(&img), (340.0, 70.0), 40.0).unwrap();
+            let layer = HsvLayer {
+                range: HsvRange { h_min: 340.0, h_max: 70.0, s_min: s, s_max: 255.0, v_min: v, v_max: 255.0 },
+                blend: Blend::Add,
+            };
+            let mask = hsv_mask(&img, &[layer]).unwrap();
+            let inside = |x: u32, y: u32| mask.get(x, y);
+            assert!(inside(25, 15) && inside(34, 29), "{brightness}: the flame is kept (v {v}, s {s})");
+            assert!(!inside(2, 2) && !inside(58, 38), "{brightness}: the background is dropped (v {v}, s {s})");
+            assert!(!inside(50, 15), "{brightness}: the pale glare is dropped (v {v}, s {s})");
+        }
+        let black = Image::new(8, 8, Channels::Rgba);
+        assert_eq!(auto_thresholds(std::iter::once(&black), (340.0, 70.0), 40.0), None);
+    }
+}

@@ -18,24 +18,21 @@ fn footage() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
 }
 
-/// The training weights of the tealight database, as the example graph builds it.
-fn tealight_weights() -> Weights {
+/// Eigenfires weights of footage `source` (a video or frame folder) after the gray-producing
+/// node `pre` (its input `pre_in`, output `pre_out`), at 150×150.
+fn pca_weights(source: &std::path::Path, pre: NodeDoc, (pre_in, pre_out): (&str, &str)) -> Weights {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut doc = GraphDoc::new();
-    let video = footage().join("tealight-candle/candle.mp4");
-    doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
-    doc.add_node(
-        "pre",
-        NodeDoc::new("graph.include").param("path", ParamValue::String("presets/preprocess-tealight.ron".into())),
-    );
+    doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(source.display().to_string())));
+    doc.add_node("pre", pre);
     doc.add_node(
         "small",
         NodeDoc::new("imaging.resize").param("width", ParamValue::Int(150)).param("height", ParamValue::Int(150)),
     );
     doc.add_node("pca", NodeDoc::new("eigen.eigenfires"));
     doc.edges = vec![
-        ("video.clip".into(), "pre.image".into()),
-        ("pre.gray".into(), "small.image".into()),
+        ("video.clip".into(), format!("pre.{pre_in}")),
+        (format!("pre.{pre_out}"), "small.image".into()),
         ("small.image".into(), "pca.clip1".into()),
     ];
     let g = Graph::build(&doc, &pyrograph::registry(), &root.join("graphs"), &BuildOptions::default())
@@ -47,30 +44,15 @@ fn tealight_weights() -> Weights {
     }
 }
 
-/// The Eigenfires weights of the candle clip: gray frames at 150×150, as the tea-light's.
+/// The training weights of the tealight database, as the example graph builds it.
+fn tealight_weights() -> Weights {
+    let pre = NodeDoc::new("graph.include").param("path", ParamValue::String("presets/preprocess-tealight.ron".into()));
+    pca_weights(&footage().join("tealight-candle/candle.mp4"), pre, ("image", "gray"))
+}
+
+/// The Eigenfires weights of the candle clip: its frames in gray, at 150×150 like the tea-light's.
 fn candle_weights() -> Weights {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut doc = GraphDoc::new();
-    let frames = footage().join("candle-black/frames");
-    doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(frames.display().to_string())));
-    doc.add_node("gray", NodeDoc::new("imaging.to_gray"));
-    doc.add_node(
-        "small",
-        NodeDoc::new("imaging.resize").param("width", ParamValue::Int(150)).param("height", ParamValue::Int(150)),
-    );
-    doc.add_node("pca", NodeDoc::new("eigen.eigenfires"));
-    doc.edges = vec![
-        ("video.clip".into(), "gray.image".into()),
-        ("gray.image".into(), "small.image".into()),
-        ("small.image".into(), "pca.clip1".into()),
-    ];
-    let g = Graph::build(&doc, &pyrograph::registry(), &root.join("graphs"), &BuildOptions::default())
-        .unwrap_or_else(|d| panic!("{d}"));
-    let out = Evaluator::new().output(&g, "pca.weights", &CookCtx::new()).unwrap();
-    match out.downcast::<Weights>() {
-        Some(w) => w.as_ref().clone(),
-        None => panic!("expected weights, got {}", out.type_name()),
-    }
+    pca_weights(&footage().join("candle-black/frames"), NodeDoc::new("imaging.to_gray"), ("image", "image"))
 }
 
 fn row(w: &Weights, f: usize) -> Vec<f32> {

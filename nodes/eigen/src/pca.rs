@@ -49,8 +49,8 @@ const LIFT_BAND_ROWS: usize = 1024;
 /// task multiplies on its own. At the thesis size (274,700 × 2,197 times 2,197 × 1,100) this ran
 /// 1.2–1.4× faster than handing the whole product to faer's parallel matmul, which splits the
 /// work inside each block instead; every band reads its slice of `a` once and writes its rows
-/// of `u` once.
-fn lift(u: MatMut<'_, f32>, a: MatRef<'_, f32>, v: MatRef<'_, f32>) {
+/// of `u` once. The same holds for reconstruction's `images += basis · weights`.
+fn lift(u: MatMut<'_, f32>, accum: Accum, a: MatRef<'_, f32>, v: MatRef<'_, f32>) {
     let mut bands = Vec::with_capacity(u.nrows().div_ceil(LIFT_BAND_ROWS));
     let mut rest = u;
     let mut r0 = 0;
@@ -63,7 +63,7 @@ fn lift(u: MatMut<'_, f32>, a: MatRef<'_, f32>, v: MatRef<'_, f32>) {
     }
     bands.into_par_iter().for_each(|(r0, band)| {
         let rows = band.nrows();
-        matmul(band, Accum::Replace, a.subrows(r0, rows), v, 1.0, Par::Seq);
+        matmul(band, accum, a.subrows(r0, rows), v, 1.0, Par::Seq);
     });
 }
 
@@ -145,7 +145,7 @@ pub fn train(
     // Eq. 17: eigenfire_l = Σ_n V_ln Φ_n, normalised (eq. 14).
     let mut eigenvectors = vec![0.0_f32; n * dec.e];
     if dec.e > 0 {
-        lift(MatMut::from_column_major_slice_mut(&mut eigenvectors, n, dec.e), a, dec.v_scaled.as_ref());
+        lift(MatMut::from_column_major_slice_mut(&mut eigenvectors, n, dec.e), Accum::Replace, a, dec.v_scaled.as_ref());
     }
     release_in_background(frames);
     finish(width, height, mean, eigenvectors, &dec, sources)
@@ -305,7 +305,7 @@ pub fn reconstruct(basis: &Basis, weights: &Weights, e: usize) -> Result<Vec<f32
         let u = MatRef::from_column_major_slice(&basis.eigenvectors[..n * e], n, e);
         let w = MatRef::from_column_major_slice(&weights.data, weights.components, f).subrows(0, e);
         let dst = MatMut::from_column_major_slice_mut(&mut out, n, f);
-        matmul(dst, Accum::Add, u, w, 1.0, par());
+        lift(dst, Accum::Add, u, w);
     }
     Ok(out)
 }
@@ -665,7 +665,7 @@ pub(crate) mod tests {
         let a = MatRef::from_column_major_slice(&a_data, n, m);
         let v = MatRef::from_column_major_slice(&v_data, m, e);
         let mut banded = vec![f32::NAN; n * e];
-        lift(MatMut::from_column_major_slice_mut(&mut banded, n, e), a, v);
+        lift(MatMut::from_column_major_slice_mut(&mut banded, n, e), Accum::Replace, a, v);
         let mut whole = vec![0.0_f32; n * e];
         matmul(MatMut::from_column_major_slice_mut(&mut whole, n, e), Accum::Replace, a, v, 1.0, Par::Seq);
         for (i, (x, y)) in banded.iter().zip(&whole).enumerate() {

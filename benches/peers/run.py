@@ -1,0 +1,434 @@
+"""The peer harness (issue 25): every contested workload run by pyrograph and by its peer on the same
+input files, producing the same outputs, alternating pyrograph / peer for --rounds rounds in one sitting.
+Each round checks that the outputs agree (mask IoU, largest difference, same End Growing path, ...) and
+stops the sitting if they do not; the report gives each row's per-round ratios (pyrograph / peer, < 1 is
+faster) and their median, the thread counts and, for whole processes, peak RSS.
+
+    cargo build --release --example kernels && cargo build --release
+    ../shared/peers/setup.sh                      # the peers' venv, /tmp/peers-venv
+    /tmp/peers-venv/bin/python benches/peers/run.py [--rounds 5] [--only bloom,endgrow] [--work DIR]
+
+Kernel rows time the kernel inside one process on each side (examples/kernels, benches/peers/kernels.py:
+`--warmup` untimed runs, then `--reps` timed, the round's value is their median); whole-process rows
+(`e2e`) time files in to files out with /usr/bin/time. Inputs are made once in --work from the shared
+footage (PYROGRAPH_FOOTAGE, else ../shared/footage) or from seeded numpy. Writes --work/report.md (the
+table) and --work/results.jsonl (every run).
+"""
+import argparse
+import datetime
+import json
+import os
+import platform
+import shutil
+import statistics as st
+import subprocess
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.abspath(os.path.join(HERE, "../.."))
+PEERS = os.path.abspath(os.environ.get("PYROGRAPH_PEERS") or os.path.join(REPO, "../shared/peers"))
+FOOTAGE = os.path.abspath(os.environ.get("PYROGRAPH_FOOTAGE") or os.path.join(REPO, "../shared/footage"))
+KERNELS = os.path.join(REPO, "target/release/examples/kernels")
+CLI = os.path.join(REPO, "target/release/pyrograph")
+PY = sys.executable
+sys.path.insert(0, PEERS)
+
+
+class Disagree(Exception):
+    """The two sides' outputs differ beyond the row's tolerance."""
+
+
+def sh(cmd, env=None, cwd=None):
+    r = subprocess.run(cmd, env={**os.environ, **(env or {})}, cwd=cwd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr[-2000:]}")
+    return r
+
+
+def threads_env(n):
+    """Thread counts for both sides: rayon (pyrograph), OpenBLAS / OpenMP (numpy, OpenCV)."""
+    return {"RAYON_NUM_THREADS": str(n), "OPENBLAS_NUM_THREADS": str(n), "OMP_NUM_THREADS": str(n)}
+
+
+def kernel(cmd, env):
+    """Runs a kernel process; its JSON line."""
+    out = sh(cmd, env).stdout.strip().splitlines()
+    return json.loads(out[-1])
+
+
+def process(cmd, env, cwd=None):
+    """Runs a whole process under /usr/bin/time: (wall seconds, peak RSS MiB)."""
+    r = sh(["/usr/bin/time", "-f", "%e %M"] + cmd, env, cwd)
+    wall, rss = r.stderr.strip().splitlines()[-1].split()
+    return {"median_s": float(wall), "peak_rss_mib": int(rss) / 1024}
+
+
+# --- inputs ---------------------------------------------------------------------------------------
+
+def ffmpeg(args):
+    sh(["ffmpeg", "-v", "error", "-nostdin", "-y"] + args)
+
+
+def once(path, make):
+    """Makes `path` with make(tmp) unless it exists (atomically, so an interrupted run leaves nothing)."""
+    if not os.path.exists(path):
+        tmp = path + ".part"
+        shutil.rmtree(tmp, ignore_errors=True)
+        make(tmp)
+        os.replace(tmp, path)
+    return path
+
+
+def save_npy(tmp, arr):
+    with open(tmp, "wb") as f:
+        np.save(f, arr)
+
+
+def inputs(work):
+    candle = os.path.join(FOOTAGE, "candle-black/candle_flame.mp4")
+    tealight = os.path.join(FOOTAGE, "tealight-candle/candle.mp4")
+    for f in (candle, tealight):
+        if not os.path.exists(f):
+            raise SystemExit(f"no footage at {f}: set PYROGRAPH_FOOTAGE")
+    i = {"candle_frames": os.path.join(FOOTAGE, "candle-black/frames"), "tealight_video": tealight}
+
+    def frames_1080p(tmp):
+        os.makedirs(tmp)
+        ffmpeg(["-stream_loop", "-1", "-i", candle, "-an", "-vf", "scale=1920:1080:flags=bicubic",
+                "-frames:v", "266", "-start_number", "0", os.path.join(tmp, "f_%04d.png")])
+    i["frames_1080p"] = once(os.path.join(work, "candle_1080p_266"), frames_1080p)
+
+    def bloom_frame(tmp):
+        import cv2
+        png = tmp + ".png"
+        ffmpeg(["-i", candle, "-vf", r"select=eq(n\,60),scale=1280:720:flags=bicubic", "-frames:v", "1", png])
+        rgb = cv2.cvtColor(cv2.imread(png, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB).astype(np.float32) / 255
+        os.remove(png)
+        save_npy(tmp, rgb)
+    i["bloom_frame"] = once(os.path.join(work, "candle_frame60_1280x720.npy"), bloom_frame)
+
+    def train_frames(tmp):
+        r = subprocess.run(["ffmpeg", "-v", "error", "-nostdin", "-i", tealight, "-vf",
+                            "crop=294:480,scale=205:335:flags=area,format=gray", "-frames:v", "500", "-f", "rawvideo", "-"],
+                           capture_output=True, check=True)
+        save_npy(tmp, np.frombuffer(r.stdout, np.uint8).reshape(-1, 335, 205).astype(np.float32) / 255)
+    i["train_frames"] = once(os.path.join(work, "tealight_500x335x205.npy"), train_frames)
+
+    def weights(tmp):
+        from knn_transition import synthetic
+        save_npy(tmp, synthetic(2197, 1100, 0))
+    i["weights"] = once(os.path.join(work, "walk_2197x1100.npy"), weights)
+
+    rng = np.random.default_rng(1)
+    p, e, b = 410 * 670, 1100, 64
+    i["mean"] = once(os.path.join(work, "recon_mean.npy"), lambda t: save_npy(t, rng.random(p, dtype=np.float32)))
+    i["basis"] = once(os.path.join(work, "recon_basis_1100x274700.npy"),
+                      lambda t: save_npy(t, rng.standard_normal((e, p), dtype=np.float32) / np.float32(np.sqrt(p))))
+    i["recon_weights"] = once(os.path.join(work, "recon_weights_64x1100.npy"),
+                              lambda t: save_npy(t, rng.standard_normal((b, e), dtype=np.float32)))
+    return i
+
+
+# --- output checks (each raises Disagree) ---------------------------------------------------------
+
+def max_diff(a, b, limit, what):
+    a, b = np.load(a), np.load(b)
+    if a.shape != b.shape:
+        raise Disagree(f"{what}: shapes {a.shape} and {b.shape}")
+    d = float(np.abs(a.astype(np.float64) - b).max())
+    if not d <= limit:
+        raise Disagree(f"{what}: largest difference {d:.3g} > {limit:.3g}")
+    return d
+
+
+def check_bloom(exact):
+    def check(o, p):
+        d = max_diff(o, p, 0.01, "bloom")
+        e = max_diff(o, exact, 0.01, "pyrograph vs the exact blur")
+        return f"largest difference {d:.4f}; pyrograph vs the exact blur {e:.4f}"
+    return check
+
+
+def check_endgrow(o, p):
+    a, b = json.load(open(o)), json.load(open(p))
+    if a != b:
+        raise Disagree(f"End Growing paths differ: pyrograph {a}, peer {b}")
+    return f"same path ({len(a['path'])} frames, {a['steps']} steps, shared {a['shared']})"
+
+
+def check_reconstruct(o, p):
+    scale = float(np.abs(np.load(p)).max())
+    return f"largest difference {max_diff(o, p, 1e-5 * scale, 'images'):.2g} (values up to {scale:.2f})"
+
+
+def check_train(o, p):
+    lo, lp = np.load(o + "eigenvalues.npy"), np.load(p + "eigenvalues.npy")
+    rel = float(np.abs(lo[:50] / lp[:50] - 1).max())
+    if not rel <= 1e-3:
+        raise Disagree(f"eigenvalues differ by {rel:.3g} (relative, first 50)")
+    qo, _ = np.linalg.qr(np.load(o + "vectors.npy").astype(np.float64).T)
+    qp, _ = np.linalg.qr(np.load(p + "vectors.npy").astype(np.float64).T)
+    angle = float(np.degrees(np.arccos(min(1.0, np.linalg.svd(qo.T @ qp, compute_uv=False).min()))))
+    if not angle <= 0.1:
+        raise Disagree(f"first {qo.shape[1]} eigenfires span subspaces {angle:.3g}° apart")
+    wo, wp = np.load(o + "weights.npy")[:, :20], np.load(p + "weights.npy")[:, :20]
+    wp = wp * np.sign((wo * wp).sum(0))
+    w = float(np.abs(wo - wp).max() / np.abs(wp).max())
+    if not w <= 1e-3:
+        raise Disagree(f"weights of the first 20 eigenfires differ by {w:.3g} of their range")
+    return f"eigenvalues within {rel:.1e}, eigenfires 1–20 {angle:.1e}° apart, weights within {w:.1e}"
+
+
+def check_cloth(o, p):
+    return f"displacements after the run agree to {max_diff(o, p, 1e-4, 'cloth displacements'):.1e}"
+
+
+def check_arp(o, p):
+    a, b = np.load(o), np.load(p)
+    sd = b.std(0)
+    mean = float((np.abs(a.mean(0) - b.mean(0)) / sd).max())
+    ratio = a.std(0) / sd
+
+    def lag1(x):
+        x = x - x.mean(0)
+        return (x[1:] * x[:-1]).mean(0) / x.var(0)
+    lag = float(np.abs(lag1(a) - lag1(b)).max())
+    if not (mean <= 0.1 and 0.9 <= ratio.min() and ratio.max() <= 1.1 and lag <= 0.05):
+        raise Disagree(f"samples differ: means {mean:.3f} sd apart, sd ratios {ratio.min():.3f}–{ratio.max():.3f}, "
+                       f"lag-1 {lag:.3f}")
+    return f"same process: means within {mean:.3f} sd, sd ratios {ratio.min():.3f}–{ratio.max():.3f}, lag-1 within {lag:.3f}"
+
+
+def check_masks(o, p):
+    import cv2
+    names = sorted(os.listdir(o))
+    if names != sorted(os.listdir(p)):
+        raise Disagree(f"mask files differ: {len(names)} and {len(os.listdir(p))}")
+    inter = union = 0
+    for n in names:
+        x = cv2.imread(os.path.join(o, n), cv2.IMREAD_GRAYSCALE) > 127
+        y = cv2.imread(os.path.join(p, n), cv2.IMREAD_GRAYSCALE) > 127
+        inter, union = inter + int((x & y).sum()), union + int((x | y).sum())
+    iou = inter / union if union else 1.0
+    if iou < 0.99:
+        raise Disagree(f"masks disagree: IoU {iou:.4f}")
+    return f"{len(names)} masks, IoU {iou:.5f}"
+
+
+def check_gray(o, p):
+    import cv2
+    names = sorted(os.listdir(o))
+    if names != sorted(os.listdir(p)):
+        raise Disagree(f"frame files differ: {len(names)} and {len(os.listdir(p))}")
+    worst = np.inf
+    for n in names[:: max(1, len(names) // 8)]:
+        x = cv2.imread(os.path.join(o, n), cv2.IMREAD_GRAYSCALE).astype(np.float64)
+        y = cv2.imread(os.path.join(p, n), cv2.IMREAD_GRAYSCALE).astype(np.float64)
+        mse = ((x - y) ** 2).mean()
+        worst = min(worst, np.inf if mse == 0 else 10 * np.log10(255 ** 2 / mse))
+    if worst < 35:
+        raise Disagree(f"gray frames differ: PSNR {worst:.1f} dB")
+    return f"{len(names)} frames, PSNR ≥ {worst:.1f} dB (8 sampled)"
+
+
+# --- rows -----------------------------------------------------------------------------------------
+
+def rows(i, work):
+    kp = [PY, os.path.join(HERE, "kernels.py")]
+    # The numpy cloth peer as run_all.sh tunes it: glibc keeps its multi-MB temporaries mapped.
+    malloc = {"MALLOC_MMAP_THRESHOLD_": "2000000000", "MALLOC_TRIM_THRESHOLD_": "2000000000"}
+    exact = os.path.join(work, "bloom_exact.npy")
+    out = []
+
+    def row(id, group, workload, size, threads, peer_name, ours, peer, check, kind="kernel", peer_threads=None, unit="ms",
+            ext=".npy"):
+        out.append(dict(id=id, group=group, workload=workload, size=size, threads=threads, peer_name=peer_name,
+                        ours=ours, peer=peer, check=check, kind=kind, unit=unit, ext="" if kind == "e2e" else ext,
+                        peer_threads=threads if peer_threads is None else peer_threads))
+
+    for t in (2, 1):
+        row(f"preprocess_t{t}", "preprocess", "pre-processing: HSV mask, open, close, contours, largest filled → mask PNGs",
+            "266 frames 1920×1080 (candle-black, scaled)", t, "OpenCV 5.0 Python loop (benches/maskchain/opencv_mask.py)",
+            lambda o, t=t: (process, [CLI, "render", os.path.join(REPO, "benches/maskchain/mask.ron"), "--out", o,
+                                      "--set", f'load.path="{i["frames_1080p"]}"', "--set", 'write.pattern="mask_####.png"'],
+                            threads_env(t)),
+            lambda o, t=t: (process, [PY, os.path.join(REPO, "benches/maskchain/opencv_mask.py"), i["frames_1080p"], o],
+                            threads_env(t)),
+            check_masks, kind="e2e", unit="s")
+    row("video_png", "video", "video → gray → 8-bit PNGs", "796 frames 480×480 (tealight-candle video)", 2, "ffmpeg -vf format=gray",
+        lambda o: (process, [CLI, "render", os.path.join(REPO, "benches/stream/gray.ron"), "--out", o,
+                             "--set", f'load.path="{i["tealight_video"]}"', "--set", 'write.pattern="f_####.png"'], threads_env(2)),
+        lambda o: (process, ["ffmpeg", "-v", "error", "-nostdin", "-i", i["tealight_video"], "-vf", "format=gray",
+                             "-start_number", "0", os.path.join(o, "f_%04d.png")], {}),
+        check_gray, kind="e2e", unit="s", peer_threads="ffmpeg default")
+    for t in (2, 1):
+        b = ["--input", i["bloom_frame"]]
+        row(f"bloom_pyramid_t{t}", "bloom", "bloom, σ 32/16/8/4, pyramid vs pyramid", "1280×720 RGB (candle-black frame 60)", t,
+            "OpenCV pyramid bloom (resize INTER_AREA, GaussianBlur, resize INTER_LINEAR)",
+            lambda o, t=t, b=b: (kernel, [KERNELS, "--reps", "15", "bloom", *b, "--output", o + ".npy"], threads_env(t)),
+            lambda o, t=t, b=b: (kernel, kp + ["--reps", "15", "bloom", *b, "--mode", "pyramid", "--threads", str(t),
+                                                "--output", o + ".npy"], threads_env(t)),
+            check_bloom(exact))
+        row(f"bloom_exact_t{t}", "bloom", "bloom, σ 32/16/8/4, pyrograph's pyramid vs the exact blur", "1280×720 RGB (candle-black frame 60)", t,
+            "OpenCV exact GaussianBlur (ksize 2·round(4σ)+1)",
+            lambda o, t=t, b=b: (kernel, [KERNELS, "--reps", "15", "bloom", *b, "--output", o + ".npy"], threads_env(t)),
+            lambda o, t=t, b=b: (kernel, kp + ["--reps", "3", "bloom", *b, "--mode", "exact", "--threads", str(t),
+                                                "--output", o + ".npy"], threads_env(t)),
+            check_bloom(exact))
+    eg = ["endgrow", "--weights", i["weights"], "--alpha", "500", "--beta", "1500", "--max-steps", "26", "--theta", "0.7", "--optimize"]
+    for t in (2, 1):
+        row(f"endgrow_t{t}", "endgrow", "End Growing (Algorithm 1 + Optimize_Path), α 500 → β 1500, max_steps 26, θ 0.7",
+            "2,197 frames, E 1,100 (seeded AR(1) walk)", t, "numpy, the same algorithm (einsum distance rows, argsort)",
+            lambda o, t=t: (kernel, [KERNELS, "--reps", "15", *eg, "--output", o + ".json"], threads_env(t)),
+            lambda o, t=t: (kernel, kp + ["--reps", "15", *eg, "--output", o + ".json"], threads_env(t)),
+            check_endgrow, peer_threads=1, ext=".json")
+    rc = ["reconstruct", "--mean", i["mean"], "--basis", i["basis"], "--weights", i["recon_weights"]]
+    for t in (2, 1):
+        row(f"reconstruct_t{t}", "reconstruct", "batch reconstruction (eq. 22), 64 frames in one product",
+            "410×670, E 1,100, 64 frames", t, "numpy W @ U + mean (OpenBLAS sgemm)",
+            lambda o, t=t: (kernel, [KERNELS, "--reps", "3", *rc, "--output", o + ".npy"], threads_env(t)),
+            lambda o, t=t: (kernel, kp + ["--reps", "3", *rc, "--output", o + ".npy"], threads_env(t)),
+            check_reconstruct)
+    tr = ["train", "--frames", i["train_frames"], "--components", "250"]
+    for t in (2, 1):
+        row(f"train_t{t}", "train", "Eigenfires training: PCA + weights of every frame, E 250",
+            "500 frames 205×335 (tealight-candle)", t, "numpy gram trick (pca.py) + projection",
+            lambda o, t=t: (kernel, [KERNELS, "--reps", "3", *tr, "--output-prefix", o + "_"], threads_env(t)),
+            lambda o, t=t: (kernel, kp + ["--reps", "3", *tr, "--output-prefix", o + "_"], threads_env(t)),
+            check_train, ext="_")
+    for n in (144, 1024):
+        for t in (2, 1):
+            cl = ["cloth", "--flames", str(n), "--steps", str(max(24, 17280 // n))]
+            row(f"cloth{n}_t{t}", "cloth", "cloth step (structural springs, constant wind), time per step",
+                f"{n} flames × 16×32 masses", t, "numpy, vectorised over flames, malloc tuned (mass_spring.py)",
+                lambda o, t=t, cl=cl: (kernel, [KERNELS, "--reps", "5", *cl, "--output", o + ".npy"], threads_env(t)),
+                lambda o, t=t, cl=cl: (kernel, kp + ["--reps", "5", *cl, "--output", o + ".npy"], {**threads_env(t), **malloc}),
+                check_cloth, peer_threads=1, unit="µs")
+    ar = ["--steps", "100000", "--model-dir", os.path.join(work, "arp_model")]
+    row("arp", "arp", "ARP sampling (eq. 2), time per step", "26 parameters, K = 2, learned on candle-black", 1,
+        "numpy (ar_fit.py's sampler: Python loop of mat-vecs)",
+        lambda o: (kernel, [KERNELS, "--reps", "5", "arp", "--frames", i["candle_frames"], *ar, "--output", o + ".npy"], threads_env(1)),
+        lambda o: (kernel, kp + ["--reps", "5", "arp", *ar, "--output", o + ".npy"], threads_env(1)),
+        check_arp, unit="µs")
+    # No peer: the papers' frame-rate targets, timed in the same sitting.
+    for op, workload, size, frames in (
+            ("particles", "1,000 particle flames, simulate + render (swept long exposure)", "1280×720", 24),
+            ("cloth-frame", "144 cloth flames (node defaults), a 24 fps frame's sub-steps + render", "1280×720", 24),
+            ("cube", "burning cube (graphs/burning-cube.ron): spread + flames + render, mean of frames 48–95", "1280×720", 0)):
+        args = ["--frames", str(frames)] if frames else []
+        row(op, "solo", workload, size, 2, "—",
+            lambda o, op=op, args=args: (kernel, [KERNELS, "--reps", "3", op, *args], threads_env(2)),
+            None, None, peer_threads="—")
+    return out
+
+
+# --- the sitting ----------------------------------------------------------------------------------
+
+SCALE = {"s": 1.0, "ms": 1e3, "µs": 1e6}
+
+
+def host():
+    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
+    import cv2
+    return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), "cpu": cpu,
+            "cores": os.cpu_count(), "numpy": np.__version__, "opencv": cv2.__version__,
+            "ffmpeg": sh(["ffmpeg", "-version"]).stdout.split("\n")[0].split(" ")[2],
+            "commit": subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
+                                     text=True).stdout.strip()}
+
+
+def run_row(r, rounds, work, log):
+    base = os.path.join(work, "out", r["id"])
+    got = []
+    for k in range(rounds):
+        shutil.rmtree(base, ignore_errors=True)
+        os.makedirs(base)
+        res = {}
+        for side in ("ours", "peer") if r["peer"] else ("ours",):
+            o = os.path.join(base, side)
+            if r["kind"] == "e2e":
+                os.makedirs(o)
+            fn, cmd, env = r[side](o)
+            res[side] = fn(cmd, env)
+        if not r["peer"]:
+            got.append((res, None, None))
+            log.write(json.dumps({"row": r["id"], "round": k + 1, **res}) + "\n")
+            ms = res["ours"]["median_s"] * 1e3
+            print(f"  {r['id']} round {k + 1}: pyrograph {ms:.4g} ms per frame ({1e3 / ms:.1f} fps)", flush=True)
+            continue
+        agree = r["check"](os.path.join(base, "ours") + r["ext"], os.path.join(base, "peer") + r["ext"])
+        ratio = res["ours"]["median_s"] / res["peer"]["median_s"]
+        got.append((res, ratio, agree))
+        rec = {"row": r["id"], "round": k + 1, "ratio": ratio, "agree": agree, **{s: res[s] for s in res}}
+        log.write(json.dumps(rec) + "\n")
+        log.flush()
+        u = SCALE[r["unit"]]
+        rss = "".join(f" {res[s]['peak_rss_mib']:.0f} MiB" if "peak_rss_mib" in res[s] else "" for s in ("ours",))
+        print(f"  {r['id']} round {k + 1}: pyrograph {res['ours']['median_s'] * u:.4g} {r['unit']}{rss}, "
+              f"peer {res['peer']['median_s'] * u:.4g} {r['unit']}, ratio {ratio:.3f} — {agree}", flush=True)
+    shutil.rmtree(base, ignore_errors=True)
+    return got
+
+
+def summary(r, got):
+    u = SCALE[r["unit"]]
+    if not r["peer"]:
+        each = [g[0]["ours"]["median_s"] * 1e3 for g in got]
+        m = st.median(each)
+        return (f"| {r['workload']} | {r['size']} | {r['threads']} / — | {m:.4g} ms ({1e3 / m:.1f} fps; rounds "
+                f"{', '.join(f'{x:.1f}' for x in each)}) | — | — | — |")
+    med = lambda side: st.median(g[0][side]["median_s"] for g in got) * u
+    ratios = [g[1] for g in got]
+    rss = lambda side: (f" / {st.median(g[0][side]['peak_rss_mib'] for g in got):.0f} MiB"
+                        if "peak_rss_mib" in got[0][0][side] else "")
+    return (f"| {r['workload']} | {r['size']} | {r['threads']} / {r['peer_threads']} | "
+            f"{med('ours'):.4g} {r['unit']}{rss('ours')} | {r['peer_name']}: {med('peer'):.4g} {r['unit']}{rss('peer')} | "
+            f"**{st.median(ratios):.3f}×** ({', '.join(f'{x:.2f}' for x in ratios)}) | ✔ {got[-1][2]} |")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--rounds", type=int, default=5)
+    p.add_argument("--only", default="", help="comma-separated groups: preprocess, video, bloom, endgrow, "
+                                               "reconstruct, train, cloth, arp, solo (default: all)")
+    p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-peers"))
+    a = p.parse_args()
+    for exe in (KERNELS, CLI):
+        if not os.access(exe, os.X_OK):
+            raise SystemExit(f"build first: cargo build --release && cargo build --release --example kernels (no {exe})")
+    os.makedirs(a.work, exist_ok=True)
+    i = inputs(a.work)
+    only = {g for g in a.only.split(",") if g}
+    todo = [r for r in rows(i, a.work) if not only or r["group"] in only]
+    if not todo:
+        raise SystemExit(f"no rows in groups {sorted(only)}")
+    if any(r["group"] == "bloom" for r in todo):
+        sh([PY, os.path.join(HERE, "kernels.py"), "--reps", "1", "--warmup", "0", "bloom", "--input", i["bloom_frame"],
+            "--mode", "exact", "--output", os.path.join(a.work, "bloom_exact.npy")])
+    h = host()
+    head = (f"Sitting {h['date']}, commit {h['commit']}: {h['cpu']}, {h['cores']} cores; numpy {h['numpy']}, "
+            f"OpenCV {h['opencv']}, ffmpeg {h['ffmpeg']}; {a.rounds} rounds, pyrograph then peer in each")
+    print("# " + head, flush=True)
+    lines = []
+    failed = []
+    with open(os.path.join(a.work, "results.jsonl"), "a") as log:
+        log.write(json.dumps({"sitting": h, "rounds": a.rounds}) + "\n")
+        for r in todo:
+            try:
+                lines.append(summary(r, run_row(r, a.rounds, a.work, log)))
+            except Disagree as e:
+                failed.append(f"{r['id']}: {e}")
+                print(f"  {r['id']}: OUTPUTS DISAGREE — {e}", flush=True)
+    table = ("| workload | size | threads (pyrograph / peer) | pyrograph | peer | ratio: median (rounds) | agree |\n"
+             "| --- | --- | --- | --- | --- | --- | --- |\n" + "\n".join(lines))
+    with open(os.path.join(a.work, "report.md"), "w") as f:
+        f.write(head + "\n\n" + table + "\n")
+    print("\n" + table)
+    if failed:
+        raise SystemExit("outputs disagree:\n" + "\n".join(failed))
+
+
+if __name__ == "__main__":
+    main()

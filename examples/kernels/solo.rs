@@ -1,0 +1,124 @@
+//! Rows with no peer (the papers' own frame-rate targets): one 1280×720 frame of 1,000 particle
+//! flames, of 144 cloth flames, and of the burning cube, each timed per frame as its criterion
+//! bench does (nodes/particles/benches/flames.rs, nodes/cloth/benches/cloth.rs,
+//! nodes/particles/benches/spread.rs).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use glam::Vec3;
+use pyrograph_core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Registry, Value};
+use pyrograph_nodes_cloth::render::{RenderParams, Textures, render_cloth};
+use pyrograph_nodes_cloth::sim::{ClothParams, Simulation, grid_roots};
+use pyrograph_nodes_particles::flame::{FlameParams, Layout, layout_roots, simulate_frame};
+use pyrograph_nodes_particles::render::render_particles;
+use pyrograph_nodes_particles::swept::Exposure;
+use pyrograph_nodes_particles::types::WindField;
+use pyrograph_render::{Blend, Camera, Particles, View};
+
+use crate::{Timing, report};
+
+#[derive(Args)]
+pub struct FramesArgs {
+    /// Frames per timed run.
+    #[arg(long, default_value_t = 24)]
+    frames: usize,
+}
+
+/// 1,000 particle flames on a grid (the flames bench's scene): simulate + render per frame.
+pub fn particles(a: &FramesArgs, t: Timing) -> Result<String, String> {
+    let n = 1000;
+    let spacing = 2.0;
+    let roots = layout_roots(Layout::Grid, n, Vec3::ZERO, spacing, 0.0, Vec3::Y, 0.0, 1);
+    let extent = (n as f32).sqrt().ceil() * spacing;
+    let eye = Vec3::new(0.0, extent * 0.45 + 3.0, extent * 0.9 + 10.0);
+    let cam = Camera::new(eye, Vec3::new(0.0, 2.5, 0.0), Vec3::Y, 40.0, 0.1, 10_000.0).map_err(|e| e.to_string())?;
+    let view = View::new(cam, 1280, 720).map_err(|e| e.to_string())?;
+    let (wind, params) = (WindField::default(), FlameParams::default());
+    let (times, _) = t.run(|| {
+        let mut lit = 0.0_f64;
+        for _ in 0..a.frames {
+            // Frame 7 every time, as the criterion bench (a frame costs the same at any time).
+            let frame = simulate_frame(&roots, &wind, &params, 7).map_err(|e| e.to_string())?;
+            let img = render_particles(
+                &view,
+                &frame,
+                Exposure::Continuous,
+                Blend::Additive,
+                [0.0, 0.0, 0.0, 1.0],
+                None,
+                &Particles::default(),
+            );
+            lit += f64::from(img.data()[img.data().len() / 2]);
+        }
+        Ok(lit)
+    })?;
+    per_frame("particle_flames_frame", &times, a.frames, serde_json::json!({ "flames": n }))
+}
+
+/// 144 cloth flames with the node's default springs: a 24 fps frame's sub-steps + textured render.
+pub fn cloth_frame(a: &FramesArgs, t: Timing) -> Result<String, String> {
+    let n = 144;
+    let target = Vec3::new(0.0, 1.0, 0.0);
+    let cam = Camera::new(target + Vec3::new(0.0, 8.0, 26.0), target, Vec3::Y, 40.0, 0.1, 1000.0).map_err(|e| e.to_string())?;
+    let view = View::new(cam, 1280, 720).map_err(|e| e.to_string())?;
+    let rp = RenderParams::default();
+    let (times, _) = t.run_with(
+        || Simulation::new(&ClothParams::default(), &grid_roots(n, 1.5)).map_err(|e| e.to_string()),
+        |sim| {
+            let mut sim = sim?;
+            for _ in 0..a.frames {
+                sim.step_frame().map_err(|e| e.to_string())?;
+                std::hint::black_box(render_cloth(&view, &sim.snapshot(), Textures::Builtin, &rp));
+            }
+            Ok(())
+        },
+    )?;
+    per_frame("cloth_frame", &times, a.frames, serde_json::json!({ "flames": n }))
+}
+
+#[derive(Args)]
+pub struct CubeArgs {
+    /// The graph (default: graphs/burning-cube.ron).
+    #[arg(long)]
+    graph: Option<PathBuf>,
+}
+
+/// `graphs/burning-cube.ron` without its writer: the mean frame over frames 48–95, pulled in order
+/// from a fresh evaluator warmed up to frame 47 (as the spread bench).
+pub fn cube(a: &CubeArgs, t: Timing) -> Result<String, String> {
+    let path = a.graph.clone().unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/burning-cube.ron"));
+    let dir = path.parent().map(PathBuf::from).unwrap_or_default();
+    let mut doc = GraphDoc::load(&path).map_err(|d| d.to_string())?;
+    doc.nodes.0.retain(|(_, node)| node.type_name.starts_with("particles."));
+    let kept: Vec<String> = doc.nodes.0.iter().map(|(id, _)| format!("{id}.")).collect();
+    doc.edges.retain(|(a, b)| [a, b].iter().all(|e| kept.iter().any(|k| e.starts_with(k.as_str()))));
+    let mut registry = Registry::with_builtins();
+    pyrograph_nodes_particles::register(&mut registry);
+    let graph = Graph::build(&doc, &registry, &dir, &BuildOptions::default()).map_err(|d| d.to_string())?;
+    let ctx = CookCtx::new();
+    let (first, len) = (48, 48);
+    let fresh = || -> Result<Clip, String> {
+        match Evaluator::new().output(&graph, "render.image", &ctx) {
+            Ok(Value::Clip(clip)) => {
+                clip.get(first - 1, &ctx).map_err(|e| e.to_string())?;
+                Ok(clip)
+            }
+            Ok(other) => Err(format!("render.image is not a clip: {}", other.summary())),
+            Err(e) => Err(e.to_string()),
+        }
+    };
+    let (times, _) = t.run_with(fresh, |clip| {
+        let clip = clip?;
+        for f in first..first + len {
+            clip.get(f, &ctx).map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    })?;
+    per_frame("burning_cube_frame", &times, len, serde_json::json!({ "frames": "48-95" }))
+}
+
+fn per_frame(op: &str, times: &[f64], frames: usize, extra: serde_json::Value) -> Result<String, String> {
+    let per: Vec<f64> = times.iter().map(|s| s / frames.max(1) as f64).collect();
+    Ok(report(op, &per, extra))
+}

@@ -189,3 +189,132 @@ fn tealight_mask_excludes_the_glowing_wax_and_glass_and_keeps_the_blue_base() {
     assert!(leak < 0.01, "{:.2} % of the glowing wax/glass pixels are inside the mask", leak * 100.0);
     assert!(with_base * 10 >= FRAMES * 8, "blue base inside the mask in only {with_base} of {FRAMES} frames");
 }
+
+/// The hand-labelled flame outlines of tests/data/tealight-flame-labels.json, filled, one 300×300
+/// mask per labelled frame (the tealight preset's crop).
+fn tealight_labels() -> Vec<(usize, image::GrayImage)> {
+    let doc: serde_json::Value = serde_json::from_str(include_str!("data/tealight-flame-labels.json")).unwrap();
+    let frames = doc["frames"].as_object().unwrap();
+    let mut out: Vec<(usize, image::GrayImage)> = frames
+        .iter()
+        .map(|(f, poly)| {
+            let points: Vec<imageproc::point::Point<i32>> = poly
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| imageproc::point::Point::new(p[0].as_i64().unwrap() as i32, p[1].as_i64().unwrap() as i32))
+                .collect();
+            let mut m = image::GrayImage::new(300, 300);
+            imageproc::drawing::draw_polygon_mut(&mut m, &points, image::Luma([255]));
+            (f.parse().unwrap(), m)
+        })
+        .collect();
+    out.sort_by_key(|(f, _)| *f);
+    out
+}
+
+/// How a mask scores against a hand label over the whole crop.
+struct LabelScore {
+    /// Intersection over union.
+    iou: f64,
+    /// Share of the mask inside the label (what keeps the wax and glass out).
+    precision: f64,
+    /// Share of the label's pixels at or below [`TEALIGHT_BASE_ROW`] (its blue base) in the mask.
+    base: f64,
+}
+
+fn score(mask: &image::GrayImage, truth: &image::GrayImage) -> LabelScore {
+    let (mut inter, mut union, mut masked, mut low, mut low_hit) = (0usize, 0usize, 0usize, 0usize, 0usize);
+    for (x, y, t) in truth.enumerate_pixels() {
+        let (a, b) = (mask.get_pixel(x, y)[0] > 127, t[0] > 127);
+        inter += usize::from(a && b);
+        union += usize::from(a || b);
+        masked += usize::from(a);
+        if b && y >= TEALIGHT_BASE_ROW {
+            low += 1;
+            low_hit += usize::from(a);
+        }
+    }
+    let share = |a: usize, b: usize| a as f64 / b.max(1) as f64;
+    LabelScore { iou: share(inter, union), precision: share(inter, masked), base: share(low_hit, low) }
+}
+
+/// Rows of the crop at and below which the labels hold the flame's violet-blue base.
+const TEALIGHT_BASE_ROW: u32 = 258;
+/// Limits near what the preset scores (measured 2026-11-26: IoU 0.45–0.69, mean 0.547; precision
+/// 0.82–0.98; base covered 18–88 %, mean 49 %). The preset keeps the wax and glass out but finds
+/// only about half of the labelled flame: the neck seen through the glass rim, as bright and pale
+/// as the lit glass there, and the dimmer half of the blue base are missed.
+const TEALIGHT_MIN_IOU: f64 = 0.42;
+const TEALIGHT_MEAN_IOU: f64 = 0.52;
+const TEALIGHT_MIN_PRECISION: f64 = 0.8;
+const TEALIGHT_MEAN_BASE: f64 = 0.4;
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn tealight_mask_matches_hand_labelled_flames() {
+    let labels = tealight_labels();
+    assert!(labels.len() >= 10, "{} labelled frames", labels.len());
+    let list: Vec<String> = labels.iter().map(|(f, _)| f.to_string()).collect();
+    let out = tempfile::tempdir().unwrap();
+    render("preprocess-tealight.ron", out.path(), &list.join(","));
+    let dir = out.path().join("preprocess-tealight");
+    let (mut iou, mut base) = (0.0, 0.0);
+    for (f, truth) in &labels {
+        let mask = gray(&dir.join(format!("mask_{f:04}.png")));
+        assert_eq!(mask.dimensions(), truth.dimensions(), "frame {f}");
+        let s = score(&mask, truth);
+        println!(
+            "tealight frame {f}: IoU {:.3} with the hand label, precision {:.2}, base covered {:.0} %",
+            s.iou,
+            s.precision,
+            s.base * 100.0
+        );
+        assert!(s.iou >= TEALIGHT_MIN_IOU, "frame {f}: IoU {:.3} with the hand-labelled flame", s.iou);
+        assert!(s.precision >= TEALIGHT_MIN_PRECISION, "frame {f}: only {:.2} of the mask is flame", s.precision);
+        iou += s.iou / labels.len() as f64;
+        base += s.base / labels.len() as f64;
+    }
+    println!("tealight: mean IoU {iou:.3}, mean base covered {:.0} % over {} hand-labelled frames", base * 100.0, labels.len());
+    assert!(iou >= TEALIGHT_MEAN_IOU, "mean IoU {iou:.3}");
+    assert!(base >= TEALIGHT_MEAN_BASE, "the mask covers {:.0} % of the labelled blue base", base * 100.0);
+}
+
+/// The measure above can fail: a mask of everything bright (value ≥ 0.6, the lit wax and glass
+/// with the flame) or the right flame shifted by 12 pixels scores below the limits.
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn tealight_label_score_rejects_a_bright_mask_and_a_shifted_flame() {
+    let labels = tealight_labels();
+    let mut doc = GraphDoc::new();
+    let video = footage().join("tealight-candle/candle.mp4");
+    doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
+    doc.add_node(
+        "crop",
+        NodeDoc::new("imaging.crop")
+            .param("x", ParamValue::Int(90))
+            .param("y", ParamValue::Int(100))
+            .param("width", ParamValue::Int(300))
+            .param("height", ParamValue::Int(300)),
+    );
+    doc.connect("v.clip", "crop.image");
+    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
+    let ctx = CookCtx::new();
+    let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
+    let (mut bright, mut shifted) = (Vec::new(), Vec::new());
+    for (f, truth) in &labels {
+        let rgb = frames.image(*f, &ctx).unwrap();
+        let lit = image::GrayImage::from_fn(300, 300, |x, y| {
+            let p = rgb.pixel(x, y);
+            image::Luma([if p[0].max(p[1]).max(p[2]) >= 0.6 { 255 } else { 0 }])
+        });
+        let moved =
+            image::GrayImage::from_fn(300, 300, |x, y| if x >= 12 { *truth.get_pixel(x - 12, y) } else { image::Luma([0]) });
+        bright.push(score(&lit, truth).iou);
+        shifted.push(score(&moved, truth).iou);
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    println!("bright mask: mean IoU {:.3}; flame shifted 12 px: {:.3}", mean(&bright), mean(&shifted));
+    assert!(mean(&bright) < TEALIGHT_MEAN_IOU, "a mask of everything bright scores {:.3}", mean(&bright));
+    assert!(mean(&shifted) < TEALIGHT_MEAN_IOU, "a shifted flame scores {:.3}", mean(&shifted));
+}

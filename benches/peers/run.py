@@ -10,9 +10,10 @@ faster) and their median, the thread counts and, for whole processes, peak RSS.
 
 Kernel rows time the kernel inside one process on each side (examples/kernels, benches/peers/kernels.py:
 `--warmup` untimed runs, then `--reps` timed, the round's value is their median); whole-process rows
-(`e2e`) time files in to files out with /usr/bin/time. Inputs are made once in --work from the shared
-footage (PYROGRAPH_FOOTAGE, else ../shared/footage) or from seeded numpy. Writes --work/report.md (the
-table) and --work/results.jsonl (every run).
+(`e2e`) time files in to files out with /usr/bin/time. Rows with no peer time the papers' frame-rate
+targets in the same sitting. Inputs are made once in --work from the shared footage (PYROGRAPH_FOOTAGE,
+else ../shared/footage) or from seeded numpy. Writes --work/report.md (the full table, then the README's
+table with each row's target) and appends every run to --work/results.jsonl.
 """
 import argparse
 import datetime
@@ -328,6 +329,50 @@ def rows(i, work):
 
 SCALE = {"s": 1.0, "ms": 1e3, "µs": 1e6}
 
+# Each row's target (the project's first-wave targets), judged on the medians of all rounds:
+# (text, test(pyrograph median s, peer median s, median per-round ratio)); keyed by row-id prefix.
+TARGETS = {
+    "preprocess": ("≤ OpenCV", lambda o, p, r: r <= 1.0),
+    "video_png": ("≤ 1.5× ffmpeg", lambda o, p, r: r <= 1.5),
+    "bloom_exact": ("≤ 0.1× the exact blur", lambda o, p, r: r <= 0.1),
+    "endgrow": ("≤ 5 ms", lambda o, p, r: o <= 5e-3),
+    "reconstruct": ("≤ 10 ms a frame", lambda o, p, r: o / 64 <= 10e-3),
+    "train": ("≤ numpy", lambda o, p, r: r <= 1.0),
+    "cloth-frame": ("≥ 60 fps", lambda o, p, r: o <= 1 / 60),
+    "cloth": ("≥ 5× numpy", lambda o, p, r: r <= 0.2),
+    "arp": ("≥ 1 M steps/s", lambda o, p, r: o <= 1e-6),
+    "particles": ("≥ 30 fps", lambda o, p, r: o <= 1 / 30),
+    "cube": ("≥ 24 fps", lambda o, p, r: o <= 1 / 24),
+}
+
+
+def target(r, o, p, ratio):
+    for prefix, (text, ok) in TARGETS.items():
+        if r["id"].startswith(prefix):
+            return f"{text} {'✔' if ok(o, p, ratio) else '✘'}"
+    return "—"
+
+
+def fmt(seconds, unit):
+    v = seconds * SCALE[unit]
+    return f"{v:,.3g} {unit}" if v < 1000 else f"{v:,.0f} {unit}"
+
+
+def compact(r, got):
+    """The README's row: workload and size, threads, medians, the median ratio and its rounds' range, target."""
+    o = st.median(g[0]["ours"]["median_s"] for g in got)
+    rss = lambda side: (f", {st.median(g[0][side]['peak_rss_mib'] for g in got):.0f} MiB"
+                        if "peak_rss_mib" in got[0][0][side] else "")
+    if not r["peer"]:
+        return (f"| {r['workload']}, {r['size']} | {r['threads']} | {fmt(o, 'ms')} ({1 / o:.1f} fps) | — | — | "
+                f"{target(r, o, None, None)} |")
+    p = st.median(g[0]["peer"]["median_s"] for g in got)
+    ratios = [g[1] for g in got]
+    peer = r["peer_name"].split(" (")[0]
+    return (f"| {r['workload']}, {r['size']} | {r['threads']} / {r['peer_threads']} | {fmt(o, r['unit'])}{rss('ours')} | "
+            f"{peer}: {fmt(p, r['unit'])}{rss('peer')} | **{st.median(ratios):.2f}×** ({min(ratios):.2f}–{max(ratios):.2f}) | "
+            f"{target(r, o, p, st.median(ratios))} |")
+
 
 def host():
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
@@ -411,21 +456,25 @@ def main():
     head = (f"Sitting {h['date']}, commit {h['commit']}: {h['cpu']}, {h['cores']} cores; numpy {h['numpy']}, "
             f"OpenCV {h['opencv']}, ffmpeg {h['ffmpeg']}; {a.rounds} rounds, pyrograph then peer in each")
     print("# " + head, flush=True)
-    lines = []
+    lines, short = [], []
     failed = []
     with open(os.path.join(a.work, "results.jsonl"), "a") as log:
         log.write(json.dumps({"sitting": h, "rounds": a.rounds}) + "\n")
         for r in todo:
             try:
-                lines.append(summary(r, run_row(r, a.rounds, a.work, log)))
+                got = run_row(r, a.rounds, a.work, log)
+                lines.append(summary(r, got))
+                short.append(compact(r, got))
             except Disagree as e:
                 failed.append(f"{r['id']}: {e}")
                 print(f"  {r['id']}: OUTPUTS DISAGREE — {e}", flush=True)
     table = ("| workload | size | threads (pyrograph / peer) | pyrograph | peer | ratio: median (rounds) | agree |\n"
              "| --- | --- | --- | --- | --- | --- | --- |\n" + "\n".join(lines))
+    readme = ("| workload | threads (pyrograph / peer) | pyrograph | peer | pyrograph / peer: median (rounds) | target |\n"
+              "| --- | --- | --- | --- | --- | --- |\n" + "\n".join(short))
     with open(os.path.join(a.work, "report.md"), "w") as f:
-        f.write(head + "\n\n" + table + "\n")
-    print("\n" + table)
+        f.write(head + "\n\n" + table + "\n\nFor the README:\n\n" + readme + "\n")
+    print("\n" + table + "\n\nFor the README:\n\n" + readme)
     if failed:
         raise SystemExit("outputs disagree:\n" + "\n".join(failed))
 

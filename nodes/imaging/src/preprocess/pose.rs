@@ -242,7 +242,10 @@ pyrograph_core::node! {
     /// bottom; lowpoly = remedy 1, Douglas–Peucker first), trimmed at the extreme projections of the contour points,
     /// and the image is rotated about the lower end so the flame stands vertical. Mode center_scale instead moves the
     /// flame's bounding box to the centre and scales it to target_height of the frame (angle and end points are
-    /// still reported). With no contours the image passes through and angle is 0.
+    /// still reported). With no contours the image passes through and angle is 0. Guards for footage the thesis did
+    /// not film: a lean beyond max_angle is turned only max_angle, and an outline spanning at least max_width of the
+    /// frame's width (a fire filling the picture, which has no single axis) is not turned; both warn, and turned
+    /// reports the rotation applied.
     #[node("imaging.pose_normalize", "Pre-processing", PerFrame)]
     pub struct PoseNormalize {
         /// Frame to normalize (gray or RGBA)
@@ -259,6 +262,12 @@ pyrograph_core::node! {
         /// Flame height as a fraction of the frame height in center_scale mode
         #[range(0.01, 4.0)]
         target_height: f64 = 0.8,
+        /// Largest rotation in degrees; a flame leaning further is turned this far only (rotate mode)
+        #[range(0.0, 180.0)]
+        max_angle: f64 = 45.0,
+        /// Outline width, as a fraction of the frame's, from which the frame is not turned (rotate mode)
+        #[range(0.05, 1.0)]
+        max_width: f64 = 0.9,
     }
     pub struct PoseNormalizeOut {
         /// Normalized frame
@@ -269,11 +278,36 @@ pyrograph_core::node! {
         root: [f64; 2],
         /// Upper end of the fitted line, in input pixels
         tip: [f64; 2],
+        /// Rotation applied in degrees (the lean, limited by the guards); 0 in center_scale mode
+        turned: f64,
     }
 }
 
+/// The rotation `imaging.pose_normalize` applies for a measured lean: the lean itself, at most
+/// `max_angle` either way, and none when the outline spans `max_width` of the frame or more.
+/// Returns the turn and, when a guard acted, the warning to give.
+pub fn guarded_turn(lean_deg: f64, outline_width: f64, frame_width: f64, max_angle: f64, max_width: f64) -> (f64, Option<String>) {
+    if outline_width >= max_width * frame_width {
+        let msg = format!(
+            "the flame's outline spans {:.0} % of the frame's width (max_width {:.0} %): a fire filling the picture has no \
+             single axis, so frames like this are not turned (measured lean {lean_deg:.1}°); crop to one flame to straighten it",
+            100.0 * outline_width / frame_width,
+            100.0 * max_width
+        );
+        return (0.0, Some(msg));
+    }
+    if lean_deg.abs() > max_angle {
+        let msg = format!(
+            "the flame leans {lean_deg:.1}°, more than max_angle {max_angle}°: turned {max_angle}° only; raise max_angle if \
+             flames this tilted should stand upright"
+        );
+        return (max_angle.copysign(lean_deg), Some(msg));
+    }
+    (lean_deg, None)
+}
+
 impl Cook for PoseNormalize {
-    fn cook(self, _: &CookCtx) -> Result<PoseNormalizeOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<PoseNormalizeOut, NodeError> {
         let (image, contours) = (&self.image, &self.contours);
         if (contours.width, contours.height) != image.size() && !contours.contours.is_empty() {
             return Err(NodeError::port(
@@ -296,9 +330,24 @@ impl Cook for PoseNormalize {
             WeightingOption::Root => Weighting::Root,
             WeightingOption::LowPoly => Weighting::LowPoly(self.lowpoly_tolerance),
         };
-        let pose = pose_normalize(image, contours, mode, weighting);
-        let (angle, root, tip) = pose.axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
-        Ok(PoseNormalizeOut { image: Arc::new(pose.image), angle, root, tip })
+        let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
+        let (image, turned) = match (mode, axis) {
+            (PoseMode::Rotate, Some(a)) => {
+                let width = main_contour(contours).map_or(0.0, |c| {
+                    let xs = c.points.iter().map(|p| f64::from(p[0]));
+                    xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min)
+                });
+                let (turn, warning) =
+                    guarded_turn(a.angle_deg, width, f64::from(image.width()), self.max_angle, self.max_width);
+                if let Some(w) = warning {
+                    ctx.warn(w);
+                }
+                (rotate_upright(image, &FlameAxis { angle_deg: turn, ..a }), turn)
+            }
+            _ => (pose_normalize(image, contours, mode, weighting).image, 0.0),
+        };
+        let (angle, root, tip) = axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
+        Ok(PoseNormalizeOut { image: Arc::new(image), angle, root, tip, turned })
     }
 }
 
@@ -339,6 +388,61 @@ pub(crate) mod tests {
                 assert!(axis.root[1] > axis.tip[1]);
             }
         }
+    }
+
+    #[test]
+    fn guards_limit_the_turn_and_say_so() {
+        assert_eq!(guarded_turn(10.0, 30.0, 200.0, 45.0, 0.9), (10.0, None));
+        let (turn, w) = guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9);
+        assert_eq!(turn, -45.0);
+        assert!(w.is_some_and(|w| w.contains("leans -60.0°") && w.contains("max_angle")));
+        let (turn, w) = guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9);
+        assert_eq!(turn, 0.0);
+        assert!(w.is_some_and(|w| w.contains("95 % of the frame's width")));
+    }
+
+    /// Cooks the node with its defaults on `m` (the mask as the frame), returning the output and
+    /// the warnings.
+    fn cook_node(m: &Mask) -> (PoseNormalizeOut, Vec<String>) {
+        let node = PoseNormalize {
+            image: Arc::new(mask_image(m)),
+            contours: Arc::new(trace_contours(m)),
+            mode: PoseModeOption::Rotate,
+            weights: WeightingOption::Uniform,
+            lowpoly_tolerance: 8.0,
+            target_height: 0.8,
+            max_angle: 45.0,
+            max_width: 0.9,
+        };
+        let ctx = CookCtx::new();
+        let out = node.cook(&ctx).unwrap();
+        (out, ctx.warnings().into_iter().map(|w| w.message).collect())
+    }
+
+    #[test]
+    fn a_steep_lean_is_turned_max_angle_only() {
+        let m = ellipse_mask(160, 160, (80.0, 80.0), (12.0, 45.0), 60.0);
+        let (out, warnings) = cook_node(&m);
+        assert!((out.angle - 60.0).abs() < 1.0, "measured {}", out.angle);
+        assert_eq!(out.turned, 45.0);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        // What is left of the lean after the turn: about 15°.
+        let turned = Mask::from_vec(160, 160, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let rest = flame_axis(main_contour(&trace_contours(&turned)).unwrap(), Weighting::Uniform).unwrap();
+        assert!((rest.angle_deg - 15.0).abs() < 1.5, "left leaning {}", rest.angle_deg);
+    }
+
+    #[test]
+    fn a_frame_filling_fire_is_not_turned() {
+        // Wider than 90 % of the frame and tilted 20°: passed through untouched, with a warning.
+        let m = ellipse_mask(100, 100, (50.0, 50.0), (20.0, 60.0), 70.0);
+        let (out, warnings) = cook_node(&m);
+        assert_eq!(out.turned, 0.0);
+        assert_eq!(out.image.data(), mask_image(&m).data());
+        assert!(warnings.iter().any(|w| w.contains("no single axis")), "{warnings:?}");
+        // A flame in the middle of the same frame is turned as before, without a warning.
+        let (out, warnings) = cook_node(&ellipse_mask(100, 100, (50.0, 50.0), (8.0, 30.0), 20.0));
+        assert!((out.turned - 20.0).abs() < 1.0 && warnings.is_empty(), "{} {warnings:?}", out.turned);
     }
 
     #[test]

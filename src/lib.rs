@@ -11,6 +11,7 @@ pub mod demo;
 pub mod job;
 pub mod look;
 pub mod manifest;
+pub mod presets;
 pub mod reference;
 pub mod wedge;
 

@@ -131,11 +131,22 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// List the preset graphs of a folder with their exposed ports.
+    /// List presets with their metadata and exposed ports: those next to --graph (its `presets/`
+    /// folder), in every folder of PYROGRAPH_PRESET_PATH, then pyrograph's own; an earlier folder
+    /// wins a name, and the listing says what it hides.
     Presets {
-        /// Folder of presets.
-        #[arg(long, default_value = "graphs/presets")]
-        dir: PathBuf,
+        /// List only this folder instead of the search path.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+        /// Search the `presets/` folder next to this graph first.
+        #[arg(long)]
+        graph: Option<PathBuf>,
+        /// Only presets with this tag (repeat for several; all must match).
+        #[arg(long)]
+        tag: Vec<String>,
+        /// Only presets whose name, description or tags contain this text (any case).
+        #[arg(long)]
+        search: Option<String>,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
@@ -210,7 +221,9 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Info { graph, json }) => info(&registry, &graph, json),
-        Some(Command::Presets { dir, json }) => presets(&registry, &dir, json),
+        Some(Command::Presets { dir, graph, tag, search, json }) => {
+            presets(&registry, &PresetQuery { dir, graph, tags: tag, search }, json)
+        }
         Some(Command::Bench { iters, json }) => {
             bench(&registry, iters, json);
             Ok(())
@@ -562,18 +575,61 @@ fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure>
     Ok(())
 }
 
-fn presets(registry: &Registry, dir: &Path, json_out: bool) -> Result<(), Failure> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| Failure(format!("error: cannot read preset folder {}: {e}", dir.display())))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .collect();
-    files.sort();
+/// What `pyrograph presets` lists.
+struct PresetQuery {
+    dir: Option<PathBuf>,
+    graph: Option<PathBuf>,
+    tags: Vec<String>,
+    search: Option<String>,
+}
+
+fn presets(registry: &Registry, q: &PresetQuery, json_out: bool) -> Result<(), Failure> {
+    use pyrograph::presets::{Library, PRESET_PATH_VAR, builtin_dir, matches, search_path};
+    let dirs = match &q.dir {
+        Some(d) => {
+            if !d.is_dir() {
+                return Err(Failure(format!("error: cannot read preset folder {}: not a folder", d.display())));
+            }
+            vec![d.clone()]
+        }
+        None => {
+            let graph_dir = q.graph.as_ref().map(|g| g.parent().map(Path::to_path_buf).unwrap_or_default());
+            let env = std::env::var_os(PRESET_PATH_VAR);
+            search_path(graph_dir.as_deref(), env.as_deref(), &builtin_dir())
+        }
+    };
+    let lib = Library::scan(&dirs);
+    let mut failed = !lib.refused.is_empty();
+    for d in &lib.missing {
+        if q.dir.is_none() && d != &builtin_dir() {
+            eprintln!("note: preset folder {} does not exist", d.display());
+        }
+    }
+    for s in &lib.shadowed {
+        eprintln!(
+            "note: preset '{}' in {} is hidden by {} (earlier in the search path)",
+            s.preset.name,
+            s.preset.file.display(),
+            s.by.display()
+        );
+    }
+    for (file, why) in &lib.refused {
+        eprintln!("error: {}: not a usable preset: {why}", file.display());
+    }
     let mut list = Vec::new();
-    let mut failed = false;
-    for f in files {
-        match preset_entry(registry, &f) {
-            Ok(entry) => list.push(entry),
+    for p in lib.presets.iter().filter(|p| matches(p, &q.tags, q.search.as_deref())) {
+        match preset_entry(registry, &p.file) {
+            Ok(mut entry) => {
+                let hides: Vec<String> =
+                    lib.shadowed.iter().filter(|s| s.by == p.file).map(|s| s.preset.file.display().to_string()).collect();
+                let m = &p.meta;
+                let extra = json!({"name": p.name, "description": p.description, "tags": m.tags, "revision": m.revision,
+                    "author": m.author, "licence": m.licence, "thumbnail": m.thumbnail, "requires": m.requires, "hides": hides});
+                if let (Some(e), serde_json::Value::Object(more)) = (entry.as_object_mut(), extra) {
+                    e.extend(more);
+                }
+                list.push(entry);
+            }
             Err(e) => {
                 failed = true;
                 eprintln!("{e}");
@@ -584,7 +640,10 @@ fn presets(registry: &Registry, dir: &Path, json_out: bool) -> Result<(), Failur
         println!("{}", serde_json::Value::Array(list));
     } else {
         for p in &list {
-            println!("{}  {}", p["file"].as_str().unwrap_or(""), p["description"].as_str().unwrap_or(""));
+            let tags: Vec<&str> = p["tags"].as_array().into_iter().flatten().filter_map(|t| t.as_str()).collect();
+            let tags = if tags.is_empty() { String::new() } else { format!("  [{}]", tags.join(", ")) };
+            println!("{}  {}{tags}", p["name"].as_str().unwrap_or(""), p["file"].as_str().unwrap_or(""));
+            println!("    {}", p["description"].as_str().unwrap_or(""));
             for kind in ["inputs", "params", "outputs"] {
                 for port in p[kind].as_array().into_iter().flatten() {
                     println!(

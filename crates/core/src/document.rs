@@ -2,9 +2,10 @@
 //!
 //! The document is its own set of plain structs, separate from the runtime graph: it keeps node
 //! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
-//! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`]), never
-//! serde aliases. A document is written in the oldest version that can hold it, so a graph without
-//! groups or comments stays readable by releases that know only version 1.
+//! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`],
+//! [`migrate_v2`]), never serde aliases. A document is written in the oldest version that can hold
+//! it, so a graph without groups, comments or preset metadata stays readable by releases that know
+//! only version 1.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -16,8 +17,12 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 
-/// The newest version this build reads and writes (2: canvas groups and comments).
-pub const CURRENT_VERSION: u32 = 2;
+/// The newest version this build reads and writes (2: canvas groups and comments; 3: preset
+/// metadata).
+pub const CURRENT_VERSION: u32 = 3;
+
+/// The version of documents with canvas groups or comments and no preset metadata.
+pub const CANVAS_VERSION: u32 = 2;
 
 /// The version of documents without groups or comments (what older releases read).
 pub const PLAIN_VERSION: u32 = 1;
@@ -176,7 +181,38 @@ pub struct CommentDoc {
     pub color: Option<String>,
 }
 
-/// A graph document, version 2 (version 1 plus canvas groups and comments).
+/// What a preset library shows of a preset (version 3): the catalogue's name, text and tags, the
+/// preset's own revision, who made it under which licence, its thumbnail, and the inputs it cannot
+/// cook without.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PresetDoc {
+    /// The name the preset is listed and found by (the file stem when empty).
+    #[serde(default)]
+    pub name: String,
+    /// What the preset makes, in a sentence or two.
+    #[serde(default)]
+    pub description: String,
+    /// Search tags, e.g. `["fire", "candle", "footage"]`.
+    #[serde(default)]
+    pub tags: Vec<String>,
+    /// The preset's own revision, raised when its exposed ports or look change.
+    #[serde(default)]
+    pub revision: u32,
+    /// Author or studio.
+    #[serde(default)]
+    pub author: String,
+    /// Licence of the preset file.
+    #[serde(default)]
+    pub licence: String,
+    /// Thumbnail image, relative to the preset file.
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub thumbnail: Option<String>,
+    /// Interface inputs that must be connected (footage, a mesh, ...).
+    #[serde(default)]
+    pub requires: Vec<String>,
+}
+
+/// A graph document, version 3 (version 1 plus canvas groups and comments, then preset metadata).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GraphDoc {
     /// Always [`CURRENT_VERSION`] after loading.
@@ -187,6 +223,9 @@ pub struct GraphDoc {
     /// For preset files: what the graph exposes as a node.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interface: Option<InterfaceDoc>,
+    /// For preset files: catalogue metadata (version 3).
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub preset: Option<PresetDoc>,
     /// Nodes by readable id, in file order.
     pub nodes: NodeList,
     /// Edges as `("from_node.output", "to_node.input")`.
@@ -206,6 +245,7 @@ impl Default for GraphDoc {
             version: CURRENT_VERSION,
             description: None,
             interface: None,
+            preset: None,
             nodes: NodeList::default(),
             edges: Vec::new(),
             groups: Vec::new(),
@@ -264,7 +304,11 @@ impl GraphDoc {
                 let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
                 Ok(migrate_v1(old))
             }
-            2 => ron_options().from_str(text).map_err(syntax_error),
+            2 => {
+                let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v2(old))
+            }
+            3 => ron_options().from_str(text).map_err(syntax_error),
             v => Err(Diagnostics::one(Diagnostic::new(
                 DiagnosticKind::Version,
                 Location::File,
@@ -284,9 +328,16 @@ impl GraphDoc {
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }
 
-    /// The oldest version that holds this document: 1 without groups and comments, else 2.
+    /// The oldest version that holds this document: 3 with preset metadata, else 2 with groups
+    /// or comments, else 1.
     pub fn needed_version(&self) -> u32 {
-        if self.groups.is_empty() && self.comments.is_empty() { PLAIN_VERSION } else { CURRENT_VERSION }
+        if self.preset.is_some() {
+            CURRENT_VERSION
+        } else if self.groups.is_empty() && self.comments.is_empty() {
+            PLAIN_VERSION
+        } else {
+            CANVAS_VERSION
+        }
     }
 
     /// The document as pretty RON, in the oldest version that holds it ([`GraphDoc::needed_version`]).
@@ -400,9 +451,16 @@ pub fn migrate_v0(old: v0::GraphDocV0) -> GraphDoc {
     GraphDoc { nodes: NodeList(nodes), edges, ..GraphDoc::default() }
 }
 
-/// Migrates version 1 to version 2: the shape is the same, version 2 only adds the optional
-/// `groups` and `comments`, so the migration is the version number.
+/// Migrates version 1 to the current version: the shape is the same, version 2 only adds the
+/// optional `groups` and `comments` and version 3 the optional `preset`, so the migration is the
+/// version number.
 pub fn migrate_v1(mut old: GraphDoc) -> GraphDoc {
+    old.version = CURRENT_VERSION;
+    old
+}
+
+/// Migrates version 2 to version 3: version 3 only adds the optional `preset` metadata.
+pub fn migrate_v2(mut old: GraphDoc) -> GraphDoc {
     old.version = CURRENT_VERSION;
     old
 }
@@ -559,6 +617,26 @@ mod tests {
         let text = doc.to_ron();
         assert!(text.contains("version: 2"), "{text}");
         assert_eq!(GraphDoc::from_ron(&text).unwrap(), doc);
+    }
+
+    #[test]
+    fn preset_metadata_round_trips_as_version_3_and_newer_is_refused() {
+        let text = r#"(version: 3, preset: (name: "candle row", description: "Five candles", tags: ["fire", "candle"],
+            revision: 2, author: "pyrograph", licence: "MIT", thumbnail: "thumbs/candle-row.png", requires: ["footage"]),
+            nodes: {"a": (type: "value.float")})"#;
+        let doc = GraphDoc::from_ron(text).unwrap();
+        let p = doc.preset.as_ref().unwrap();
+        assert_eq!((p.name.as_str(), p.revision, p.tags.len(), p.requires.len()), ("candle row", 2, 2, 1));
+        assert_eq!(p.thumbnail.as_deref(), Some("thumbs/candle-row.png"));
+        let out = doc.to_ron();
+        assert!(out.contains("version: 3,") && out.contains("preset: (") && !out.contains("Some("), "{out}");
+        assert_eq!(GraphDoc::from_ron(&out).unwrap(), doc);
+        let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 4")).unwrap_err();
+        assert_eq!(err.0[0].kind, DiagnosticKind::Version);
+        // Without metadata the same graph is written for older readers again.
+        let mut plain = doc.clone();
+        plain.preset = None;
+        assert!(plain.to_ron().contains("version: 1,"));
     }
 
     #[test]

@@ -286,7 +286,13 @@ pyrograph_core::node! {
 /// The rotation `imaging.pose_normalize` applies for a measured lean: the lean itself, at most
 /// `max_angle` either way, and none when the outline spans `max_width` of the frame or more.
 /// Returns the turn and, when a guard acted, the warning to give.
-pub fn guarded_turn(lean_deg: f64, outline_width: f64, frame_width: f64, max_angle: f64, max_width: f64) -> (f64, Option<String>) {
+pub fn guarded_turn(
+    lean_deg: f64,
+    outline_width: f64,
+    frame_width: f64,
+    max_angle: f64,
+    max_width: f64,
+) -> (f64, Option<String>) {
     if outline_width >= max_width * frame_width {
         let msg = format!(
             "the flame's outline spans {:.0} % of the frame's width (max_width {:.0} %): a fire filling the picture has no \
@@ -337,8 +343,7 @@ impl Cook for PoseNormalize {
                     let xs = c.points.iter().map(|p| f64::from(p[0]));
                     xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min)
                 });
-                let (turn, warning) =
-                    guarded_turn(a.angle_deg, width, f64::from(image.width()), self.max_angle, self.max_width);
+                let (turn, warning) = guarded_turn(a.angle_deg, width, f64::from(image.width()), self.max_angle, self.max_width);
                 if let Some(w) = warning {
                     ctx.warn(w);
                 }
@@ -427,7 +432,8 @@ pub(crate) mod tests {
         assert_eq!(out.turned, 45.0);
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         // What is left of the lean after the turn: about 15°.
-        let turned = Mask::from_vec(160, 160, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let turned =
+            Mask::from_vec(160, 160, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
         let rest = flame_axis(main_contour(&trace_contours(&turned)).unwrap(), Weighting::Uniform).unwrap();
         assert!((rest.angle_deg - 15.0).abs() < 1.5, "left leaning {}", rest.angle_deg);
     }

@@ -601,7 +601,9 @@ fn presets(registry: &Registry, q: &PresetQuery, json_out: bool) -> Result<(), F
     let lib = Library::scan(&dirs);
     let mut failed = !lib.refused.is_empty();
     for d in &lib.missing {
-        if q.dir.is_none() && d != &builtin_dir() {
+        if d == &builtin_dir() {
+            eprintln!("note: pyrograph's own presets are not at {} (a binary moved away from its source tree)", d.display());
+        } else {
             eprintln!("note: preset folder {} does not exist", d.display());
         }
     }

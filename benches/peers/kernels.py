@@ -11,10 +11,11 @@ Library calls, per subcommand:
   endgrow      Algorithm 1 of the thesis (§5.1.2.2) in numpy, step for step as pyrograph's
                nodes/eigen/src/transition/end_growing.rs: distance rows by np.einsum over the float32
                weights, candidates by np.argsort (stable, so ties go to the lower frame index).
-  reconstruct  eq. 22 batched: W @ U + mean, one float32 BLAS product (OpenBLAS sgemm) for all B frames.
-  train        ../shared/peers/pca.py `gram_eigenfaces` (mean, A A^T by BLAS, np.linalg.eigh, lift by A^T V,
-               normalise) plus the projection of every frame, A @ U (sgemm): the same result as
-               pyrograph's training (basis + weights of every training frame).
+  reconstruct  eq. 22 batched: W @ U (one float32 OpenBLAS sgemm for all B frames), then += mean in place.
+  train        ../shared/peers/pca.py's `gram_eigenfaces` steps (mean, A A^T by BLAS sgemm, np.linalg.eigh,
+               lift by A^T V, normalise) on a copy centred in place, and the training weights as
+               sqrt(w) V, the identity pyrograph uses: the same result (basis + weights of every
+               training frame) from the same work.
   cloth        ../shared/peers/mass_spring.py's model and `add_springs` (numpy, vectorised over all flames),
                with the wind held constant instead of pulsed (both sides integrate the same forces).
   arp          eq. 2 of Stich & Magnor sampled as ../shared/peers/ar_fit.py `sample` does: all noise drawn
@@ -32,13 +33,17 @@ PEERS = os.environ.get("PYROGRAPH_PEERS") or os.path.join(os.path.dirname(os.pat
 sys.path.insert(0, os.path.abspath(PEERS))
 
 
-def timed(fn, reps, warmup):
+def timed(fn, reps, warmup, setup=None):
+    """Runs fn `warmup` times, then `reps` times timed; with `setup`, each run gets a fresh
+    setup() made outside the timing (as examples/kernels does for kernels that consume input)."""
+    call = (lambda: fn(setup())) if setup else fn
     for _ in range(warmup):
-        fn()
+        call()
     times, out = [], None
     for _ in range(max(reps, 1)):
+        arg = setup() if setup else None
         t0 = time.perf_counter()
-        out = fn()
+        out = fn(arg) if setup else fn()
         times.append(time.perf_counter() - t0)
     return times, out
 
@@ -190,28 +195,40 @@ def cmd_reconstruct(a):
     mean = np.load(a.mean).astype(np.float32)
     U = np.ascontiguousarray(np.load(a.basis), np.float32)
     W = np.ascontiguousarray(np.load(a.weights), np.float32)
-    times, out = timed(lambda: np.add(W @ U, mean), a.reps, a.warmup)
+    def run():
+        out = W @ U
+        out += mean                                # in place, as pyrograph adds into its output
+        return out
+
+    times, out = timed(run, a.reps, a.warmup)
     np.save(a.output, out)
     report("reconstruct", times, threads_env(), batch=len(W), e=U.shape[0], pixels=U.shape[1])
 
 
 def cmd_train(a):
-    from pca import gram_eigenfaces
     frames = np.load(a.frames)
     m = frames.shape[0]
     X = np.ascontiguousarray(frames.reshape(m, -1), np.float32)
 
-    def run():
-        mean, U, _, _ = gram_eigenfaces(X, a.components)
-        weights = X @ U - mean @ U                 # eq. 18 for every frame, as pca.py's `project`
-        return mean, U, weights
+    def run(A):
+        # pca.py's gram_eigenfaces step for step, centring its own copy in place as pyrograph
+        # does, and the training weights from the decomposition, w_l(n) = sqrt(mu_l) v_l(n) --
+        # the identity pyrograph uses -- instead of a second product X @ U.
+        mean = A.mean(axis=0)
+        A -= mean
+        L = A @ A.T
+        w, V = np.linalg.eigh(L)
+        top = np.argsort(w)[::-1][:a.components]
+        w, V = w[top], V[:, top]
+        U = A.T @ V
+        U /= np.linalg.norm(U, axis=0)
+        return U, V * np.sqrt(np.maximum(w, 0)), w
 
-    times, (mean, U, weights) = timed(run, a.reps, a.warmup)
-    # Eigenvalues of the covariance as pyrograph reports them (eq. 13): |A u|^2 / M for each unit eigenfire u.
-    lam = (weights.astype(np.float64) ** 2).sum(axis=0) / m
-    np.save(a.output_prefix + "eigenvalues.npy", lam)
+    times, (U, weights, w) = timed(run, a.reps, a.warmup, setup=X.copy)
+    # Eigenvalues of the covariance as pyrograph reports them (eq. 13): the Gram matrix's over M.
+    np.save(a.output_prefix + "eigenvalues.npy", w.astype(np.float64) / m)
     np.save(a.output_prefix + "vectors.npy", np.ascontiguousarray(U[:, :a.keep_vectors].T))
-    np.save(a.output_prefix + "weights.npy", weights)
+    np.save(a.output_prefix + "weights.npy", np.ascontiguousarray(weights, np.float32))
     report("train", times, threads_env(), frames=m, e=U.shape[1])
 
 

@@ -24,6 +24,9 @@ pub const CURRENT_VERSION: u32 = 3;
 /// The version of documents with canvas groups or comments and no preset metadata.
 pub const CANVAS_VERSION: u32 = 2;
 
+/// The version of documents with preset metadata.
+pub const PRESET_VERSION: u32 = 3;
+
 /// The version of documents without groups or comments (what older releases read).
 pub const PLAIN_VERSION: u32 = 1;
 
@@ -332,7 +335,7 @@ impl GraphDoc {
     /// or comments, else 1.
     pub fn needed_version(&self) -> u32 {
         if self.preset.is_some() {
-            CURRENT_VERSION
+            PRESET_VERSION
         } else if self.groups.is_empty() && self.comments.is_empty() {
             PLAIN_VERSION
         } else {

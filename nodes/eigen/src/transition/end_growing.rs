@@ -199,6 +199,9 @@ pub fn end_growing_adaptive(
     if alpha >= m || beta >= m {
         return Err(format!("α = {alpha} or β = {beta} is past the database's {m} frames"));
     }
+    if alpha == beta {
+        return Err(format!("α and β are the same frame ({alpha}): there is no gap to bridge"));
+    }
     if e > db.components {
         return Err(format!("{e} components asked, the weights have {}", db.components));
     }

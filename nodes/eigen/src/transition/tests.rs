@@ -84,6 +84,15 @@ fn end_growing_fails_clearly_when_theta_min_is_too_large() {
 }
 
 #[test]
+fn end_growing_refuses_the_same_frame_at_both_ends() {
+    // α = β used to reach the shared-image join with nothing on either side and slice out of range.
+    let (db, alpha, _, _) = planted(9, 14);
+    let ex = vec![false; db.frames];
+    let err = end_growing(&db, alpha, alpha, 10, 6, 0.5, &ex, true).unwrap_err();
+    assert!(err.contains("same frame"), "{err}");
+}
+
+#[test]
 fn direct_bridging_follows_the_bridge_and_respects_exclusions() {
     let (db, alpha, beta, chain) = planted(9, 13);
     let ex = vec![false; db.frames];

@@ -303,11 +303,12 @@ pub fn guarded_turn(
         return (0.0, Some(msg));
     }
     if lean_deg.abs() > max_angle {
+        let turn = max_angle.copysign(lean_deg);
         let msg = format!(
-            "the flame leans {lean_deg:.1}°, more than max_angle {max_angle}°: turned {max_angle}° only; raise max_angle if \
+            "the flame leans {lean_deg:.1}°, more than max_angle {max_angle}°: turned {turn}° only; raise max_angle if \
              flames this tilted should stand upright"
         );
-        return (max_angle.copysign(lean_deg), Some(msg));
+        return (turn, Some(msg));
     }
     (lean_deg, None)
 }
@@ -339,9 +340,11 @@ impl Cook for PoseNormalize {
         let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
         let (image, turned) = match (mode, axis) {
             (PoseMode::Rotate, Some(a)) => {
+                // Columns covered: a traced outline runs through pixel centres, so an outline
+                // from the first column to the last spans the whole width.
                 let width = main_contour(contours).map_or(0.0, |c| {
                     let xs = c.points.iter().map(|p| f64::from(p[0]));
-                    xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min)
+                    xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min) + 1.0
                 });
                 let (turn, warning) = guarded_turn(a.angle_deg, width, f64::from(image.width()), self.max_angle, self.max_width);
                 if let Some(w) = warning {
@@ -400,7 +403,7 @@ pub(crate) mod tests {
         assert_eq!(guarded_turn(10.0, 30.0, 200.0, 45.0, 0.9), (10.0, None));
         let (turn, w) = guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9);
         assert_eq!(turn, -45.0);
-        assert!(w.is_some_and(|w| w.contains("leans -60.0°") && w.contains("max_angle")));
+        assert!(w.is_some_and(|w| w.contains("leans -60.0°") && w.contains("turned -45° only")));
         let (turn, w) = guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9);
         assert_eq!(turn, 0.0);
         assert!(w.is_some_and(|w| w.contains("95 % of the frame's width")));

@@ -139,21 +139,7 @@ fn tealight_mask_excludes_the_glowing_wax_and_glass_and_keeps_the_blue_base() {
     let dir = out.path().join("preprocess-tealight");
 
     // The same crop of the original frames, for colour checks.
-    let mut doc = GraphDoc::new();
-    let video = footage().join("tealight-candle/candle.mp4");
-    doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
-    doc.add_node(
-        "crop",
-        NodeDoc::new("imaging.crop")
-            .param("x", ParamValue::Int(90))
-            .param("y", ParamValue::Int(100))
-            .param("width", ParamValue::Int(300))
-            .param("height", ParamValue::Int(300)),
-    );
-    doc.connect("v.clip", "crop.image");
-    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
-    let ctx = CookCtx::new();
-    let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
+    let (frames, ctx) = tealight_crop();
 
     let (mut wax_inside, mut wax_total, mut with_base) = (0usize, 0usize, 0usize);
     for f in 0..FRAMES {
@@ -188,6 +174,27 @@ fn tealight_mask_excludes_the_glowing_wax_and_glass_and_keeps_the_blue_base() {
     );
     assert!(leak < 0.01, "{:.2} % of the glowing wax/glass pixels are inside the mask", leak * 100.0);
     assert!(with_base * 10 >= FRAMES * 8, "blue base inside the mask in only {with_base} of {FRAMES} frames");
+}
+
+/// The tea-light video cropped as the tealight preset crops it (300×300 at 90, 100), as a clip of
+/// the original colours, and the context to read it with.
+fn tealight_crop() -> (pyrograph::core::Clip, CookCtx) {
+    let mut doc = GraphDoc::new();
+    let video = footage().join("tealight-candle/candle.mp4");
+    doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
+    doc.add_node(
+        "crop",
+        NodeDoc::new("imaging.crop")
+            .param("x", ParamValue::Int(90))
+            .param("y", ParamValue::Int(100))
+            .param("width", ParamValue::Int(300))
+            .param("height", ParamValue::Int(300)),
+    );
+    doc.connect("v.clip", "crop.image");
+    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
+    let ctx = CookCtx::new();
+    let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
+    (frames, ctx)
 }
 
 /// The hand-labelled flame outlines of tests/data/tealight-flame-labels.json, filled, one 300×300
@@ -286,21 +293,7 @@ fn tealight_mask_matches_hand_labelled_flames() {
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn tealight_label_score_rejects_a_bright_mask_and_a_shifted_flame() {
     let labels = tealight_labels();
-    let mut doc = GraphDoc::new();
-    let video = footage().join("tealight-candle/candle.mp4");
-    doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
-    doc.add_node(
-        "crop",
-        NodeDoc::new("imaging.crop")
-            .param("x", ParamValue::Int(90))
-            .param("y", ParamValue::Int(100))
-            .param("width", ParamValue::Int(300))
-            .param("height", ParamValue::Int(300)),
-    );
-    doc.connect("v.clip", "crop.image");
-    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
-    let ctx = CookCtx::new();
-    let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
+    let (frames, ctx) = tealight_crop();
     let (mut bright, mut shifted) = (Vec::new(), Vec::new());
     for (f, truth) in &labels {
         let rgb = frames.image(*f, &ctx).unwrap();

@@ -163,7 +163,7 @@ fn build_variant(
     apply_sets(&mut doc, sets)?;
     let used_tokens = v.apply(&mut doc).map_err(|e| Failure(format!("error: {e}")))?;
     let out = if used_tokens { out_root.to_path_buf() } else { out_root.join(&v.name) };
-    let options = BuildOptions { output_dir: Some(out.clone()), allow_outside_out };
+    let options = BuildOptions { output_dir: Some(out.clone()), allow_outside_out, ..BuildOptions::default() };
     let graph = Graph::build_file(&doc, path, registry, &options)?;
     Ok((graph, out))
 }

@@ -11,6 +11,8 @@ pub mod demo;
 pub mod job;
 pub mod look;
 pub mod manifest;
+pub mod preset_cook;
+pub mod preset_docs;
 pub mod presets;
 pub mod reference;
 pub mod wedge;

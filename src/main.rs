@@ -10,8 +10,10 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use serde_json::json;
 
 mod cli_farm;
+mod cli_presets;
 
 use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
+use cli_presets::{PresetQuery, presets, render_preset};
 use pyrograph::core::{
     BuildOptions, CookCtx, CookResult, CookSettings, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError, ParamValue,
     Progress, Registry, Warning,
@@ -150,6 +152,31 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Cook each listed preset at 256×144 (its middle frame; inputs from its samples) and
+        /// write the thumbnail its metadata names (default thumbs/<file>.png beside it).
+        #[arg(long)]
+        thumbnails: bool,
+        /// With --thumbnails: write them into this folder instead.
+        #[arg(long, requires = "thumbnails")]
+        out: Option<PathBuf>,
+        /// With --thumbnails: replace thumbnails that exist.
+        #[arg(long, requires = "thumbnails")]
+        overwrite: bool,
+    },
+    /// Render one preset by name (or file) into frames: --set PARAM=VALUE sets its exposed
+    /// parameters, --input NAME=FILE feeds its inputs (a graph file, an image, a video or a
+    /// folder of frames); frames go to --out (default pyrograph-out) as <preset>/<preset>_####.png.
+    Preset {
+        /// The preset's name (see `pyrograph presets`) or a preset file.
+        name: String,
+        /// Search the `presets/` folder next to this graph first.
+        #[arg(long)]
+        graph: Option<PathBuf>,
+        /// Feed an input: NAME=FILE (default: the preset's sample, where it has one).
+        #[arg(long = "input", value_name = "NAME=FILE")]
+        input: Vec<String>,
+        #[command(flatten)]
+        opts: RenderOpts,
     },
     /// Time the evaluator: cold, warm and one-parameter re-cook of 200-node chains and fans.
     Bench {
@@ -213,7 +240,7 @@ fn main() -> ExitCode {
             _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
         },
         Some(Command::Check { graph, out, allow_outside_out, json }) => {
-            check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out }, json)
+            check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() }, json)
         }
         Some(Command::Save { graph, output, set, overwrite }) => save(&graph, &output, &set, overwrite),
         Some(Command::Nodes { markdown, json }) => {
@@ -221,9 +248,11 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Info { graph, json }) => info(&registry, &graph, json),
-        Some(Command::Presets { dir, graph, tag, search, json }) => {
-            presets(&registry, &PresetQuery { dir, graph, tags: tag, search }, json)
+        Some(Command::Presets { dir, graph, tag, search, json, thumbnails, out, overwrite }) => {
+            let thumbnails = thumbnails.then_some(out);
+            presets(&registry, &PresetQuery { dir, graph, tags: tag, search, thumbnails, overwrite }, json)
         }
+        Some(Command::Preset { name, graph, input, opts }) => render_preset(&registry, &name, graph.as_deref(), &input, &opts),
         Some(Command::Bench { iters, json }) => {
             bench(&registry, iters, json);
             Ok(())
@@ -356,7 +385,7 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     if o.wedge_index.is_some() || o.sheet {
         return Err(Failure("error: --wedge-index and --sheet need --wedge or --wedge-zip".into()));
     }
-    let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out };
+    let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out, ..BuildOptions::default() };
     let (_, graph) = load(registry, path, &o.set, &options)?;
     let targets: Vec<String> = if o.nodes.is_empty() {
         let sinks = graph.sinks();
@@ -364,6 +393,12 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     } else {
         o.nodes.clone()
     };
+    cook_graph(&graph, path, o, &targets)
+}
+
+/// Cooks `targets` of `graph` (built from `path`) with the settings of `o`: progress, the
+/// manifest and the report.
+fn cook_graph(graph: &Graph, path: &Path, o: &RenderOpts, targets: &[String]) -> Result<(), Failure> {
     let target_refs: Vec<&str> = targets.iter().map(String::as_str).collect();
     if let Some(dir) = &o.cache_dir
         && !dir.is_dir()
@@ -375,13 +410,13 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
         ctx = ctx.with_progress(p);
     }
     let started = std::time::Instant::now();
-    let result = Evaluator::new().cook(&graph, &target_refs, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
+    let result = Evaluator::new().cook(graph, &target_refs, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
     if let Some(file) = &o.manifest {
         let out = o.out.clone().unwrap_or_else(|| graph.dir.clone());
         let ok = result.root_errors().is_empty();
         write_manifest(file, path, &out, o, None, ok, &ctx.written(), started.elapsed())?;
     }
-    report(&graph, &targets, &result, &ctx.warnings(), started.elapsed(), o.json)
+    report(graph, targets, &result, &ctx.warnings(), started.elapsed(), o.json)
 }
 
 fn report(
@@ -573,105 +608,6 @@ fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure>
         println!("  {a} -> {b}");
     }
     Ok(())
-}
-
-/// What `pyrograph presets` lists.
-struct PresetQuery {
-    dir: Option<PathBuf>,
-    graph: Option<PathBuf>,
-    tags: Vec<String>,
-    search: Option<String>,
-}
-
-fn presets(registry: &Registry, q: &PresetQuery, json_out: bool) -> Result<(), Failure> {
-    use pyrograph::presets::{Library, PRESET_PATH_VAR, builtin_dir, matches, search_path};
-    let dirs = match &q.dir {
-        Some(d) => {
-            if !d.is_dir() {
-                return Err(Failure(format!("error: cannot read preset folder {}: not a folder", d.display())));
-            }
-            vec![d.clone()]
-        }
-        None => {
-            let graph_dir = q.graph.as_ref().map(|g| g.parent().map(Path::to_path_buf).unwrap_or_default());
-            let env = std::env::var_os(PRESET_PATH_VAR);
-            search_path(graph_dir.as_deref(), env.as_deref(), &builtin_dir())
-        }
-    };
-    let lib = Library::scan(&dirs);
-    let mut failed = !lib.refused.is_empty();
-    for d in &lib.missing {
-        if d == &builtin_dir() {
-            eprintln!("note: pyrograph's own presets are not at {} (a binary moved away from its source tree)", d.display());
-        } else {
-            eprintln!("note: preset folder {} does not exist", d.display());
-        }
-    }
-    for s in &lib.shadowed {
-        eprintln!(
-            "note: preset '{}' in {} is hidden by {} (earlier in the search path)",
-            s.preset.name,
-            s.preset.file.display(),
-            s.by.display()
-        );
-    }
-    for (file, why) in &lib.refused {
-        eprintln!("error: {}: not a usable preset: {why}", file.display());
-    }
-    let mut list = Vec::new();
-    for p in lib.presets.iter().filter(|p| matches(p, &q.tags, q.search.as_deref())) {
-        match preset_entry(registry, &p.file) {
-            Ok(mut entry) => {
-                let hides: Vec<String> =
-                    lib.shadowed.iter().filter(|s| s.by == p.file).map(|s| s.preset.file.display().to_string()).collect();
-                let m = &p.meta;
-                let extra = json!({"name": p.name, "description": p.description, "tags": m.tags, "revision": m.revision,
-                    "author": m.author, "licence": m.licence, "thumbnail": m.thumbnail, "requires": m.requires, "hides": hides});
-                if let (Some(e), serde_json::Value::Object(more)) = (entry.as_object_mut(), extra) {
-                    e.extend(more);
-                }
-                list.push(entry);
-            }
-            Err(e) => {
-                failed = true;
-                eprintln!("{e}");
-            }
-        }
-    }
-    if json_out {
-        println!("{}", serde_json::Value::Array(list));
-    } else {
-        for p in &list {
-            let tags: Vec<&str> = p["tags"].as_array().into_iter().flatten().filter_map(|t| t.as_str()).collect();
-            let tags = if tags.is_empty() { String::new() } else { format!("  [{}]", tags.join(", ")) };
-            println!("{}  {}{tags}", p["name"].as_str().unwrap_or(""), p["file"].as_str().unwrap_or(""));
-            println!("    {}", p["description"].as_str().unwrap_or(""));
-            for kind in ["inputs", "params", "outputs"] {
-                for port in p[kind].as_array().into_iter().flatten() {
-                    println!(
-                        "    {kind:<8} {:<18} {:<14} {}",
-                        port["name"].as_str().unwrap_or(""),
-                        port["type"].as_str().unwrap_or(""),
-                        port["default"].as_str().unwrap_or("")
-                    );
-                }
-            }
-        }
-    }
-    if failed { Err(Failure(String::new())) } else { Ok(()) }
-}
-
-/// A preset's exposed ports, read by including it the way a graph would.
-fn preset_entry(registry: &Registry, file: &Path) -> Result<serde_json::Value, String> {
-    let desc = pyrograph::core::include::preset_desc(file, registry).map_err(|d| d.to_string())?;
-    let iface = GraphDoc::load(file).ok().and_then(|d| d.interface).unwrap_or_default();
-    let port = |p: &pyrograph::core::PortDesc| json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary())});
-    let inputs: Vec<_> = desc.inputs.iter().filter(|p| iface.inputs.contains_key(&p.name)).map(port).collect();
-    let params: Vec<_> = desc.inputs.iter().filter(|p| iface.params.contains_key(&p.name)).map(port).collect();
-    let outputs: Vec<_> = desc.outputs.iter().map(port).collect();
-    Ok(
-        json!({"file": file.display().to_string(), "description": desc.summary(), "inputs": inputs, "params": params, "outputs": outputs}),
-    )
 }
 
 fn bench(registry: &Registry, iters: usize, json_out: bool) {

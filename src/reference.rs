@@ -4,7 +4,7 @@ use std::fmt::Write;
 
 use pyrograph_core::{NodeDesc, PortDesc, Registry, Value};
 
-fn default_text(p: &PortDesc) -> String {
+pub(crate) fn default_text(p: &PortDesc) -> String {
     match &p.default {
         None => "required".to_string(),
         Some(Value::Path(path)) => format!("`{}`", path.display()),
@@ -12,7 +12,7 @@ fn default_text(p: &PortDesc) -> String {
     }
 }
 
-fn constraint_text(p: &PortDesc) -> String {
+pub(crate) fn constraint_text(p: &PortDesc) -> String {
     match (&p.range, p.options.is_empty()) {
         (Some((lo, hi)), _) => format!("{lo} – {hi}"),
         (None, false) => p.options.join(" / "),
@@ -20,7 +20,7 @@ fn constraint_text(p: &PortDesc) -> String {
     }
 }
 
-fn one_line(s: &str) -> String {
+pub(crate) fn one_line(s: &str) -> String {
     s.replace('\n', " ").replace('|', "\\|")
 }
 

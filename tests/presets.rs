@@ -75,7 +75,7 @@ fn tags_and_text_filter_the_listing() {
     let (o, v) = presets(&["--json", "--tag", "studio"], &[a.path()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(names(&v), vec!["campfire".to_string()]);
-    let (_, v) = presets(&["--json", "--tag", "footage", "--search", "TEA-LIGHT"], &[a.path()]);
+    let (_, v) = presets(&["--json", "--tag", "preprocess", "--search", "TEA-LIGHT"], &[a.path()]);
     assert_eq!(names(&v), vec!["tea-light pre-processing".to_string()]);
     let (o, v) = presets(&["--json", "--search", "no such preset"], &[a.path()]);
     assert!(o.status.success() && v.as_array().unwrap().is_empty());
@@ -83,4 +83,56 @@ fn tags_and_text_filter_the_listing() {
     let (o, _) = presets(&["--tag", "studio"], &[a.path()]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("campfire") && out.contains("our-campfire.ron") && out.contains("[studio, fire]"), "{out}");
+}
+
+fn run(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pyrograph"))
+        .args(args)
+        .current_dir(cwd)
+        .env_remove("PYROGRAPH_PRESET_PATH")
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_preset_renders_by_name_with_its_parameters_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["preset", "candle row", "--set", "width=96", "--set", "height=54", "--set", "frames=2", "--out", "renders"];
+    let o = run(&args, dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let frames: Vec<PathBuf> = (0..2).map(|i| dir.path().join(format!("renders/candle-row/candle-row_{i:04}.png"))).collect();
+    for f in &frames {
+        assert_eq!(image::image_dimensions(f).unwrap(), (96, 54), "{}", f.display());
+    }
+    assert!(!dir.path().join("renders/candle-row/candle-row_0002.png").exists(), "frames=2 writes two frames");
+    // A second run does not replace the frames unless asked.
+    let o = run(&args, dir.path());
+    assert!(!o.status.success() && stderr(&o).contains("already exists"), "{}", stderr(&o));
+    // A parameter the preset does not expose, and a name no library holds, are errors that say so.
+    let o = run(&["preset", "candle row", "--set", "flames=3", "--out", "r2"], dir.path());
+    assert!(!o.status.success() && stderr(&o).contains("has no parameter 'flames'"), "{}", stderr(&o));
+    let o = run(&["preset", "no such fire", "--out", "r3"], dir.path());
+    assert!(!o.status.success() && stderr(&o).contains("no preset named 'no such fire'"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("campfire"), "the error lists the presets there are: {}", stderr(&o));
+}
+
+#[test]
+fn thumbnails_are_cooked_into_a_folder_and_kept_unless_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let library = root().join("graphs/presets");
+    let args =
+        ["presets", "--dir", library.to_str().unwrap(), "--tag", "candle", "--tag", "perry", "--thumbnails", "--out", "thumbs"];
+    let o = run(&args, dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let made = dir.path().join("thumbs/candle-row.png");
+    assert_eq!(image::image_dimensions(&made).unwrap(), (256, 144));
+    assert!(!dir.path().join("thumbs/campfire.png").exists(), "only the presets the filters pick");
+    std::fs::write(&made, b"mine").unwrap();
+    let o = run(&args, dir.path());
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("kept"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&made).unwrap(), b"mine", "an existing file is kept without --overwrite");
+    let mut again = args.to_vec();
+    again.push("--overwrite");
+    assert!(run(&again, dir.path()).status.success());
+    assert_eq!(image::image_dimensions(&made).unwrap(), (256, 144));
 }

@@ -213,6 +213,18 @@ pub struct PresetDoc {
     /// Interface inputs that must be connected (footage, a mesh, ...).
     #[serde(default)]
     pub requires: Vec<String>,
+    /// An example source for each required input, for thumbnails and tests: input name → a graph
+    /// file (its first output is fed in) or an image, a video or a folder of frames; relative to
+    /// the preset file, `${VAR}` allowed.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub samples: BTreeMap<String, String>,
+    /// The output thumbnails and `pyrograph preset` show (default: `clip`, `image` or `sheet`,
+    /// else the first picture output).
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub preview: Option<String>,
+    /// The frame of the preview clip thumbnails show (default: the middle one).
+    #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
+    pub thumbnail_frame: Option<u32>,
 }
 
 /// A graph document, version 3 (version 1 plus canvas groups and comments, then preset metadata).
@@ -625,12 +637,15 @@ mod tests {
     #[test]
     fn preset_metadata_round_trips_as_version_3_and_newer_is_refused() {
         let text = r#"(version: 3, preset: (name: "candle row", description: "Five candles", tags: ["fire", "candle"],
-            revision: 2, author: "pyrograph", licence: "MIT", thumbnail: "thumbs/candle-row.png", requires: ["footage"]),
+            revision: 2, author: "pyrograph", licence: "MIT", thumbnail: "thumbs/candle-row.png", requires: ["footage"],
+            samples: {"footage": "clips/candle.mp4"}, preview: "gray", thumbnail_frame: 30),
             nodes: {"a": (type: "value.float")})"#;
         let doc = GraphDoc::from_ron(text).unwrap();
         let p = doc.preset.as_ref().unwrap();
         assert_eq!((p.name.as_str(), p.revision, p.tags.len(), p.requires.len()), ("candle row", 2, 2, 1));
         assert_eq!(p.thumbnail.as_deref(), Some("thumbs/candle-row.png"));
+        assert_eq!(p.samples["footage"], "clips/candle.mp4");
+        assert_eq!((p.preview.as_deref(), p.thumbnail_frame), (Some("gray"), Some(30)));
         let out = doc.to_ron();
         assert!(out.contains("version: 3,") && out.contains("preset: (") && !out.contains("Some("), "{out}");
         assert_eq!(GraphDoc::from_ron(&out).unwrap(), doc);

@@ -39,6 +39,10 @@ pub struct EditorApp {
     pub frame_times: Vec<f64>,
     /// Where to write the state dump (`--state-dump FILE`), for tests that drive a real window.
     pub state_dump: Option<PathBuf>,
+    /// The preset browser, when open.
+    pub browser: Option<crate::browser::PresetBrowser>,
+    /// The "Save selection as preset" dialog, when open.
+    pub save_preset: Option<crate::browser::SavePresetDialog>,
     last_dump: String,
 }
 
@@ -62,6 +66,8 @@ impl EditorApp {
             frame_times: Vec::new(),
             state_dump: None,
             last_dump: String::new(),
+            browser: None,
+            save_preset: None,
         }
     }
 
@@ -109,6 +115,8 @@ impl EditorApp {
         self.apply(actions);
         self.after_canvas(&ctx);
         self.palette_window(&ctx);
+        self.browser_window(&ctx);
+        self.save_preset_window(&ctx);
         self.dialog_window(&ctx);
         self.toast(&ctx);
 
@@ -443,6 +451,17 @@ impl EditorApp {
                         .path()
                         .map_or_else(|| format!("{}untitled.ron", self.default_dir()), |p| p.display().to_string());
                     self.dialog = Some(FileDialog::SaveAs(cur));
+                    ui.close();
+                }
+            });
+            ui.menu_button("Presets", |ui| {
+                if ui.button("Preset browser…").clicked() {
+                    self.open_preset_browser();
+                    ui.close();
+                }
+                let any = !self.editor.selection().is_empty();
+                if ui.add_enabled(any, egui::Button::new("Save selection as preset…")).clicked() {
+                    self.open_save_selection_as_preset();
                     ui.close();
                 }
             });

@@ -79,6 +79,9 @@ pub struct CookOutcome {
     pub log: Vec<String>,
     /// Per-node errors of the cooked cone (cancellations excluded).
     pub node_errors: BTreeMap<String, String>,
+    /// Per-node warnings reported in this cook (a clamped pose angle, an empty mask, ...);
+    /// nodes served from the cache report none.
+    pub node_warnings: BTreeMap<String, Vec<String>>,
     /// The preview, when one was asked for.
     pub preview: Option<Preview>,
     /// Whether the cook was cancelled.
@@ -344,6 +347,9 @@ fn run_job(
         outcome.cancelled = true;
     }
     outcome.log = eval.take_log();
+    for w in ctx.warnings() {
+        outcome.node_warnings.entry(w.node.as_deref().unwrap_or_default().to_string()).or_default().push(w.message);
+    }
     outcome.elapsed = start.elapsed();
     outcome
 }

@@ -14,6 +14,7 @@
 
 pub mod annotate;
 pub mod app;
+pub mod browser;
 pub mod canvas;
 pub mod clipboard;
 pub mod cook;

@@ -29,6 +29,9 @@ impl EditorApp {
         for p in self.editor.node_problems(&id) {
             ui.colored_label(Color32::from_rgb(255, 120, 120), format!("⚠ {p}"));
         }
+        for w in self.editor.node_warnings(&id) {
+            ui.colored_label(Color32::from_rgb(255, 190, 70), format!("⚠ warning: {w}"));
+        }
         let Some(desc) = self.editor.desc(&id).cloned() else {
             ui.colored_label(Color32::from_rgb(255, 120, 120), "unknown node type: no parameters to show");
             return;

@@ -22,6 +22,9 @@ pub use crate::layout::auto_layout;
 use crate::layout::relative_path;
 
 mod files;
+mod preset_lib;
+
+pub use preset_lib::SelectionPreset;
 
 /// A message for the status bar.
 #[derive(Clone, Debug)]
@@ -58,6 +61,10 @@ pub struct PaletteItem {
     pub preset: Option<PathBuf>,
 }
 
+fn same_folder(a: &Path, b: &Path) -> bool {
+    a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+}
+
 /// The editor session.
 pub struct Editor {
     doc: GraphDoc,
@@ -71,6 +78,7 @@ pub struct Editor {
     cooker: Cooker,
     /// Cook errors per node from the latest finished cook.
     cook_errors: BTreeMap<String, String>,
+    cook_warnings: BTreeMap<String, Vec<String>>,
     last_outcome: Option<CookOutcome>,
     preview: Option<Preview>,
     preview_req: Option<PreviewRequest>,
@@ -89,11 +97,19 @@ pub struct Editor {
 impl Editor {
     /// A session with an empty document and the given node registry.
     pub fn new(registry: Arc<Registry>) -> Self {
+        // The CLI's search path (a studio's PYROGRAPH_PRESET_PATH, then pyrograph's own), after
+        // the working folder's graphs/presets; the open graph's presets/ goes first on open.
         let mut preset_dirs = Vec::new();
         if let Ok(cwd) = std::env::current_dir() {
             preset_dirs.push(cwd.join("graphs").join("presets"));
         }
-        preset_dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../graphs/presets"));
+        let env = std::env::var_os(pyrograph::presets::PRESET_PATH_VAR);
+        let builtin = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../graphs/presets");
+        for d in pyrograph::presets::search_path(None, env.as_deref(), &builtin) {
+            if !preset_dirs.iter().any(|x| same_folder(x, &d)) {
+                preset_dirs.push(d);
+            }
+        }
         let mut ed = Editor {
             doc: GraphDoc::new(),
             path: None,
@@ -105,6 +121,7 @@ impl Editor {
             revision: 1,
             cooker: Cooker::new(),
             cook_errors: BTreeMap::new(),
+            cook_warnings: BTreeMap::new(),
             last_outcome: None,
             preview: None,
             preview_req: None,
@@ -176,6 +193,17 @@ impl Editor {
             v.push(e.clone());
         }
         v
+    }
+
+    /// Warnings node `id` reported when it last cooked (kept while the cache serves it); for a
+    /// preset, those of the nodes inside it too, each named.
+    pub fn node_warnings(&self, id: &str) -> Vec<String> {
+        let inner = format!("{id}/");
+        self.cook_warnings
+            .iter()
+            .filter(|(k, _)| *k == id || k.starts_with(&inner))
+            .flat_map(|(k, ws)| ws.iter().map(move |w| if k == id { w.clone() } else { format!("{k}: {w}") }))
+            .collect()
     }
 
     /// Cook errors of the latest cook by node.
@@ -618,6 +646,13 @@ impl Editor {
         while let Some(outcome) = self.cooker.poll() {
             any = true;
             self.cook_errors = outcome.node_errors.clone();
+            // A node that cooked again says its warnings afresh; one the cache served keeps its own.
+            for id in &outcome.log {
+                self.cook_warnings.remove(id);
+            }
+            for (id, w) in &outcome.node_warnings {
+                self.cook_warnings.insert(id.clone(), w.clone());
+            }
             if let Some(p) = &outcome.preview
                 && !(outcome.cancelled && p.image.is_none() && p.contours.is_empty())
             {
@@ -677,6 +712,8 @@ impl Editor {
         self.descs = self.resolve_descs(graph.as_deref());
         self.validation = Validation { graph, diagnostics, by_node };
         self.cook_errors.retain(|k, _| self.doc.node(k).is_some());
+        let doc = &self.doc;
+        self.cook_warnings.retain(|k, _| doc.node(k.split('/').next().unwrap_or(k)).is_some());
     }
 
     fn resolve_descs(&self, graph: Option<&Graph>) -> HashMap<String, Arc<NodeDesc>> {

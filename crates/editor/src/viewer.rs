@@ -14,6 +14,9 @@ use crate::overlay::{AnnotationRects, paint_annotations};
 use crate::palette::palette_ui;
 use crate::state::Editor;
 
+/// Badge and text colour of warnings (amber: the node cooked, but look at this).
+const WARNING: Color32 = Color32::from_rgb(255, 190, 70);
+
 /// The outline of selected nodes (Houdini's yellow).
 pub const SELECTED: Color32 = Color32::from_rgb(255, 200, 80);
 
@@ -129,10 +132,13 @@ impl SnarlViewer<String> for Viewer<'_> {
         let Some(id) = snarl.get_node(node).cloned() else { return };
         let type_name = self.editor.doc().node(&id).map(|n| n.type_name.clone()).unwrap_or_default();
         let problems = self.editor.node_problems(&id);
+        let warnings = self.editor.node_warnings(&id);
         ui.horizontal(|ui| {
             if !problems.is_empty() {
                 ui.label(egui::RichText::new("⚠").color(Color32::from_rgb(255, 80, 80)).strong())
                     .on_hover_text(problems.join("\n"));
+            } else if !warnings.is_empty() {
+                ui.label(egui::RichText::new("⚠").color(WARNING).strong()).on_hover_text(warnings.join("\n"));
             }
             ui.label(egui::RichText::new(&id).strong().color(Color32::WHITE)).on_hover_text(
                 self.editor.desc(&id).map(|d| format!("{type_name}\n{}", d.doc)).unwrap_or_else(|| type_name.clone()),
@@ -229,13 +235,16 @@ impl SnarlViewer<String> for Viewer<'_> {
     }
 
     fn has_on_hover_popup(&mut self, node: &String) -> bool {
-        !self.editor.node_problems(node).is_empty()
+        !self.editor.node_problems(node).is_empty() || !self.editor.node_warnings(node).is_empty()
     }
 
     fn show_on_hover_popup(&mut self, node: NodeId, _i: &[InPin], _o: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
         if let Some(id) = snarl.get_node(node) {
             for p in self.editor.node_problems(id) {
                 ui.colored_label(Color32::from_rgb(255, 120, 120), p);
+            }
+            for w in self.editor.node_warnings(id) {
+                ui.colored_label(WARNING, w);
             }
         }
     }

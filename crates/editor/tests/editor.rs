@@ -331,3 +331,42 @@ fn a_long_cook_keeps_the_ui_responsive_and_cancel_stops_it() {
     let outcome = h.state().editor.last_outcome().unwrap();
     assert!(outcome.cancelled);
 }
+
+#[test]
+fn warnings_show_on_their_node_until_it_cooks_again() {
+    fn cook_warn(i: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        let level = i.float("level")?;
+        if level > 0.5 {
+            ctx.warn(format!("level {level} is above 0.5"));
+        }
+        Ok(vec![Value::Float(level)])
+    }
+    let mut r = pyrograph::registry();
+    r.add(FnNode::new(
+        NodeDesc::new("test.warn", "Test", TimeDep::Source, "Warns above 0.5.")
+            .input(PortDesc::float("level", 0.9, (0.0, 1.0), "How much."))
+            .output("value", PortType::Float, "The level."),
+        cook_warn,
+    ));
+    let mut ed = Editor::new(Arc::new(r));
+    let w = ed.add_node("test.warn", (0.0, 0.0)).unwrap();
+    let add = ed.add_node("math.add", (200.0, 0.0)).unwrap();
+    ed.connect(&w, "value", &add, "a").unwrap();
+    let mut h = harness(EditorApp::new(ed));
+    h.state_mut().editor.select(&w);
+    settle(&mut h);
+    assert_eq!(h.state().editor.node_warnings(&w), vec!["level 0.9 is above 0.5".to_string()]);
+    assert!(h.query_by_label("⚠ warning: level 0.9 is above 0.5").is_some(), "the inspector shows it");
+    // Another node re-cooks while the cache serves this one: its warning stays.
+    h.state_mut().editor.take_outcomes();
+    h.state_mut().editor.set_param(&add, "b", ParamValue::Float(2.0)).unwrap();
+    h.state_mut().editor.select(&add);
+    settle(&mut h);
+    let cooked: Vec<String> = h.state_mut().editor.take_outcomes().into_iter().flat_map(|o| o.log).collect();
+    assert!(cooked.contains(&add) && !cooked.contains(&w), "served from the cache: {cooked:?}");
+    assert_eq!(h.state().editor.node_warnings(&w).len(), 1);
+    // Fixed, it cooks again and the warning goes.
+    h.state_mut().editor.set_param(&w, "level", ParamValue::Float(0.2)).unwrap();
+    settle(&mut h);
+    assert!(h.state().editor.node_warnings(&w).is_empty());
+}

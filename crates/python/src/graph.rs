@@ -145,7 +145,7 @@ impl Graph {
     /// `pyrograph check`: a list of `Problem`s, empty when the graph is fine.
     #[pyo3(signature = (out=None, allow_outside_out=false))]
     fn check(&self, py: Python<'_>, out: Option<PathBuf>, allow_outside_out: bool) -> Vec<crate::errors::Problem> {
-        let options = BuildOptions { output_dir: out, allow_outside_out };
+        let options = BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() };
         let built = self.build_with(&options);
         let problems = py.detach(|| pyrograph::check::problems(built.as_ref()));
         problems.into_iter().map(Into::into).collect()
@@ -377,7 +377,7 @@ impl Graph {
         allow_outside_out: bool,
         progress: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Vec<PathBuf>> {
-        let options = BuildOptions { output_dir: out, allow_outside_out };
+        let options = BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() };
         let graph = self.build_with(&options).map_err(|d| from_diagnostics(py, &d))?;
         let frames = match frames {
             Some(sel) => Some(

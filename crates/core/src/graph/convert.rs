@@ -162,7 +162,11 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
         },
         PortType::Path => match pv {
             ParamValue::String(s) => {
-                let expanded = expand_vars(s).map_err(|m| (DiagnosticKind::UnsetVariable, m))?;
+                let expanded = match expand_vars(s) {
+                    Ok(e) => e,
+                    Err(_) if ctx.options.describe_only => s.clone(),
+                    Err(m) => return Err((DiagnosticKind::UnsetVariable, m)),
+                };
                 let role = port.path_role.unwrap_or(PathRole::Input);
                 let path = resolve_path(Path::new(&expanded), role, ctx);
                 if role == PathRole::Output && !ctx.options.allow_outside_out && !inside(&path, &ctx.root) {

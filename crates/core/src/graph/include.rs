@@ -93,7 +93,7 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
 /// The node description a graph file would have when included (its exposed ports), for preset
 /// listings; problems in the file come back as diagnostics.
 pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
-    let options = BuildOptions::default();
+    let options = BuildOptions { describe_only: true, ..BuildOptions::default() };
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = LoadCtx { registry, root: dir.clone(), dir, options: &options, include_stack: Vec::new() };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

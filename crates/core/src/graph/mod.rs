@@ -37,6 +37,10 @@ pub struct BuildOptions {
     /// that is absolute or climbs out with `..` is refused when the graph loads, so a preset
     /// from a library cannot write anywhere on a farm node.
     pub allow_outside_out: bool,
+    /// Build only to describe the graph (a preset's ports for a listing): a path parameter
+    /// naming an unset environment variable keeps its text instead of failing, since the
+    /// environment it cooks in (a farm's footage folder) need not be this one.
+    pub describe_only: bool,
 }
 
 /// Where an input's value comes from.

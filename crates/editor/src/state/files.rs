@@ -38,6 +38,7 @@ impl Editor {
         self.preview = None;
         self.preview_req = None;
         self.cook_errors.clear();
+        self.cook_warnings.clear();
         self.revision += 1;
         self.revalidate();
         self.push_recent(path);

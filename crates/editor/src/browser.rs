@@ -1,0 +1,295 @@
+//! The preset browser and "Save selection as preset" (issue 30): a window listing the presets on
+//! the search path with their thumbnails, tags and a search field; click a preset to insert it at
+//! the centre of the canvas, or drag it onto the canvas to drop it where the pointer is. Either
+//! way it becomes a `graph.include` node with the preset's exposed ports.
+
+use std::collections::{BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+use eframe::egui::{self, Color32, RichText};
+use pyrograph::presets::Preset;
+
+use crate::app::EditorApp;
+use crate::state::SelectionPreset;
+
+/// Thumbnail size in the browser, in points (half the files' 256×144).
+const THUMB: egui::Vec2 = egui::vec2(128.0, 72.0);
+
+/// The browser's state: the search, the tags ticked, and what was read from disk.
+#[derive(Default)]
+pub struct PresetBrowser {
+    /// Words every listed preset contains (name, description or tags).
+    pub query: String,
+    /// Tags every listed preset carries.
+    pub tags: BTreeSet<String>,
+    focus: bool,
+    presets: Option<Vec<Preset>>,
+    thumbs: HashMap<PathBuf, Option<egui::TextureHandle>>,
+}
+
+/// A preset being dragged from the browser.
+#[derive(Clone, Debug)]
+pub struct PresetDrag(pub PathBuf);
+
+/// The "Save selection as preset" dialog.
+#[derive(Clone, Debug, Default)]
+pub struct SavePresetDialog {
+    /// Where the preset goes; empty: `<graph folder>/presets/<name>.ron`.
+    pub file: String,
+    /// The preset's name.
+    pub name: String,
+    /// What it makes.
+    pub description: String,
+    /// Comma-separated tags.
+    pub tags: String,
+    /// The parameters ticked for exposure, as `(node, parameter)`.
+    pub ticked: BTreeSet<(String, String)>,
+    /// Replace an existing file.
+    pub overwrite: bool,
+    /// Why the last save failed.
+    pub error: Option<String>,
+    focus: bool,
+}
+
+impl SavePresetDialog {
+    /// The file the dialog saves to, for the graph folder `base`.
+    pub fn target(&self, base: &Path) -> PathBuf {
+        if !self.file.trim().is_empty() {
+            return PathBuf::from(self.file.trim());
+        }
+        let slug: String = self
+            .name
+            .trim()
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '-' })
+            .collect::<String>()
+            .split('-')
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join("-");
+        base.join("presets").join(format!("{}.ron", if slug.is_empty() { "preset" } else { &slug }))
+    }
+}
+
+impl EditorApp {
+    /// Opens the preset browser (reading the library afresh) with the search field focused.
+    pub fn open_preset_browser(&mut self) {
+        let b = self.browser.get_or_insert_with(PresetBrowser::default);
+        b.presets = None;
+        b.focus = true;
+    }
+
+    /// Whether the preset browser is open.
+    pub fn preset_browser_is_open(&self) -> bool {
+        self.browser.is_some()
+    }
+
+    /// Opens "Save selection as preset" for the selected nodes.
+    pub fn open_save_selection_as_preset(&mut self) {
+        if self.editor.selection().is_empty() {
+            self.editor.set_status("select the nodes to save as a preset first", true);
+            return;
+        }
+        self.save_preset = Some(SavePresetDialog { focus: true, ..SavePresetDialog::default() });
+    }
+
+    pub(crate) fn browser_window(&mut self, ctx: &egui::Context) {
+        let Some(mut b) = self.browser.take() else { return };
+        let presets = b.presets.get_or_insert_with(|| self.editor.browse_presets("", &[])).clone();
+        let mut open = true;
+        let mut insert = None;
+        egui::Window::new("Presets")
+            .open(&mut open)
+            .default_pos(egui::pos2(40.0, 60.0))
+            .default_width(380.0)
+            .default_height(520.0)
+            .show(ctx, |ui| {
+                let r = ui.add(egui::TextEdit::singleline(&mut b.query).hint_text("search presets").desired_width(f32::INFINITY));
+                if b.focus {
+                    r.request_focus();
+                    b.focus = false;
+                }
+                let all_tags: BTreeSet<&String> = presets.iter().flat_map(|p| &p.meta.tags).collect();
+                ui.horizontal_wrapped(|ui| {
+                    for t in all_tags {
+                        let on = b.tags.contains(t);
+                        if ui.selectable_label(on, format!("#{t}")).clicked() {
+                            if on {
+                                b.tags.remove(t);
+                            } else {
+                                b.tags.insert(t.clone());
+                            }
+                        }
+                    }
+                });
+                ui.separator();
+                let tags: Vec<String> = b.tags.iter().cloned().collect();
+                let shown = self.editor.browse_presets(&b.query, &tags);
+                if shown.is_empty() {
+                    ui.weak("no preset matches");
+                }
+                egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                    for p in &shown {
+                        ui.horizontal(|ui| {
+                            match thumb(&mut b.thumbs, ctx, p) {
+                                Some(t) => ui.add(egui::Image::new((t.id(), THUMB))),
+                                None => ui.add_sized(THUMB, egui::Label::new(RichText::new("no thumbnail").weak())),
+                            };
+                            ui.vertical(|ui| {
+                                let r = ui
+                                    .add(egui::Button::new(RichText::new(&p.name).strong()).sense(egui::Sense::click_and_drag()))
+                                    .on_hover_text(format!(
+                                        "{}\n{}\nclick: insert · drag onto the canvas",
+                                        p.description,
+                                        p.file.display()
+                                    ));
+                                if r.clicked() {
+                                    insert = Some((p.file.clone(), None));
+                                }
+                                if r.drag_started() {
+                                    egui::DragAndDrop::set_payload(ctx, PresetDrag(p.file.clone()));
+                                }
+                                ui.label(
+                                    RichText::new(p.meta.tags.iter().map(|t| format!("#{t}")).collect::<Vec<_>>().join(" "))
+                                        .weak(),
+                                );
+                            });
+                        });
+                    }
+                });
+            });
+        if let Some(drag) = egui::DragAndDrop::payload::<PresetDrag>(ctx) {
+            let name = drag.0.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let released = ctx.input(|i| i.pointer.any_released());
+            let at = ctx.input(|i| i.pointer.latest_pos());
+            if let Some(p) = at {
+                egui::Area::new(egui::Id::new("preset-drag"))
+                    .order(egui::Order::Tooltip)
+                    .fixed_pos(p + egui::vec2(14.0, 14.0))
+                    .interactable(false)
+                    .show(ctx, |ui| egui::Frame::popup(ui.style()).show(ui, |ui| ui.label(format!("preset {name}"))));
+            }
+            let over_window = ctx.layer_id_at(at.unwrap_or_default()).is_some_and(|l| l.order != egui::Order::Background);
+            if released {
+                egui::DragAndDrop::clear_payload(ctx);
+                if let Some(at) = at.filter(|p| self.canvas.rect_contains(*p) && !over_window) {
+                    insert = Some((drag.0.clone(), Some(at)));
+                }
+            }
+        }
+        if let Some((file, at)) = insert {
+            let pos = at.map_or_else(|| self.canvas.view_center(), |p| self.canvas.to_graph(p));
+            match self.editor.add_preset(&file, (pos.x, pos.y)) {
+                Ok(id) => self.editor.select(&id),
+                Err(e) => self.editor.set_status(e, true),
+            }
+        }
+        if open {
+            self.browser = Some(b);
+        }
+    }
+
+    pub(crate) fn save_preset_window(&mut self, ctx: &egui::Context) {
+        let Some(mut d) = self.save_preset.take() else { return };
+        let mut open = true;
+        let mut save = false;
+        let base = self.editor.base_dir();
+        let selection = self.editor.selection().to_vec();
+        egui::Window::new("Save selection as preset").open(&mut open).collapsible(false).default_width(460.0).show(ctx, |ui| {
+            egui::Grid::new("save-preset").num_columns(2).show(ui, |ui| {
+                ui.label("Name");
+                let r = ui.add(egui::TextEdit::singleline(&mut d.name).hint_text("my torch").desired_width(300.0));
+                if d.focus {
+                    r.request_focus();
+                    d.focus = false;
+                }
+                ui.end_row();
+                ui.label("Description");
+                ui.add(egui::TextEdit::singleline(&mut d.description).desired_width(300.0));
+                ui.end_row();
+                ui.label("Tags");
+                ui.add(egui::TextEdit::singleline(&mut d.tags).hint_text("fire, torch").desired_width(300.0));
+                ui.end_row();
+                ui.label("File");
+                let default = d.target(&base).display().to_string();
+                ui.add(egui::TextEdit::singleline(&mut d.file).hint_text(default).desired_width(300.0));
+                ui.end_row();
+            });
+            ui.separator();
+            ui.label("Parameters to expose:");
+            egui::ScrollArea::vertical().max_height(260.0).show(ui, |ui| {
+                for id in &selection {
+                    let Some(desc) = self.editor.desc(id).cloned() else { continue };
+                    let params: Vec<_> = desc
+                        .inputs
+                        .iter()
+                        .filter(|p| p.ty.is_parameter() && self.editor.incoming(id, &p.name).is_none())
+                        .collect();
+                    if params.is_empty() {
+                        continue;
+                    }
+                    ui.label(RichText::new(id).strong());
+                    ui.indent(("params", id), |ui| {
+                        for p in params {
+                            let key = (id.clone(), p.name.clone());
+                            let mut on = d.ticked.contains(&key);
+                            if ui.checkbox(&mut on, format!("{id}.{}", p.name)).on_hover_text(&p.doc).changed() {
+                                if on {
+                                    d.ticked.insert(key);
+                                } else {
+                                    d.ticked.remove(&key);
+                                }
+                            }
+                        }
+                    });
+                }
+            });
+            ui.separator();
+            ui.checkbox(&mut d.overwrite, "Overwrite an existing file");
+            if let Some(e) = &d.error {
+                ui.colored_label(Color32::from_rgb(255, 120, 120), e);
+            }
+            save = ui.button("Save preset").clicked();
+        });
+        if save {
+            let spec = SelectionPreset {
+                name: d.name.clone(),
+                description: d.description.clone(),
+                tags: d.tags.split(',').map(|t| t.trim().to_lowercase()).filter(|t| !t.is_empty()).collect(),
+                params: d.ticked.iter().cloned().collect(),
+                overwrite: d.overwrite,
+            };
+            match self.editor.save_selection_as_preset(&d.target(&base), &spec) {
+                Ok(_) => {
+                    if let Some(b) = &mut self.browser {
+                        b.presets = None;
+                    }
+                    return;
+                }
+                Err(e) => d.error = Some(e),
+            }
+        }
+        if open {
+            self.save_preset = Some(d);
+        }
+    }
+}
+
+/// The thumbnail texture of `p`, loaded once (none when it has no readable thumbnail).
+fn thumb<'a>(
+    cache: &'a mut HashMap<PathBuf, Option<egui::TextureHandle>>,
+    ctx: &egui::Context,
+    p: &Preset,
+) -> Option<&'a egui::TextureHandle> {
+    let file = pyrograph::preset_cook::thumbnail_path(&p.file, p.meta.thumbnail.as_deref());
+    cache
+        .entry(file.clone())
+        .or_insert_with(|| {
+            let img = pyrograph::imaging::io::load_image(&file).ok()?;
+            let rgba = pyrograph::imaging::convert::to_rgba8(&img);
+            let size = [rgba.width() as usize, rgba.height() as usize];
+            let ci = egui::ColorImage::from_rgba_unmultiplied(size, rgba.as_raw());
+            Some(ctx.load_texture(file.display().to_string(), ci, egui::TextureOptions::LINEAR))
+        })
+        .as_ref()
+}

@@ -123,7 +123,20 @@ fn print_entry(p: &serde_json::Value) {
 fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite: bool) -> bool {
     let target = match out {
         Some(dir) => dir.join(format!("{}.png", p.file.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default())),
-        None => thumbnail_path(&p.file, p.meta.thumbnail.as_deref()),
+        None => {
+            // A library's preset names its own thumbnail: it may not point the writer elsewhere.
+            let declared = p.meta.thumbnail.as_deref().map(Path::new);
+            if declared.is_some_and(|t| t.is_absolute() || t.components().any(|c| c == std::path::Component::ParentDir)) {
+                eprintln!(
+                    "error: preset '{}' ({}): thumbnail \"{}\" leaves the preset's folder; name a file inside it, or use --out",
+                    p.name,
+                    p.file.display(),
+                    p.meta.thumbnail.as_deref().unwrap_or_default()
+                );
+                return false;
+            }
+            thumbnail_path(&p.file, p.meta.thumbnail.as_deref())
+        }
     };
     if target.exists() && !overwrite {
         println!("{}: kept {} (it exists; --overwrite replaces it)", p.name, target.display());
@@ -191,7 +204,9 @@ pub fn render_preset(
         (as_file.to_path_buf(), as_file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default())
     } else {
         let lib = library(None, graph)?;
-        let p = lib.find(name).ok_or_else(|| {
+        // By its name, else by its file's stem (`candle-row` for "candle row").
+        let by_stem = || lib.presets.iter().find(|p| p.file.file_stem().is_some_and(|s| s == name));
+        let p = lib.find(name).or_else(by_stem).ok_or_else(|| {
             let known: Vec<&str> = lib.presets.iter().map(|p| p.name.as_str()).collect();
             Failure(format!("error: no preset named '{name}' on the search path (found: {})", known.join(", ")))
         })?;
@@ -204,6 +219,9 @@ pub fn render_preset(
     }
     let err = |m: String| Failure(format!("error: preset {}: {m}", file.display()));
     let mut wrapped = wrap(registry, &file, &[], &sources).map_err(err)?;
+    if o.set.iter().any(|s| s.split_once('=').is_some_and(|(l, _)| l == "path" || l == "preset.path")) {
+        return Err(err("`path` names the preset file itself; set the preset's exposed parameters".into()));
+    }
     // `--set flames=200` sets the preset's own parameter; `--set node.param=v` any wrapper node.
     let sets: Vec<String> = o
         .set

@@ -152,7 +152,7 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
-        /// Cook each listed preset at 256×144 (its middle frame; inputs from its samples) and
+        /// Cook each listed preset at 256×144 (its middle frame or thumbnail_frame; inputs from its samples) and
         /// write the thumbnail its metadata names (default thumbs/<file>.png beside it).
         #[arg(long)]
         thumbnails: bool,

@@ -119,7 +119,9 @@ fn source_node(registry: &Registry, doc: &mut GraphDoc, id: &str, source: &Path,
         doc.add_node(id, NodeDoc::new(INCLUDE_TYPE).param("path", text));
         return Ok(format!("{id}.{out}"));
     }
-    if !source.exists() {
+    // A frame pattern (`shot/frame_####.png`) names files that exist, not itself.
+    let pattern = source.to_string_lossy().contains(['#', '%']);
+    if !pattern && !source.exists() {
         return Err(format!("input source {} does not exist", source.display()));
     }
     // A single picture feeds an image input as it is; anything else is read as a clip, and a

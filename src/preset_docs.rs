@@ -28,7 +28,8 @@ pub fn markdown(registry: &Registry, lib: &Library, root: &Path) -> Result<Strin
          Render a preset by name with `pyrograph preset NAME`; list presets with `pyrograph presets` \
          (`--tag`, `--search`, `--json`); include one in a graph as \
          `(type: \"graph.include\", params: {\"path\": \"presets/FILE.ron\", ...})`. \
-         Thumbnails are the middle frame at 256×144 (`pyrograph presets --thumbnails`).\n\n\
+         Thumbnails are the middle frame (or the frame the preset names) at 256×144 \
+         (`pyrograph presets --thumbnails`).\n\n\
          ![Every preset's thumbnail](images/preset-catalogue.png)\n\n| preset | tags | needs |\n|---|---|---|\n",
     );
     for p in &lib.presets {

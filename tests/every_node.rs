@@ -78,6 +78,18 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
             }
             "s_clip_mask.mask".to_string()
         }
+        "Clip<Float>" => {
+            // A per-frame lean: pose normalization over the flame clip.
+            let masks = supply(doc, &PortType::clip_of(PortType::Mask), consumer, files)?;
+            if add(doc, "s_clip_contours", NodeDoc::new("imaging.contours")) {
+                doc.connect(&masks, "s_clip_contours.mask");
+            }
+            if add(doc, "s_pose", NodeDoc::new("imaging.pose_normalize")) {
+                doc.connect("s_flame.clip", "s_pose.image");
+                doc.connect("s_clip_contours.contours", "s_pose.contours");
+            }
+            "s_pose.angle".to_string()
+        }
         "Contours" => {
             let mask = supply(doc, &PortType::Mask, consumer, files)?;
             if add(doc, "s_contours", NodeDoc::new("imaging.contours")) {

@@ -68,8 +68,14 @@ fn cook_all(pick: impl Fn(&Preset) -> bool) -> usize {
         let made = pyrograph::imaging::convert::to_rgba8(&thumb.image);
         let file = thumbnail_path(&p.file, p.meta.thumbnail.as_deref());
         if regenerate() {
+            // Atomically: another test of this binary reads the thumbnails meanwhile.
+            let bytes = pyrograph::imaging::io::encode_image(
+                &thumb.image,
+                pyrograph::imaging::io::OutputFormat::Png { sixteen_bit: false },
+            )
+            .unwrap();
             std::fs::create_dir_all(file.parent().unwrap()).unwrap();
-            made.save(&file).unwrap();
+            pyrograph::core::document::write_atomic(&file, &bytes, true).unwrap();
         }
         match image::open(&file) {
             Ok(want) => {
@@ -94,10 +100,16 @@ fn every_preset_without_footage_checks_cooks_and_matches_its_thumbnail() {
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn every_footage_preset_checks_cooks_and_matches_its_thumbnail() {
     if std::env::var_os("PYROGRAPH_FOOTAGE").is_none() {
-        let footage = root().join("../shared/footage");
-        // SAFETY: set before any thread of this test reads the environment; the other tests of
-        // this binary do not read PYROGRAPH_FOOTAGE.
-        unsafe { std::env::set_var("PYROGRAPH_FOOTAGE", footage) };
+        // The presets read ${PYROGRAPH_FOOTAGE}; setting it here would race the other tests'
+        // threads, so this test runs again in a child process with it set.
+        let me = std::env::current_exe().unwrap();
+        let o = std::process::Command::new(me)
+            .args(["--exact", "every_footage_preset_checks_cooks_and_matches_its_thumbnail", "--ignored", "--nocapture"])
+            .env("PYROGRAPH_FOOTAGE", root().join("../shared/footage"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        return;
     }
     let cooked = cook_all(needs_footage);
     assert!(cooked >= 4, "only {cooked} footage presets");

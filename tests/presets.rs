@@ -114,6 +114,12 @@ fn a_preset_renders_by_name_with_its_parameters_set() {
     let o = run(&["preset", "no such fire", "--out", "r3"], dir.path());
     assert!(!o.status.success() && stderr(&o).contains("no preset named 'no such fire'"), "{}", stderr(&o));
     assert!(stderr(&o).contains("campfire"), "the error lists the presets there are: {}", stderr(&o));
+    // The file's stem finds it too; `path` (the preset file itself) cannot be set.
+    let o =
+        run(&["preset", "candle-row", "--set", "width=32", "--set", "height=18", "--set", "frames=1", "--out", "r4"], dir.path());
+    assert!(o.status.success() && dir.path().join("r4/candle-row/candle-row_0000.png").exists(), "{}", stderr(&o));
+    let o = run(&["preset", "candle row", "--set", "path=other.ron", "--out", "r5"], dir.path());
+    assert!(!o.status.success() && stderr(&o).contains("names the preset file itself"), "{}", stderr(&o));
 }
 
 #[test]

@@ -10,7 +10,7 @@ use eframe::egui::{self, Color32, RichText};
 use pyrograph::presets::Preset;
 
 use crate::app::EditorApp;
-use crate::state::SelectionPreset;
+use crate::state::{SelectionPreset, filter_presets};
 
 /// Thumbnail size in the browser, in points (half the files' 256×144).
 const THUMB: egui::Vec2 = egui::vec2(128.0, 72.0);
@@ -34,7 +34,7 @@ pub struct PresetDrag(pub PathBuf);
 /// The "Save selection as preset" dialog.
 #[derive(Clone, Debug, Default)]
 pub struct SavePresetDialog {
-    /// Where the preset goes; empty: `<graph folder>/presets/<name>.ron`.
+    /// Where the preset goes, relative to the graph's folder; empty: `presets/<name>.ron` there.
     pub file: String,
     /// The preset's name.
     pub name: String,
@@ -55,7 +55,8 @@ impl SavePresetDialog {
     /// The file the dialog saves to, for the graph folder `base`.
     pub fn target(&self, base: &Path) -> PathBuf {
         if !self.file.trim().is_empty() {
-            return PathBuf::from(self.file.trim());
+            // A relative file is taken from the graph's folder, like every path in the graph.
+            return base.join(self.file.trim());
         }
         let slug: String = self
             .name
@@ -124,7 +125,8 @@ impl EditorApp {
                 });
                 ui.separator();
                 let tags: Vec<String> = b.tags.iter().cloned().collect();
-                let shown = self.editor.browse_presets(&b.query, &tags);
+                // Filtered from the library read when the browser opened (not re-read every frame).
+                let shown = filter_presets(&presets, &b.query, &tags);
                 if shown.is_empty() {
                     ui.weak("no preset matches");
                 }
@@ -251,6 +253,9 @@ impl EditorApp {
             }
             save = ui.button("Save preset").clicked();
         });
+        // The selection may change while the dialog is open: ticks of nodes no longer selected
+        // have no checkbox left to untick, so they go.
+        d.ticked.retain(|(node, _)| selection.contains(node));
         if save {
             let spec = SelectionPreset {
                 name: d.name.clone(),

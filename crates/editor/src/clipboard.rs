@@ -17,7 +17,7 @@ use crate::layout::relative_path;
 use crate::state::Editor;
 
 /// The names of the parameters of `type_name` that are paths read relative to the graph file.
-fn input_path_params(registry: &Registry, type_name: &str) -> Vec<String> {
+pub(crate) fn input_path_params(registry: &Registry, type_name: &str) -> Vec<String> {
     if type_name == INCLUDE_TYPE {
         return vec!["path".to_string()];
     }
@@ -28,7 +28,7 @@ fn input_path_params(registry: &Registry, type_name: &str) -> Vec<String> {
 }
 
 /// Whether a stored path is left alone when moved between folders (`${VAR}` or absolute).
-fn is_anchored(path: &str) -> bool {
+pub(crate) fn is_anchored(path: &str) -> bool {
     path.contains("${") || Path::new(path).is_absolute()
 }
 

@@ -24,7 +24,7 @@ use crate::layout::relative_path;
 mod files;
 mod preset_lib;
 
-pub use preset_lib::SelectionPreset;
+pub use preset_lib::{SelectionPreset, filter_presets};
 
 /// A message for the status bar.
 #[derive(Clone, Debug)]

@@ -154,3 +154,52 @@ fn a_selection_saved_as_a_preset_cooks_the_same_frames() {
     let err = h.state().save_preset.as_ref().and_then(|d| d.error.clone()).unwrap_or_default();
     assert!(err.contains("exists"), "{err}");
 }
+
+#[test]
+fn a_saved_preset_finds_its_files_and_keeps_the_include_path_free() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("footage")).unwrap();
+    std::fs::copy(repo().join("tests/golden/candles_0012.png"), dir.path().join("footage/frame.png")).unwrap();
+    let graph = dir.path().join("shot.ron");
+    let preset = repo().join("graphs/presets/flame-card.ron");
+    std::fs::write(
+        &graph,
+        format!(
+            r#"(version: 1, nodes: {{
+                "load": (type: "imaging.load_image", params: {{"path": "footage/frame.png"}}),
+                "blur": (type: "imaging.gaussian_blur", params: {{"sigma": 2.0}}),
+                "card": (type: "graph.include", params: {{"path": "{}"}}),
+            }}, edges: [("load.image", "blur.image")])"#,
+            preset.display()
+        ),
+    )
+    .unwrap();
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    ed.open(&graph).unwrap();
+    ed.set_selection(vec!["load".into(), "blur".into()]);
+    let spec = pyrograph_editor::state::SelectionPreset {
+        name: "soft frame".into(),
+        params: vec![("load".into(), "path".into()), ("blur".into(), "sigma".into())],
+        ..Default::default()
+    };
+    let file = ed.save_selection_as_preset(&dir.path().join("presets/soft-frame.ron"), &spec).unwrap();
+    let doc = GraphDoc::load(&file).unwrap();
+    // The footage path now climbs out of presets/ to where the file is.
+    assert!(
+        matches!(doc.node("load").unwrap().params.get("path"), Some(ParamValue::String(p)) if p == "../footage/frame.png"),
+        "{:?}",
+        doc.node("load").unwrap().params
+    );
+    // `path` is the include node's own parameter: the exposed one is renamed.
+    let iface = doc.interface.unwrap();
+    assert_eq!(iface.params.get("load_path").map(String::as_str), Some("load.path"), "{:?}", iface.params);
+    assert!(!iface.params.contains_key("path"));
+    // Included from the graph's folder, it cooks the footage frame blurred.
+    let mut wrapper = GraphDoc::new();
+    wrapper.add_node("p", NodeDoc::new("graph.include").param("path", ParamValue::String("presets/soft-frame.ron".into())));
+    let g =
+        Graph::build(&wrapper, &pyrograph::registry(), dir.path(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let v = Evaluator::new().output(&g, "p.image", &CookCtx::new()).unwrap();
+    assert!(matches!(v, Value::Image(ref i) if i.size() == (640, 360)), "{}", v.summary());
+}

@@ -4,11 +4,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::GraphDoc;
+use pyrograph::core::builtin::INCLUDE_PATH;
 use pyrograph::core::document::{InterfaceDoc, PresetDoc, split_endpoint};
+use pyrograph::core::include::preset_desc;
+use pyrograph::core::{GraphDoc, ParamValue};
 use pyrograph::presets::{Library, Preset, matches};
 
 use super::Editor;
+use crate::clipboard::{input_path_params, is_anchored};
 
 /// What "Save selection as preset" writes besides the nodes.
 #[derive(Clone, Debug, Default)]
@@ -35,26 +38,33 @@ impl Editor {
     /// Presets whose name, description or tags contain every word of `query` (any case) and that
     /// carry every tag of `tags`, in search-path order.
     pub fn browse_presets(&self, query: &str, tags: &[String]) -> Vec<Preset> {
-        let words: Vec<&str> = query.split_whitespace().collect();
-        self.preset_library()
-            .presets
-            .into_iter()
-            .filter(|p| matches(p, tags, None) && words.iter().all(|w| matches(p, &[], Some(w))))
-            .collect()
+        filter_presets(&self.preset_library().presets, query, tags)
     }
 
     /// The preset document the selected nodes make: the nodes and the edges between them;
     /// an edge into the selection becomes an input, one out of it an output (with none, every
     /// output of the selection's last nodes); `spec.params` become exposed parameters.
-    pub fn selection_preset(&self, spec: &SelectionPreset) -> Result<GraphDoc, String> {
+    /// Relative file paths (footage, meshes, included presets) are rebased from the graph's folder
+    /// to `dir`, where the preset will live, since an included file resolves its paths from its
+    /// own folder.
+    pub fn selection_preset(&self, spec: &SelectionPreset, dir: &Path) -> Result<GraphDoc, String> {
         let sel: BTreeSet<&str> = self.selection().iter().map(String::as_str).collect();
         if sel.is_empty() {
             return Err("select the nodes to save as a preset first".into());
         }
+        let base = self.base_dir();
         let mut doc = GraphDoc::new();
         for (id, nd) in &self.doc().nodes.0 {
             if sel.contains(id.as_str()) {
-                doc.nodes.0.push((id.clone(), nd.clone()));
+                let mut nd = nd.clone();
+                for name in input_path_params(self.registry(), &nd.type_name) {
+                    if let Some(ParamValue::String(p)) = nd.params.get_mut(&name)
+                        && !is_anchored(p)
+                    {
+                        *p = rebase(&base.join(&*p), dir);
+                    }
+                }
+                doc.nodes.0.push((id.clone(), nd));
             }
         }
         let mut iface = InterfaceDoc::default();
@@ -65,7 +75,7 @@ impl Editor {
             match (sel.contains(fnode.as_str()), sel.contains(tnode.as_str())) {
                 (true, true) => doc.edges.push((from.clone(), to.clone())),
                 (false, true) => {
-                    let name = unique(&iface.inputs, &tport, &tnode);
+                    let name = unique(&iface, &tport, &tnode);
                     iface.inputs.insert(name, to.clone());
                 }
                 (true, false) => crossing_out.push((fnode, fport)),
@@ -87,7 +97,7 @@ impl Editor {
         for (node, port) in crossing_out {
             let endpoint = format!("{node}.{port}");
             if !iface.outputs.values().any(|e| e == &endpoint) {
-                let name = unique(&iface.outputs, &port, &node);
+                let name = unique(&iface, &port, &node);
                 iface.outputs.insert(name, endpoint);
             }
         }
@@ -111,7 +121,7 @@ impl Editor {
                 Some(false) => return Err(format!("'{node}.{param}' is a data input, not a parameter")),
                 None => return Err(format!("node '{node}' has no parameter '{param}'")),
             }
-            let name = if counts[param.as_str()] > 1 { format!("{node}_{param}") } else { param.clone() };
+            let name = if counts[param.as_str()] > 1 { format!("{node}_{param}") } else { unique(&iface, param, node) };
             iface.params.insert(name, format!("{node}.{param}"));
         }
         // An input with no default cannot cook unconnected: the preset says it needs it.
@@ -145,8 +155,9 @@ impl Editor {
         if spec.name.trim().is_empty() {
             return Err("give the preset a name".into());
         }
-        let doc = self.selection_preset(spec)?;
         let file = if file.extension().is_some_and(|e| e == "ron") { file.to_path_buf() } else { file.with_extension("ron") };
+        let dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
+        let doc = self.selection_preset(spec, &dir)?;
         if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         }
@@ -154,6 +165,11 @@ impl Editor {
             std::io::ErrorKind::AlreadyExists => format!("{} exists; tick overwrite to replace it", file.display()),
             _ => format!("writing {}: {e}", file.display()),
         })?;
+        // Read back the way a graph including it would, so a preset that cannot be used is not
+        // reported as saved.
+        if let Err(d) = preset_desc(&file, self.registry()) {
+            return Err(format!("saved {}, but it does not load as a preset: {d}", file.display()));
+        }
         if let Some(dir) = file.parent().filter(|d| !self.preset_dirs().iter().any(|x| x == d)) {
             self.add_preset_dir(dir.to_path_buf());
         }
@@ -162,7 +178,52 @@ impl Editor {
     }
 }
 
-/// `want`, or `node_want` when `map` already holds `want`.
-fn unique<V>(map: &BTreeMap<String, V>, want: &str, node: &str) -> String {
-    if map.contains_key(want) { format!("{node}_{want}") } else { want.to_string() }
+/// The presets of `all` whose name, description or tags contain every word of `query` (any
+/// case) and that carry every tag of `tags`.
+pub fn filter_presets(all: &[Preset], query: &str, tags: &[String]) -> Vec<Preset> {
+    let words: Vec<&str> = query.split_whitespace().collect();
+    all.iter().filter(|p| matches(p, tags, None) && words.iter().all(|w| matches(p, &[], Some(w)))).cloned().collect()
+}
+
+/// `want`, or `node_want` when an input, parameter or output of `iface` is already called
+/// `want` or it is `path` (the include node's own file parameter).
+fn unique(iface: &InterfaceDoc, want: &str, node: &str) -> String {
+    let taken = |n: &str| {
+        n == INCLUDE_PATH || iface.inputs.contains_key(n) || iface.params.contains_key(n) || iface.outputs.contains_key(n)
+    };
+    if taken(want) { format!("{node}_{want}") } else { want.to_string() }
+}
+
+/// `file` written relative to `dir` (climbing with `..` where they share a parent), else absolute.
+fn rebase(file: &Path, dir: &Path) -> String {
+    use std::path::Component;
+    let abs = |p: &Path| {
+        let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir().unwrap_or_default().join(p) };
+        // Lexical clean-up of `.` and `..`, so the shared prefix is found without the files existing.
+        let mut out = PathBuf::new();
+        for c in p.components() {
+            match c {
+                Component::ParentDir => {
+                    out.pop();
+                }
+                Component::CurDir => {}
+                other => out.push(other),
+            }
+        }
+        out
+    };
+    let (f, d) = (abs(file), abs(dir));
+    let (fc, dc): (Vec<_>, Vec<_>) = (f.components().collect(), d.components().collect());
+    let shared = fc.iter().zip(&dc).take_while(|(a, b)| a == b).count();
+    if shared <= 1 {
+        return f.display().to_string();
+    }
+    let mut rel = PathBuf::new();
+    for _ in shared..dc.len() {
+        rel.push("..");
+    }
+    for c in &fc[shared..] {
+        rel.push(c);
+    }
+    rel.display().to_string()
 }

@@ -10,6 +10,7 @@ pub mod hsv;
 pub mod hsv_auto;
 pub mod morphology;
 pub mod pose;
+pub mod pose_smooth;
 
 use pyrograph_core::{Cook, Registry};
 
@@ -27,6 +28,7 @@ pub fn register(registry: &mut Registry) {
     registry.add(hermite::HermiteBackground::node());
     registry.add(hermite::HermiteBackgroundMasked::node());
     registry.add(pose::PoseNormalize::node());
+    registry.add(pose_smooth::SmoothAngle::node());
 }
 
 #[cfg(test)]

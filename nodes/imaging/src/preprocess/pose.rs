@@ -158,6 +158,56 @@ pub fn rotate_upright(image: &Image, axis: &FlameAxis) -> Image {
     warp_image(image, Projection::translate(px, py) * Projection::rotate(theta) * Projection::translate(-px, -py))
 }
 
+/// Where the flame's outline lands after `rotate_upright` turns it by `turn_deg` about `root`, as
+/// a bounding box `[x_min, y_min, x_max, y_max]` (the same rotation as the warp: positive turns
+/// a right-leaning tip up).
+pub fn turned_bounds(points: &[[f32; 2]], root: [f64; 2], turn_deg: f64) -> Option<[f64; 4]> {
+    let (s, c) = (-turn_deg.to_radians()).sin_cos();
+    let turned = points.iter().map(|&[x, y]| {
+        let (dx, dy) = (f64::from(x) - root[0], f64::from(y) - root[1]);
+        [root[0] + c * dx - s * dy, root[1] + s * dx + c * dy]
+    });
+    let b = turned.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, [x, y]| {
+        [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)]
+    });
+    (b[0] <= b[2]).then_some(b)
+}
+
+/// The scale (≤ 1, about the root) and shift that bring the turned outline `bounds` inside a
+/// `w` × `h` frame with `margin` pixels to spare; `(1, [0, 0])` when it is inside already.
+pub fn keep_inside(bounds: [f64; 4], root: [f64; 2], w: f64, h: f64, margin: f64) -> (f64, [f64; 2]) {
+    let (bw, bh) = (bounds[2] - bounds[0], bounds[3] - bounds[1]);
+    let scale = ((w - 1.0 - 2.0 * margin) / bw.max(1e-9)).min((h - 1.0 - 2.0 * margin) / bh.max(1e-9)).clamp(1e-3, 1.0);
+    // The scaled box, about the root.
+    let at = |v: f64, r: f64| r + scale * (v - r);
+    let (x0, y0, x1, y1) = (at(bounds[0], root[0]), at(bounds[1], root[1]), at(bounds[2], root[0]), at(bounds[3], root[1]));
+    let shift_axis = |lo: f64, hi: f64, size: f64| {
+        if lo < margin {
+            margin - lo
+        } else if hi > size - 1.0 - margin {
+            (size - 1.0 - margin - hi).max(margin - lo)
+        } else {
+            0.0
+        }
+    };
+    (scale, [shift_axis(x0, x1, w), shift_axis(y0, y1, h)])
+}
+
+/// Rotates `image` about `root` by `turn_deg` (as [`rotate_upright`]), then scales it by `scale`
+/// about the root and shifts it by `shift`.
+pub fn turn_scale_shift(image: &Image, root: [f64; 2], turn_deg: f64, scale: f64, shift: [f64; 2]) -> Image {
+    let (px, py) = (root[0] as f32, root[1] as f32);
+    let theta = (-turn_deg.to_radians()) as f32;
+    let (s, sx, sy) = (scale as f32, shift[0] as f32, shift[1] as f32);
+    warp_image(
+        image,
+        Projection::translate(px + sx, py + sy)
+            * Projection::scale(s, s)
+            * Projection::rotate(theta)
+            * Projection::translate(-px, -py),
+    )
+}
+
 /// Bounding box `[x_min, y_min, x_max, y_max]` of every outermost contour's points.
 pub fn flame_bounds(contours: &Contours) -> Option<[f64; 4]> {
     let pts = contours.contours.iter().filter(|c| c.depth == 0).flat_map(|c| c.points.iter());
@@ -268,6 +318,13 @@ pyrograph_core::node! {
         /// Outline width, as a fraction of the frame's, from which the frame is not turned (rotate mode)
         #[range(0.05, 1.0)]
         max_width: f64 = 0.9,
+        /// Keep the turned flame inside the frame: where the turn would push part of it out, move it back in and, if it is taller or wider than the frame, scale it down about its root (rotate mode)
+        keep_inside: bool = true,
+        /// Straighten by lean instead of the fitted angle (connect imaging.smooth_angle's angle so the turn does not jitter); the guards still apply (rotate mode)
+        use_lean: bool = false,
+        /// The lean to straighten, in degrees, positive to the right (with use_lean)
+        #[range(-180.0, 180.0)]
+        lean: f64 = 0.0,
     }
     pub struct PoseNormalizeOut {
         /// Normalized frame
@@ -346,11 +403,27 @@ impl Cook for PoseNormalize {
                     let xs = c.points.iter().map(|p| f64::from(p[0]));
                     xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min) + 1.0
                 });
-                let (turn, warning) = guarded_turn(a.angle_deg, width, f64::from(image.width()), self.max_angle, self.max_width);
+                let lean = if self.use_lean { self.lean } else { a.angle_deg };
+                let (turn, warning) = guarded_turn(lean, width, f64::from(image.width()), self.max_angle, self.max_width);
                 if let Some(w) = warning {
                     ctx.warn(w);
                 }
-                (rotate_upright(image, &FlameAxis { angle_deg: turn, ..a }), turn)
+                let (iw, ih) = (f64::from(image.width()), f64::from(image.height()));
+                let fit = main_contour(contours)
+                    .and_then(|c| turned_bounds(&c.points, a.root, turn))
+                    .map_or((1.0, [0.0; 2]), |b| keep_inside(b, a.root, iw, ih, 1.0));
+                if self.keep_inside && fit != (1.0, [0.0; 2]) && turn.abs() >= UPRIGHT_EPSILON_DEG {
+                    ctx.warn(format!(
+                        "turned upright the flame would leave the frame: moved it ({:.0}, {:.0}) px{} to keep it whole; \
+                         crop with more room above and beside the flame to avoid this",
+                        fit.1[0],
+                        fit.1[1],
+                        if fit.0 < 1.0 { format!(" and scaled it to {:.0} %", 100.0 * fit.0) } else { String::new() }
+                    ));
+                    (turn_scale_shift(image, a.root, turn, fit.0, fit.1), turn)
+                } else {
+                    (rotate_upright(image, &FlameAxis { angle_deg: turn, ..a }), turn)
+                }
             }
             _ => (pose_normalize(image, contours, mode, weighting).image, 0.0),
         };
@@ -421,6 +494,9 @@ pub(crate) mod tests {
             target_height: 0.8,
             max_angle: 45.0,
             max_width: 0.9,
+            keep_inside: true,
+            use_lean: false,
+            lean: 0.0,
         };
         let ctx = CookCtx::new();
         let out = node.cook(&ctx).unwrap();
@@ -452,6 +528,53 @@ pub(crate) mod tests {
         // A flame in the middle of the same frame is turned as before, without a warning.
         let (out, warnings) = cook_node(&ellipse_mask(100, 100, (50.0, 50.0), (8.0, 30.0), 20.0));
         assert!((out.turned - 20.0).abs() < 1.0 && warnings.is_empty(), "{} {warnings:?}", out.turned);
+    }
+
+    #[test]
+    fn a_turned_flame_is_kept_whole_inside_the_frame() {
+        // A long flame lying 40° across a wide, short frame: upright it is taller than the frame.
+        let m = ellipse_mask(200, 90, (100.0, 50.0), (8.0, 52.0), 40.0);
+        let (out, warnings) = cook_node(&m);
+        assert!((out.turned - 40.0).abs() < 1.0, "{}", out.turned);
+        assert!(warnings.iter().any(|w| w.contains("would leave the frame") && w.contains("scaled")), "{warnings:?}");
+        let lit = |img: &Image| -> Vec<(u32, u32)> {
+            (0..img.height())
+                .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+                .filter(|&(x, y)| img.pixel(x, y)[0] > 0.5)
+                .collect()
+        };
+        let after = lit(&out.image);
+        // Nothing touches the border, and (almost) all of the flame is still there: scaled
+        // to fit, its area shrinks by the scale squared, never by a cut.
+        assert!(after.iter().all(|&(x, y)| x > 0 && y > 0 && x < 199 && y < 89), "the flame touches the frame's edge");
+        let upright =
+            Mask::from_vec(200, 90, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+        let axis = flame_axis(main_contour(&trace_contours(&upright)).unwrap(), Weighting::Uniform).unwrap();
+        assert!(axis.angle_deg.abs() < 2.0, "still upright: {}", axis.angle_deg);
+        let height = axis.root[1] - axis.tip[1];
+        assert!(height > 80.0, "scaled to the frame's height, not cut: {height}");
+        // Without the guard the same turn cuts the flame at the top of the frame.
+        let a = flame_axis(main_contour(&trace_contours(&m)).unwrap(), Weighting::Uniform).unwrap();
+        let cut = rotate_upright(&mask_image(&m), &a);
+        assert!(lit(&cut).iter().any(|&(_, y)| y == 0), "the plain turn reaches the top edge");
+    }
+
+    #[test]
+    fn turned_bounds_predict_where_the_warp_puts_the_flame() {
+        let m = ellipse_mask(160, 160, (80.0, 90.0), (10.0, 40.0), -30.0);
+        let c = trace_contours(&m);
+        let a = flame_axis(main_contour(&c).unwrap(), Weighting::Uniform).unwrap();
+        let b = turned_bounds(&main_contour(&c).unwrap().points, a.root, a.angle_deg).unwrap();
+        let img = rotate_upright(&mask_image(&m), &a);
+        for y in 0..160 {
+            for x in 0..160 {
+                if img.pixel(x, y)[0] > 0.5 {
+                    let (x, y) = (f64::from(x), f64::from(y));
+                    assert!(x >= b[0] - 1.5 && x <= b[2] + 1.5 && y >= b[1] - 1.5 && y <= b[3] + 1.5, "({x}, {y}) outside {b:?}");
+                }
+            }
+        }
+        assert_eq!(keep_inside(b, a.root, 160.0, 160.0, 1.0), (1.0, [0.0, 0.0]), "inside already: untouched");
     }
 
     #[test]

@@ -40,6 +40,15 @@ pub fn otsu(hist: &[u64; 256]) -> Option<u8> {
 /// saturation of those at or above it, never below `s_floor`. `None` when no pixel has a hue in
 /// the band.
 pub fn auto_thresholds<'a>(frames: impl Iterator<Item = &'a Image>, hues: (f32, f32), s_floor: f32) -> Option<(f32, f32)> {
+    auto_levels(frames, hues, s_floor).map(|(v, s, _)| (v, s))
+}
+
+/// [`auto_thresholds`] with the value histogram of the band's pixels (for [`core_level`]).
+pub fn auto_levels<'a>(
+    frames: impl Iterator<Item = &'a Image>,
+    hues: (f32, f32),
+    s_floor: f32,
+) -> Option<(f32, f32, Box<[u64; 256]>)> {
     let band = HsvRange { h_min: hues.0, h_max: hues.1, s_min: 0.0, s_max: 255.0, v_min: 0.0, v_max: 255.0 };
     // Saturation histograms per value level, so the second pass needs no second read.
     let mut v_hist = [0u64; 256];
@@ -61,7 +70,53 @@ pub fn auto_thresholds<'a>(frames: impl Iterator<Item = &'a Image>, hues: (f32, 
         }
     }
     let s_min = otsu(&s_hist).map_or(s_floor, |s| f32::from(s).max(s_floor));
-    Some((f32::from(v_min), s_min))
+    Some((f32::from(v_min), s_min, Box::new(v_hist)))
+}
+
+/// The value from which a pixel counts as the white-hot core: `fraction` of the brightest value
+/// of the band's flame pixels (their 99.5th percentile, so a few hot pixels do not set it), never
+/// below `v_min`. Relative to the clip's own brightest flame, so a darker exposure lowers it too.
+pub fn core_level(v_hist: &[u64; 256], v_min: f32, fraction: f32) -> f32 {
+    let from = v_min.clamp(0.0, 255.0) as usize;
+    let total: u64 = v_hist[from..].iter().sum();
+    let mut seen = 0u64;
+    let top = (from..256)
+        .rev()
+        .find(|&v| {
+            seen += v_hist[v];
+            seen as f64 >= 0.005 * total as f64
+        })
+        .unwrap_or(255);
+    (fraction * top as f32).max(v_min)
+}
+
+/// `band` with the components of `core` that touch it (8-connected, one pixel apart): the
+/// white-hot core joins the flame it sits in, glare elsewhere stays out.
+///
+/// By hand because imageproc's labelling would need a second pass to find the touching labels;
+/// one flood fill from the band does both.
+pub fn join_core(band: &Mask, core: &Mask) -> Mask {
+    let (w, h) = (band.width() as usize, band.height() as usize);
+    let (b, c) = (band.data(), core.data());
+    let mut out = b.to_vec();
+    let mut stack: Vec<usize> = (0..w * h).filter(|&i| b[i] > 0).collect();
+    while let Some(i) = stack.pop() {
+        let (x, y) = (i % w, i / w);
+        for dy in -1i64..=1 {
+            for dx in -1i64..=1 {
+                let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+                    continue;
+                }
+                let j = ny as usize * w + nx as usize;
+                if c[j] > 0 && out[j] == 0 {
+                    out[j] = 255;
+                    stack.push(j);
+                }
+            }
+        }
+    }
+    Mask::from_vec(band.width(), band.height(), out).unwrap_or_else(|| band.clone())
 }
 
 pyrograph_core::node! {
@@ -89,6 +144,11 @@ pyrograph_core::node! {
         /// Frames sampled for the thresholds: every stride-th.
         #[range(1, 100_000)]
         stride: usize = 5,
+        /// Also keep the white-hot core where it touches the flame: pixels at least core_level of the flame's brightest value, whatever their hue or saturation (a candle's core is nearly white, so the saturation threshold drops it).
+        core: bool = true,
+        /// The core's value threshold as a fraction of the flame's brightest value (its 99.5th percentile).
+        #[range(0.5, 1.0)]
+        core_level: f32 = 0.85,
     }
     pub struct HsvAutoMaskOut {
         /// 255 where the flame is, per frame.
@@ -97,6 +157,8 @@ pyrograph_core::node! {
         value_threshold: f32,
         /// The saturation threshold chosen (0–255): imaging.hsv_mask's s_min.
         saturation_threshold: f32,
+        /// The core's value threshold chosen (0–255; 255 with core off).
+        core_threshold: f32,
     }
 }
 
@@ -104,6 +166,8 @@ pyrograph_core::node! {
 struct MaskSource {
     clip: Clip,
     layers: Vec<HsvLayer>,
+    /// The core's layer, joined where it touches the band.
+    core: Option<HsvLayer>,
 }
 
 impl FrameSource for MaskSource {
@@ -114,7 +178,12 @@ impl FrameSource for MaskSource {
         let Value::Image(img) = self.clip.get(index, ctx)? else {
             return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {index} is not an image")));
         };
-        Ok(Value::Mask(Arc::new(hsv_mask(&img, &self.layers)?)))
+        let band = hsv_mask(&img, &self.layers)?;
+        let mask = match &self.core {
+            Some(core) => join_core(&band, &hsv_mask(&img, std::slice::from_ref(core))?),
+            None => band,
+        };
+        Ok(Value::Mask(Arc::new(mask)))
     }
 }
 
@@ -132,8 +201,8 @@ impl Cook for HsvAutoMask {
             }
             sampled.push(img);
         }
-        let (v_min, s_min) = auto_thresholds(sampled.iter().map(|i| i.as_ref()), (self.hue_min, self.hue_max), self.s_min_floor)
-            .ok_or_else(|| {
+        let (v_min, s_min, v_hist) =
+            auto_levels(sampled.iter().map(|i| i.as_ref()), (self.hue_min, self.hue_max), self.s_min_floor).ok_or_else(|| {
                 NodeError::port(
                     port!(HsvAutoMask, hue_min),
                     format!(
@@ -153,10 +222,21 @@ impl Cook for HsvAutoMask {
         if self.blue_base {
             layers.push(layer(200.0, 260.0));
         }
+        let core_v = if self.core { core_level(&v_hist, v_min, self.core_level) } else { 255.0 };
+        let core = self.core.then_some(HsvLayer {
+            range: HsvRange { h_min: 0.0, h_max: 360.0, s_min: 0.0, s_max: 255.0, v_min: core_v, v_max: 255.0 },
+            blend: Blend::Add,
+        });
         let mut h = Fingerprinter::new();
-        ("imaging.hsv_auto_mask", clip.fingerprint(), format!("{layers:?}")).hash(&mut h);
-        let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(MaskSource { clip: clip.clone(), layers }));
-        Ok(HsvAutoMaskOut { mask: ClipOf::new(masks), value_threshold: v_min, saturation_threshold: s_min })
+        ("imaging.hsv_auto_mask", clip.fingerprint(), format!("{layers:?} {core:?}")).hash(&mut h);
+        let source = MaskSource { clip: clip.clone(), layers, core };
+        let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(source));
+        Ok(HsvAutoMaskOut {
+            mask: ClipOf::new(masks),
+            value_threshold: v_min,
+            saturation_threshold: s_min,
+            core_threshold: core_v,
+        })
     }
 }
 
@@ -217,6 +297,42 @@ mod tests {
             assert!(!inside(50, 15), "{brightness}: the pale glare is dropped (v {v}, s {s})");
         }
         let black = Image::new(8, 8, Channels::Rgba);
+        assert!(auto_levels(std::iter::once(&black), (340.0, 70.0), 40.0).is_none());
         assert_eq!(auto_thresholds(std::iter::once(&black), (340.0, 70.0), 40.0), None);
+    }
+
+    #[test]
+    fn the_core_joins_where_it_touches_the_flame_and_glare_stays_out() {
+        let m = |w: u32, h: u32, on: &dyn Fn(u32, u32) -> bool| {
+            Mask::from_vec(
+                w,
+                h,
+                (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| if on(x, y) { 255 } else { 0 }).collect(),
+            )
+            .unwrap()
+        };
+        // The band: a ring of orange around a hole (the white core); a second white blob far off.
+        let band = m(20, 10, &|x, y| (2..9).contains(&x) && (2..8).contains(&y) && !((4..7).contains(&x) && (4..6).contains(&y)));
+        let core =
+            m(20, 10, &|x, y| ((4..7).contains(&x) && (4..6).contains(&y)) || ((14..18).contains(&x) && (3..6).contains(&y)));
+        let joined = join_core(&band, &core);
+        assert!(joined.get(5, 4), "the core inside the flame joins it");
+        assert!(!joined.get(15, 4), "the glare apart from it does not");
+        assert!(joined.get(2, 2), "the band itself stays");
+    }
+
+    #[test]
+    fn the_core_level_follows_the_exposure() {
+        // Flame values spread up to 250 (bright) or 125 (two stops darker in 8-bit).
+        let hist = |top: usize| {
+            let mut h = [0u64; 256];
+            h[40..=top].fill(10);
+            h
+        };
+        let bright = core_level(&hist(250), 60.0, 0.85);
+        let dark = core_level(&hist(125), 30.0, 0.85);
+        assert!((bright - 211.0).abs() < 2.0, "{bright}");
+        assert!((dark - 105.0).abs() < 2.0, "{dark}");
+        assert_eq!(core_level(&hist(70), 65.0, 0.85), 65.0, "never below the band's threshold");
     }
 }

@@ -413,13 +413,14 @@ impl Cook for PoseNormalize {
                     .and_then(|c| turned_bounds(&c.points, a.root, turn))
                     .map_or((1.0, [0.0; 2]), |b| keep_inside(b, a.root, iw, ih, 1.0));
                 if self.keep_inside && fit != (1.0, [0.0; 2]) && turn.abs() >= UPRIGHT_EPSILON_DEG {
-                    ctx.warn(format!(
-                        "turned upright the flame would leave the frame: moved it ({:.0}, {:.0}) px{} to keep it whole; \
-                         crop with more room above and beside the flame to avoid this",
-                        fit.1[0],
-                        fit.1[1],
-                        if fit.0 < 1.0 { format!(" and scaled it to {:.0} %", 100.0 * fit.0) } else { String::new() }
-                    ));
+                    // One wording for every frame, so a clip reports it once (see CookCtx::warn).
+                    ctx.warn(if fit.0 < 1.0 {
+                        "turned upright the flame would not fit the frame: it was scaled down about its root to keep it \
+                         whole; crop with more room above and beside the flame to avoid this"
+                    } else {
+                        "turned upright the flame would leave the frame: it was moved back in to keep it whole; crop with \
+                         more room above and beside the flame to avoid this"
+                    });
                     (turn_scale_shift(image, a.root, turn, fit.0, fit.1), turn)
                 } else {
                     (rotate_upright(image, &FlameAxis { angle_deg: turn, ..a }), turn)
@@ -536,7 +537,7 @@ pub(crate) mod tests {
         let m = ellipse_mask(200, 90, (100.0, 50.0), (8.0, 52.0), 40.0);
         let (out, warnings) = cook_node(&m);
         assert!((out.turned - 40.0).abs() < 1.0, "{}", out.turned);
-        assert!(warnings.iter().any(|w| w.contains("would leave the frame") && w.contains("scaled")), "{warnings:?}");
+        assert!(warnings.iter().any(|w| w.contains("would not fit the frame") && w.contains("scaled")), "{warnings:?}");
         let lit = |img: &Image| -> Vec<(u32, u32)> {
             (0..img.height())
                 .flat_map(|y| (0..img.width()).map(move |x| (x, y)))

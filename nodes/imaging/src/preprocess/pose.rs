@@ -318,8 +318,8 @@ pyrograph_core::node! {
         /// Outline width, as a fraction of the frame's, from which the frame is not turned (rotate mode)
         #[range(0.05, 1.0)]
         max_width: f64 = 0.9,
-        /// Keep the turned flame inside the frame: where the turn would push part of it out, move it back in and, if it is taller or wider than the frame, scale it down about its root (rotate mode)
-        keep_inside: bool = true,
+        /// Keep the turned flame inside the frame: where the turn would push part of it out, move it back in and, if it is taller or wider than the frame, scale it down about its root (rotate mode; off keeps every frame's scale, as the thesis does)
+        keep_inside: bool = false,
         /// Straighten by lean instead of the fitted angle (connect imaging.smooth_angle's angle so the turn does not jitter); the guards still apply (rotate mode)
         use_lean: bool = false,
         /// The lean to straighten, in degrees, positive to the right (with use_lean)

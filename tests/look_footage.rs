@@ -57,7 +57,8 @@ fn candle_graph_moves_like_the_candle_footage_and_shows_no_bands() {
 /// was trained on, in image space: the AR(2) fit reproduces its parameters' statistics by
 /// construction, so the check that matters is what the rendered flames do — their area, height,
 /// width and energy vary like the real flame's (coefficient of variation within 30 %, lag-1 and
-/// lag-2 autocorrelation within 0.15).
+/// lag-2 autocorrelation within 0.15). 1200 synthesized frames, since the lag-2 autocorrelation of
+/// one 300-frame draw wanders by about 0.1 from model to model (0.33–0.44 for the height).
 #[test]
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn learned_candle_moves_like_its_training_clip_in_image_space() {
@@ -66,7 +67,7 @@ fn learned_candle_moves_like_its_training_clip_in_image_space() {
     let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
     let path = format!("frames.path={:?}", frames.display().to_string());
     let learned =
-        graph_look(&graph, "render.color", &[&path, "sample.frames=300"], THRESHOLD, 25).expect("the learned candle cooks");
+        graph_look(&graph, "render.color", &[&path, "sample.frames=1200"], THRESHOLD, 25).expect("the learned candle cooks");
     println!("footage {}", real.summary());
     println!("learned {}", learned.summary());
     assert_eq!(learned.flames.len(), 1, "{learned:?}");

@@ -184,8 +184,22 @@ fn parse_term(term: &str) -> Result<FrameRange, String> {
     Ok(FrameRange { start, end: start + (end - start) / step * step, step })
 }
 
+/// Frame numbers for a message: the first twelve, then how many more ("3, 17, 40 and 9 more").
+pub fn list_for_message(frames: &[usize]) -> String {
+    let listed: Vec<String> = frames.iter().take(12).map(|f| f.to_string()).collect();
+    let more = if frames.len() > listed.len() { format!(" and {} more", frames.len() - listed.len()) } else { String::new() };
+    format!("{}{more}", listed.join(", "))
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn message_lists_stop_after_twelve_frames() {
+        assert_eq!(list_for_message(&[3, 17]), "3, 17");
+        let many: Vec<usize> = (0..20).collect();
+        assert_eq!(list_for_message(&many), "0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11 and 8 more");
+    }
+
     use super::*;
     use proptest::prelude::*;
 

@@ -139,12 +139,10 @@ pub fn frame_box(b: PixelBox, margin: f64, square: bool, multiple: u32, width: u
 pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (width, height): (u32, u32)) -> Vec<String> {
     let mut out = Vec::new();
     if !empty.is_empty() {
-        let listed: Vec<String> = empty.iter().take(12).map(|f| f.to_string()).collect();
-        let more = if empty.len() > listed.len() { format!(" and {} more", empty.len() - listed.len()) } else { String::new() };
         out.push(format!(
-            "the mask is empty in {} of {frames} frames ({}{more}): those frames have no flame in the box",
+            "the mask is empty in {} of {frames} frames ({}): those frames have no flame in the box",
             empty.len(),
-            listed.join(", ")
+            pyrograph_core::frames::list_for_message(empty)
         ));
     }
     let share = |f: &dyn Fn(&PixelBox) -> bool| boxes.iter().filter(|b| f(b)).count() as f64 / boxes.len().max(1) as f64;

@@ -11,12 +11,12 @@
 //! scaled to 1, and the intensity scaled to the clip's average. PCA of the normalized images
 //! (the Eigenfires code) gives the eigenflames and the N_e appearance weights (§3.2).
 
-use pyrograph_nodes_eigen::pca;
 use rayon::prelude::*;
 
+use super::quality::{EdgeReport, FrameQuality, train_scored};
 use super::shape::{Moments, Spline, plumes, slice_value};
 use crate::values::{FlameModel, ParamSeries};
-use pyrograph_nodes_eigen::values::FrameRef;
+use pyrograph_core::frames::list_for_message;
 
 pyrograph_core::ports! {
     /// Settings of the fit: the ports of `flame_model.fit` after its clip, with their defaults.
@@ -41,9 +41,13 @@ pyrograph_core::ports! {
         /// Height of the normalized images (eigenflame size).
         #[range(4, 1024)]
         norm_height: u32 = 128,
-        /// Gray values at or below this are background.
+        /// Gray values at or below this are background (a fraction of the clip's peak when relative_threshold is on).
         #[range(0.0, 1.0)]
         threshold: f32 = 0.08,
+        // The median over frames of each frame's brightest pixel: 1 for footage whose flame core
+        // clips (the shared candle), lower for darker footage, which then needs no retuning.
+        /// The threshold is a fraction of the clip's peak brightness (the median of the frames' brightest pixels, at least 0.25).
+        relative_threshold: bool = true,
         /// Plumes under this fraction of a frame's intensity are specks (removed); two larger ones skip the frame.
         #[range(0.0, 1.0)]
         min_plume: f64 = 0.05,
@@ -67,6 +71,24 @@ pyrograph_core::ports! {
         v_above: f64 = 0.2,
         /// Scale every normalized image to the clip's average intensity (§3.1).
         normalize_intensity: bool = true,
+        /// A clip whose flame base is outside the picture in a quarter of its frames or more: refuse to fit (the
+        /// model needs the whole flame, base at the bottom, §3), or fit it with a warning.
+        cut_base: CutBase = CutBase::Refuse,
+        // A frame the eigenflames cannot represent (a flare, a second plume merged in, a bad mask)
+        // would teach the dynamics a jump; 0 keeps every frame.
+        /// Drop frames whose normalized image the eigenflames reconstruct with a relative error above this (0 = keep all).
+        #[range(0.0, 10.0)]
+        max_residual: f64 = 0.0,
+    }
+}
+
+pyrograph_core::choice! {
+    /// What `flame_model.fit` does with a clip whose flame base is outside the picture.
+    pub enum CutBase {
+        /// Refuse with an error naming the edge and the share of frames.
+        Refuse = "refuse",
+        /// Fit anyway and report a warning.
+        Warn = "warn",
     }
 }
 
@@ -188,6 +210,12 @@ pub struct Fit {
     pub skipped_plumes: Vec<usize>,
     /// Frames skipped for holding no flame.
     pub skipped_empty: Vec<usize>,
+    /// Frames dropped because the eigenflames reconstruct them worse than `max_residual`.
+    pub skipped_quality: Vec<usize>,
+    /// Fit quality of every frame that held one flame (kept or dropped by quality), in frame order.
+    pub quality: Vec<FrameQuality>,
+    /// What the user should know about the clip (flame cut by an edge, frames dropped).
+    pub warnings: Vec<String>,
 }
 
 /// Column names of a parameter row: `path_0.., width_0.., eig_0.., height`.
@@ -372,6 +400,15 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
     }
     anchor = [anchor[0] / flames.len() as f64, anchor[1] / flames.len() as f64];
     let f0 = Frame0 { anchor, axis };
+    let edges = EdgeReport::of(&flames, frame_size, axis);
+    let mut warnings = Vec::new();
+    if let Some(base) = edges.base_cut() {
+        match s.cut_base {
+            CutBase::Refuse => return Err(format!("{base} (cut_base: warn fits it anyway)")),
+            CutBase::Warn => warnings.push(base),
+        }
+    }
+    warnings.extend(edges.tip_cut());
 
     // Per frame: height from the second-order moment along the main axis, slices, normalization.
     let shaped: Vec<(Shape, Vec<f32>)> = flames
@@ -392,9 +429,46 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         let gain = if s.normalize_intensity && m > 0.0 { (target / m) as f32 } else { 1.0 };
         data.extend(img.iter().map(|v| v * gain));
     }
-    let sources = (0..shaped.len()).map(|i| FrameRef { clip: 0, index: kept[i] as u32 }).collect();
-    let db = pca::train(s.norm_size().0, s.norm_size().1, data, sources, s.n_e)?;
+    let all: Vec<usize> = (0..shaped.len()).collect();
+    let (mut db, mut residuals) = train_scored(s, &data, &all, &kept)?;
+    let mut used = all;
+    if s.max_residual > 0.0 {
+        let good: Vec<usize> = used.iter().copied().filter(|&f| residuals[f] <= s.max_residual).collect();
+        if good.len() < used.len() {
+            if good.len() < 2 {
+                return Err(format!(
+                    "only {} of {} frames are reconstructed within max_residual {}: raise it (the worst frame's residual is {:.3})",
+                    good.len(),
+                    used.len(),
+                    s.max_residual,
+                    residuals.iter().fold(0.0_f64, |a, &b| a.max(b))
+                ));
+            }
+            // The eigenflames of the good frames alone; the dropped frames keep their first-pass scores.
+            let (db2, r2) = train_scored(s, &data, &good, &kept)?;
+            for (&f, r) in good.iter().zip(r2) {
+                residuals[f] = r;
+            }
+            db = db2;
+            used = good;
+        }
+    }
+    let skipped_quality: Vec<usize> = (0..shaped.len()).filter(|f| !used.contains(f)).map(|f| kept[f]).collect();
+    if !skipped_quality.is_empty() {
+        warnings.push(format!(
+            "{} of {} frames dropped: the eigenflames reconstruct them with a relative error above max_residual {} ({})",
+            skipped_quality.len(),
+            shaped.len(),
+            s.max_residual,
+            list_for_message(&skipped_quality)
+        ));
+    }
+    let quality: Vec<FrameQuality> = (0..shaped.len())
+        .map(|f| FrameQuality { frame: kept[f], residual: residuals[f], edge: edges.touches[f], used: used.contains(&f) })
+        .collect();
     let e = db.basis.components();
+    let shaped: Vec<&(Shape, Vec<f32>)> = used.iter().map(|&f| &shaped[f]).collect();
+    let kept: Vec<usize> = used.iter().map(|&f| kept[f]).collect();
 
     let names = param_names(s.n_p, s.n_w, e);
     let dim = names.len();
@@ -425,7 +499,7 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         mean_intensity: if s.normalize_intensity { target } else { 0.0 },
         mean_params,
     };
-    Ok(Fit { model, params, kept, skipped_plumes, skipped_empty })
+    Ok(Fit { model, params, kept, skipped_plumes, skipped_empty, skipped_quality, quality, warnings })
 }
 
 /// Analyses and fits row-major gray frames of one size (the node pulls clip frames instead).
@@ -434,8 +508,32 @@ pub fn fit_gray_frames(frames: &[Vec<f32>], frame_size: (u32, u32), s: &FitSetti
     if let Some(i) = frames.iter().position(|f| f.len() != w * h) {
         return Err(format!("frame {i} has {} samples, expected {w}x{h}", frames[i].len()));
     }
+    let peaks: Vec<f32> = frames.par_iter().map(|f| frame_peak(f)).collect();
+    let s = &absolute(s, &peaks);
     let analysed: Vec<Frame> = frames.par_iter().map(|f| analyse_frame(f, w, h, s)).collect();
     fit_frames(&analysed, frame_size, s, fps)
+}
+
+/// The lowest clip peak a relative threshold is scaled by: two stops under full scale.
+pub const MIN_PEAK: f32 = 0.25;
+
+/// A frame's brightest finite gray value (0 for an empty frame).
+pub fn frame_peak(gray: &[f32]) -> f32 {
+    gray.iter().copied().filter(|v| v.is_finite()).fold(0.0, f32::max)
+}
+
+/// The settings with an absolute threshold: a relative one times the median of the frames'
+/// `peaks` (a median, so a few flares or dark frames do not move it), taken as [`MIN_PEAK`] to 1.
+pub fn absolute(s: &FitSettings, peaks: &[f32]) -> FitSettings {
+    if !s.relative_threshold || peaks.is_empty() {
+        return FitSettings { relative_threshold: false, ..s.clone() };
+    }
+    let mut sorted = peaks.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    // A clip without a flame has a low peak too: a relative threshold would make its noise a
+    // flame. Footage more than two stops under full scale needs a lower `threshold` instead.
+    let peak = sorted[sorted.len() / 2].clamp(MIN_PEAK, 1.0);
+    FitSettings { threshold: s.threshold * peak, relative_threshold: false, ..s.clone() }
 }
 
 fn check_settings(s: &FitSettings) -> Result<(), String> {

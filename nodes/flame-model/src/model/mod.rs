@@ -3,6 +3,7 @@
 //! (model + parameter series → gray and coloured frames).
 
 pub mod fit;
+pub mod quality;
 pub mod render;
 pub mod shape;
 
@@ -17,7 +18,8 @@ use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, Por
 use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
 use rayon::prelude::*;
 
-pub use fit::{FitSettings, analyse_frame, fit_frames, fit_gray_frames};
+pub use fit::{CutBase, FitSettings, analyse_frame, fit_frames, fit_gray_frames};
+pub use quality::FrameQuality;
 pub use render::{Alpha, RenderSettings, colorize, render_frame};
 
 /// Category of the learned-flame nodes in the editor.
@@ -65,8 +67,11 @@ pyrograph_core::node! {
         model: Arc<FlameModel>,
         /// One parameter row per kept frame: path, width, eigenflame weights, height.
         params: Arc<ParamSeries>,
-        /// Frames skipped: two or more disjoint plumes, or no flame.
+        /// Frames skipped: two or more disjoint plumes, no flame, or dropped by max_residual.
         skipped: usize,
+        /// Fit quality of every frame holding one flame: its frame, the eigenflames' relative reconstruction error
+        /// (residual), whether the flame touches an edge of the picture (1/0) and whether it is a row of params (1/0).
+        quality: Arc<ParamSeries>,
     }
 }
 
@@ -78,6 +83,21 @@ impl Cook for FitModel {
             return Err(NodeError::port(port, "the clip has no frames"));
         }
         let size = clip.image(0, ctx).map_err(|e| NodeError::port(port, e.to_string()))?.size();
+        // A relative threshold needs the clip's peak before any frame is thresholded: one more
+        // pass over the frames, keeping one number per frame rather than the frames.
+        let peaks: Vec<f32> = if s.relative_threshold {
+            (0..clip.len())
+                .into_par_iter()
+                .map(|f| {
+                    ctx.check_cancel()?;
+                    let img = clip.image(f, ctx).map_err(|e| NodeError::port(port, e.to_string()))?;
+                    Ok(fit::frame_peak(&gray_plane(&img)))
+                })
+                .collect::<Result<_, NodeError>>()?
+        } else {
+            Vec::new()
+        };
+        let s = &fit::absolute(s, &peaks);
         let frames: Vec<fit::Frame> = (0..clip.len())
             .into_par_iter()
             .map(|f| {
@@ -101,8 +121,19 @@ impl Cook for FitModel {
             })
             .collect::<Result<_, NodeError>>()?;
         let fit = fit_frames(&frames, size, s, clip.fps()).map_err(|m| NodeError::port(port, m))?;
-        let skipped = fit.skipped_plumes.len() + fit.skipped_empty.len();
-        Ok(FitModelOut { model: Arc::new(fit.model), params: Arc::new(fit.params), skipped })
+        for w in &fit.warnings {
+            ctx.warn(w.clone());
+        }
+        let skipped = fit.skipped_plumes.len() + fit.skipped_empty.len() + fit.skipped_quality.len();
+        let names = ["frame", "residual", "edge", "used"].map(String::from).to_vec();
+        let rows = fit
+            .quality
+            .iter()
+            .flat_map(|q| [q.frame as f64, q.residual, f64::from(u8::from(q.edge)), f64::from(u8::from(q.used))])
+            .collect();
+        let quality =
+            ParamSeries::new(names, fit.quality.len(), rows, clip.fps()).ok_or_else(|| NodeError::port(port, "quality rows"))?;
+        Ok(FitModelOut { model: Arc::new(fit.model), params: Arc::new(fit.params), skipped, quality: Arc::new(quality) })
     }
 }
 
@@ -147,6 +178,9 @@ pyrograph_core::node! {
         /// Multiplies the width parameters.
         #[range(0.01, 100.0)]
         width_scale: f64 = 1.0,
+        /// Scale the fitted picture (e.g. an auto crop) to fit the output, so the flame's size does not depend on the
+        /// footage's resolution; scale applies on top.
+        fit_to_output: bool = false,
         /// Intensity → colour ramp of the color output: pos:r,g,b; …
         ramp: String = DEFAULT_RAMP.to_string(),
         /// Intensity multiplier before the colour ramp.
@@ -213,6 +247,7 @@ impl Cook for RenderModel {
             bend_ramp,
             height_scale,
             width_scale,
+            fit_to_output,
             ramp,
             exposure,
             alpha,
@@ -234,7 +269,7 @@ impl Cook for RenderModel {
                 ),
             ));
         }
-        let settings = RenderSettings { size: (width, height), scale, bend, bend_ramp, height_scale, width_scale };
+        let settings = RenderSettings { size: (width, height), scale, bend, bend_ramp, height_scale, width_scale, fit_to_output };
         if settings.size.0 == 0 && model.frame_size.0 == 0 || settings.size.1 == 0 && model.frame_size.1 == 0 {
             return Err(NodeError::port(port!(RenderModel, width), "the model has no frame size; set width and height"));
         }
@@ -412,6 +447,73 @@ mod tests {
     }
 
     #[test]
+    fn a_clip_with_the_flame_base_outside_the_picture_is_refused_or_fitted_with_a_warning() {
+        let (w, h) = (96, 144);
+        // The synthetic flame's base is 12 rows above the bottom: cutting 30 rows cuts it off.
+        let cut: Vec<Vec<f32>> = flames(w, h, 8).into_iter().map(|f| f[..w * (h - 30)].to_vec()).collect();
+        let size = (w as u32, (h - 30) as u32);
+        let err = fit_gray_frames(&cut, size, &FitSettings::default(), 24.0).unwrap_err();
+        assert!(
+            err.contains("touches the bottom edge in 100 % of frames: its base is outside the picture")
+                && err.contains("cut_base"),
+            "{err}"
+        );
+        let fit = fit_gray_frames(&cut, size, &FitSettings { cut_base: CutBase::Warn, ..FitSettings::default() }, 24.0).unwrap();
+        assert_eq!(fit.warnings.len(), 1, "{:?}", fit.warnings);
+        assert!(fit.warnings[0].contains("base is outside"));
+        assert!(fit.quality.iter().all(|q| q.edge && q.used));
+        // The whole flame: no warning, no edge.
+        let whole = fit_gray_frames(&flames(w, h, 8), (w as u32, h as u32), &FitSettings::default(), 24.0).unwrap();
+        assert!(whole.warnings.is_empty(), "{:?}", whole.warnings);
+        assert!(whole.quality.iter().all(|q| !q.edge));
+    }
+
+    #[test]
+    fn a_darker_clip_fits_the_same_shapes_with_the_relative_threshold() {
+        let (w, h, m) = (96, 144, 8);
+        let bright = flames(w, h, m);
+        let dark: Vec<Vec<f32>> = bright.iter().map(|f| f.iter().map(|v| 0.4 * v).collect()).collect();
+        let size = (w as u32, h as u32);
+        let heights = |s: &FitSettings, frames: &[Vec<f32>]| -> Vec<f64> {
+            let fit = fit_gray_frames(frames, size, s, 24.0).unwrap();
+            (0..m).map(|r| *fit.params.row(r).unwrap().last().unwrap()).collect()
+        };
+        let s = FitSettings { threshold: 0.2, ..FitSettings::default() };
+        let (a, b) = (heights(&s, &bright), heights(&s, &dark));
+        assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6 * x), "{a:?} vs {b:?}");
+        // An absolute threshold cuts the darker flame smaller.
+        let abs = FitSettings { relative_threshold: false, ..s };
+        let c = heights(&abs, &dark);
+        assert!(a.iter().zip(&c).all(|(x, y)| y < &(0.98 * x)), "{a:?} vs {c:?}");
+    }
+
+    #[test]
+    fn frames_the_eigenflames_reconstruct_badly_are_dropped_and_reported() {
+        let (w, h, m) = (96, 144, 16);
+        let s = FitSettings { n_e: 2, ..FitSettings::default() };
+        let all = fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &s, 24.0).unwrap();
+        assert_eq!(all.quality.len(), m);
+        assert!(all.quality.iter().all(|q| q.used && q.residual > 0.0 && q.residual < 1.0), "{:?}", all.quality);
+        let mut sorted: Vec<f64> = all.quality.iter().map(|q| q.residual).collect();
+        sorted.sort_by(f64::total_cmp);
+        // Between the 12th and 13th smallest: the four worst frames go.
+        let limit = 0.5 * (sorted[11] + sorted[12]);
+        let worst: Vec<usize> = all.quality.iter().filter(|q| q.residual > limit).map(|q| q.frame).collect();
+        assert_eq!(worst.len(), 4);
+        let fit =
+            fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings { max_residual: limit, ..s }, 24.0).unwrap();
+        assert_eq!(fit.skipped_quality, worst);
+        assert_eq!(fit.params.frames, m - 4);
+        assert!(fit.kept.iter().all(|f| !worst.contains(f)));
+        assert_eq!(fit.quality.iter().filter(|q| !q.used).map(|q| q.frame).collect::<Vec<_>>(), worst);
+        assert!(fit.warnings.iter().any(|w| w.contains("4 of 16 frames dropped")), "{:?}", fit.warnings);
+        // A limit nothing meets is an error that says how far off the frames are.
+        let err =
+            fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings { max_residual: 1e-9, ..s }, 24.0).unwrap_err();
+        assert!(err.contains("max_residual") && err.contains("worst"), "{err}");
+    }
+
+    #[test]
     fn bend_offsets_the_tip_and_scales_change_the_size() {
         let (w, h, m) = (96, 144, 6);
         let fit = fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings::default(), 24.0).unwrap();
@@ -432,6 +534,20 @@ mod tests {
         let out = render_frame(&fit.model, row, &RenderSettings { size: (480, 480), ..RenderSettings::default() }, 0).unwrap();
         assert_eq!(out.size(), (480, 480));
         assert!(mass(&out) > 0.9 * mass(&plain) && mass(&out) < 1.1 * mass(&plain));
+        // Fitted into an output twice as large (and wider), the flame is twice as tall: four times the mass.
+        let fitted = RenderSettings { size: (2 * w as u32 + 40, 2 * h as u32), fit_to_output: true, ..RenderSettings::default() };
+        let big = render_frame(&fit.model, row, &fitted, 0).unwrap();
+        let ratio = mass(&big) / mass(&plain);
+        assert!((ratio - 4.0).abs() < 0.2, "mass ratio {ratio}");
+        let rows_of = |img: &Image| {
+            let wd = img.width() as usize;
+            let lit: Vec<usize> =
+                img.data().chunks_exact(wd).enumerate().filter(|(_, r)| r.iter().any(|&v| v > 0.05)).map(|(y, _)| y).collect();
+            (lit[0], lit[lit.len() - 1])
+        };
+        let ((t0, b0), (t1, b1)) = (rows_of(&plain), rows_of(&big));
+        assert!(((b1 - t1) as f64 / (b0 - t0) as f64 - 2.0).abs() < 0.1, "heights {} and {}", b0 - t0, b1 - t1);
+        assert!(((2 * h - b1) as f64 - 2.0 * (h - b0) as f64).abs() <= 3.0, "the base keeps its scaled distance from the bottom");
     }
 
     #[test]
@@ -458,6 +574,10 @@ mod tests {
         let out = fit.cook(&Inputs::new(&desc, &values), &ctx).unwrap();
         let Value::Int(skipped) = out[2] else { panic!() };
         assert_eq!(skipped, 0);
+        let quality = out[3].downcast::<ParamSeries>().expect("quality is a parameter series");
+        assert_eq!(quality.names, ["frame", "residual", "edge", "used"]);
+        assert_eq!(quality.frames, 6);
+        assert_eq!(quality.row(5).unwrap()[0], 5.0);
         let render = RenderModel::node();
         let rdesc = render.desc().clone();
         let mut rvalues: Vec<Value> = rdesc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();

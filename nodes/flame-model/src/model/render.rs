@@ -27,11 +27,23 @@ pub struct RenderSettings {
     pub height_scale: f64,
     /// Multiplies the width parameters.
     pub width_scale: f64,
+    /// Scale the fitted picture to fit inside the output (centred, bottom on the bottom), so a
+    /// flame keeps its size in the output whatever the footage's resolution or crop; `scale`
+    /// applies on top.
+    pub fit_to_output: bool,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        RenderSettings { size: (0, 0), scale: 1.0, bend: 0.0, bend_ramp: 0, height_scale: 1.0, width_scale: 1.0 }
+        RenderSettings {
+            size: (0, 0),
+            scale: 1.0,
+            bend: 0.0,
+            bend_ramp: 0,
+            height_scale: 1.0,
+            width_scale: 1.0,
+            fit_to_output: false,
+        }
     }
 }
 
@@ -111,10 +123,18 @@ pub fn render_frame(model: &FlameModel, row: &[f64], s: &RenderSettings, index: 
         })
         .collect();
 
-    // Output pixel → fitted-frame coordinates: the anchor keeps its offset from the bottom centre.
-    let anchor =
-        [model.anchor[0] - f64::from(fw) / 2.0 + f64::from(out_w) / 2.0, model.anchor[1] - f64::from(fh) + f64::from(out_h)];
-    let inv = 1.0 / s.scale;
+    // Output pixel → fitted-frame coordinates: the anchor keeps its offset from the bottom centre
+    // (times the fit's scale k when the fitted picture is fitted into the output).
+    let k = if s.fit_to_output && fw > 0 && fh > 0 {
+        (f64::from(out_w) / f64::from(fw)).min(f64::from(out_h) / f64::from(fh))
+    } else {
+        1.0
+    };
+    let anchor = [
+        f64::from(out_w) / 2.0 + (model.anchor[0] - f64::from(fw) / 2.0) * k,
+        f64::from(out_h) - (f64::from(fh) - model.anchor[1]) * k,
+    ];
+    let inv = 1.0 / (s.scale * k);
     let e = model.axis;
     let across = [-e[1], e[0]];
     let (nwid, nhgt) = (model.width as usize, model.height as usize);

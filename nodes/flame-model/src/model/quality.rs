@@ -1,0 +1,135 @@
+//! How well a clip suits the generic flame model (Stich & Magnor §3 assumes the whole flame in
+//! the picture, its base at the bottom) and how well each frame is fitted: flames cut by an edge
+//! of the frame, and the eigenflames' reconstruction error of every normalized frame (§3.2).
+
+use pyrograph_nodes_eigen::pca::{self, Database};
+use pyrograph_nodes_eigen::values::FrameRef;
+
+use super::fit::{FitSettings, Plume};
+
+/// The fit quality of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameQuality {
+    /// Frame of the clip.
+    pub frame: usize,
+    /// ‖x − x̂‖ / ‖x‖ of its normalized image x and the eigenflames' reconstruction x̂ (N_e of them).
+    pub residual: f64,
+    /// The flame touches an edge of the picture.
+    pub edge: bool,
+    /// The frame is a row of the fitted parameters (not dropped by `max_residual`).
+    pub used: bool,
+}
+
+/// The picture's four edges: name and outward normal (x right, y down).
+const EDGES: [(&str, [f64; 2]); 4] = [("left", [-1.0, 0.0]), ("top", [0.0, -1.0]), ("right", [1.0, 0.0]), ("bottom", [0.0, 1.0])];
+
+/// Which frames' flames touch which edges of the picture, and where the base and tip point.
+pub struct EdgeReport {
+    /// Per flame frame: it touches any edge.
+    pub touches: Vec<bool>,
+    /// Per edge (left, top, right, bottom): the share of flame frames touching it.
+    share: [f64; 4],
+    /// Unit main axis, base → tip.
+    axis: [f64; 2],
+}
+
+impl EdgeReport {
+    /// Edges touched by `flames` (tight boxes of the thresholded plumes) in a `frame_size` picture.
+    pub fn of(flames: &[&Plume], (width, height): (u32, u32), axis: [f64; 2]) -> EdgeReport {
+        let (w, h) = (width as usize, height as usize);
+        let per_frame: Vec<[bool; 4]> =
+            flames.iter().map(|p| [p.x0 == 0, p.y0 == 0, p.x0 + p.width >= w, p.y0 + p.height >= h]).collect();
+        let mut share = [0.0; 4];
+        for t in &per_frame {
+            for (s, &hit) in share.iter_mut().zip(t) {
+                *s += f64::from(u8::from(hit)) / per_frame.len().max(1) as f64;
+            }
+        }
+        EdgeReport { touches: per_frame.iter().map(|t| t.iter().any(|&b| b)).collect(), share, axis }
+    }
+
+    /// The most touched edge on the side `dir` points to (within 60° of its normal), if a quarter
+    /// of the frames or more touch it: a flame grazing an edge now and then is a flare.
+    fn cut_towards(&self, dir: [f64; 2]) -> Option<(&'static str, f64)> {
+        EDGES
+            .iter()
+            .zip(self.share)
+            .filter(|((_, n), s)| n[0] * dir[0] + n[1] * dir[1] > 0.5 && *s >= 0.25)
+            .map(|((name, _), s)| (*name, s))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The message when the flame's base is outside the picture.
+    pub fn base_cut(&self) -> Option<String> {
+        self.cut_towards([-self.axis[0], -self.axis[1]]).map(|(edge, s)| {
+            format!(
+                "the flame touches the {edge} edge in {:.0} % of frames: its base is outside the picture; crop lower or use a clip \
+                 where the base is visible",
+                100.0 * s
+            )
+        })
+    }
+
+    /// The message when the flame's tip is outside the picture.
+    pub fn tip_cut(&self) -> Option<String> {
+        self.cut_towards(self.axis).map(|(edge, s)| {
+            format!(
+                "the flame touches the {edge} edge in {:.0} % of frames: its tip is outside the picture, so the fitted heights \
+                 are cut; crop higher or use a clip where the whole flame is visible",
+                100.0 * s
+            )
+        })
+    }
+}
+
+/// Trains the eigenflames on the rows `subset` of `data` (normalized images, one after another)
+/// and scores each of those rows by its relative reconstruction error with the N_e eigenflames
+/// kept. `kept[f]` is row f's frame in the clip.
+pub fn train_scored(s: &FitSettings, data: &[f32], subset: &[usize], kept: &[usize]) -> Result<(Database, Vec<f64>), String> {
+    let n = s.norm_size().0 as usize * s.norm_size().1 as usize;
+    let rows: Vec<f32> = subset.iter().flat_map(|&f| data[f * n..(f + 1) * n].iter().copied()).collect();
+    let sources = subset.iter().map(|&f| FrameRef { clip: 0, index: kept[f] as u32 }).collect();
+    // `train` consumes its frames (made mean-free in place); the originals are scored against.
+    let db = pca::train(s.norm_size().0, s.norm_size().1, rows.clone(), sources, s.n_e)?;
+    let back = pca::reconstruct(&db.basis, &db.weights, db.basis.components())?;
+    let residuals = rows
+        .chunks_exact(n)
+        .zip(back.chunks_exact(n))
+        .map(|(x, r)| {
+            let err: f64 = x.iter().zip(r).map(|(a, b)| f64::from(a - b).powi(2)).sum();
+            let norm: f64 = x.iter().map(|a| f64::from(*a).powi(2)).sum();
+            if norm > 0.0 { (err / norm).sqrt() } else { 0.0 }
+        })
+        .collect();
+    Ok((db, residuals))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::shape::Moments;
+
+    fn plume(x0: usize, y0: usize, width: usize, height: usize) -> Plume {
+        Plume { x0, y0, width, height, data: vec![1.0; width * height], moments: Moments::of_image(&[1.0], 1, 1) }
+    }
+
+    #[test]
+    fn a_flame_cut_by_the_bottom_edge_is_a_cut_base_and_one_by_the_top_a_cut_tip() {
+        let up = [0.0, -1.0];
+        let cut: Vec<Plume> = (0..8).map(|i| plume(40, 10, 20, if i < 6 { 90 } else { 80 })).collect();
+        let refs: Vec<&Plume> = cut.iter().collect();
+        let r = EdgeReport::of(&refs, (100, 100), up);
+        let base = r.base_cut().expect("base cut");
+        assert!(base.contains("bottom edge in 75 % of frames") && base.contains("base is outside the picture"), "{base}");
+        assert!(r.tip_cut().is_none());
+        assert_eq!(r.touches, vec![true, true, true, true, true, true, false, false]);
+        // The same boxes, flame pointing down (hanging from the top): the bottom is its tip.
+        let r = EdgeReport::of(&refs, (100, 100), [0.0, 1.0]);
+        assert!(r.base_cut().is_none());
+        assert!(r.tip_cut().unwrap().contains("tip is outside"));
+        // Touching now and then (under a quarter of the frames) is a flare, not a framing problem.
+        let flare: Vec<Plume> = (0..8).map(|i| plume(40, 10, 20, if i == 0 { 90 } else { 80 })).collect();
+        let refs: Vec<&Plume> = flare.iter().collect();
+        assert!(EdgeReport::of(&refs, (100, 100), up).base_cut().is_none());
+    }
+}

@@ -130,9 +130,11 @@ pyrograph_core::node! {
     pub struct HsvAutoMask {
         /// RGBA frames to segment.
         clip: ClipOf<Arc<Image>>,
+        // Candle and wood flames are 20–60° where they are bright; lit wax and glass glow
+        // pink-orange below 20° (a tea-light's holder fills a frame with it).
         /// Lowest hue of the flame band, in degrees (above hue_max wraps past red).
         #[range(0.0, 360.0)]
-        hue_min: f32 = 340.0,
+        hue_min: f32 = 20.0,
         /// Highest hue of the flame band, in degrees.
         #[range(0.0, 360.0)]
         hue_max: f32 = 70.0,
@@ -144,11 +146,16 @@ pyrograph_core::node! {
         /// Frames sampled for the thresholds: every stride-th.
         #[range(1, 100_000)]
         stride: usize = 5,
-        /// Also keep the white-hot core where it touches the flame: pixels at least core_level of the flame's brightest value, whatever their hue or saturation (a candle's core is nearly white, so the saturation threshold drops it).
+        /// Also keep the white-hot core where it touches the flame: pixels at least core_level of the flame's brightest value, white (saturation up to core_s_max) or in the flame's hue band at any saturation (a candle's core is nearly white, so the saturation threshold drops it).
         core: bool = true,
         /// The core's value threshold as a fraction of the flame's brightest value (its 99.5th percentile).
         #[range(0.5, 1.0)]
         core_level: f32 = 0.85,
+        // A tea-light's lit wax and glass glow as brightly as its flame, tinted pink-orange
+        // (saturation 70–100 at hue 0–20°), while a flame's hottest parts are white or yellow.
+        /// A core pixel outside the flame's hue band must be nearly white: saturation at most this (0–255).
+        #[range(0.0, 255.0)]
+        core_s_max: f32 = 40.0,
     }
     pub struct HsvAutoMaskOut {
         /// 255 where the flame is, per frame.
@@ -166,8 +173,8 @@ pyrograph_core::node! {
 struct MaskSource {
     clip: Clip,
     layers: Vec<HsvLayer>,
-    /// The core's layer, joined where it touches the band.
-    core: Option<HsvLayer>,
+    /// The core's layers (none with core off), joined where they touch the band.
+    core: Vec<HsvLayer>,
 }
 
 impl FrameSource for MaskSource {
@@ -179,10 +186,7 @@ impl FrameSource for MaskSource {
             return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {index} is not an image")));
         };
         let band = hsv_mask(&img, &self.layers)?;
-        let mask = match &self.core {
-            Some(core) => join_core(&band, &hsv_mask(&img, std::slice::from_ref(core))?),
-            None => band,
-        };
+        let mask = if self.core.is_empty() { band } else { join_core(&band, &hsv_mask(&img, &self.core)?) };
         Ok(Value::Mask(Arc::new(mask)))
     }
 }
@@ -223,10 +227,15 @@ impl Cook for HsvAutoMask {
             layers.push(layer(200.0, 260.0));
         }
         let core_v = if self.core { core_level(&v_hist, v_min, self.core_level) } else { 255.0 };
-        let core = self.core.then_some(HsvLayer {
-            range: HsvRange { h_min: 0.0, h_max: 360.0, s_min: 0.0, s_max: 255.0, v_min: core_v, v_max: 255.0 },
+        let core_layer = |h_min, h_max, s_max| HsvLayer {
+            range: HsvRange { h_min, h_max, s_min: 0.0, s_max, v_min: core_v, v_max: 255.0 },
             blend: Blend::Add,
-        });
+        };
+        let core = if self.core {
+            vec![core_layer(0.0, 360.0, self.core_s_max), core_layer(self.hue_min, self.hue_max, 255.0)]
+        } else {
+            Vec::new()
+        };
         let mut h = Fingerprinter::new();
         ("imaging.hsv_auto_mask", clip.fingerprint(), format!("{layers:?} {core:?}")).hash(&mut h);
         let source = MaskSource { clip: clip.clone(), layers, core };
@@ -319,6 +328,48 @@ mod tests {
         assert!(joined.get(5, 4), "the core inside the flame joins it");
         assert!(!joined.get(15, 4), "the glare apart from it does not");
         assert!(joined.get(2, 2), "the band itself stays");
+    }
+
+    /// A yellow flame with a white core, and lit wax beside it as bright as the flame but tinted
+    /// pink-orange (hue 14°, saturation 0.35), touching it: a tea-light in its holder.
+    #[test]
+    fn lit_wax_touching_the_flame_stays_out_of_the_mask() {
+        let (w, h) = (60u32, 40u32);
+        let mut data = Vec::with_capacity((w * h * 4) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let rgb = if (25..30).contains(&x) && (15..25).contains(&y) {
+                    [1.0, 1.0, 1.0]
+                } else if (20..35).contains(&x) && (5..30).contains(&y) {
+                    [1.0, 0.75, 0.2]
+                } else if (35..55).contains(&x) && (20..38).contains(&y) {
+                    [0.97, 0.71, 0.63]
+                } else {
+                    let n = ((x * 7 + y * 13) % 10) as f32 / 100.0;
+                    [0.06 + n, 0.03 + n / 2.0, 0.02]
+                };
+                data.extend(rgb);
+                data.push(1.0);
+            }
+        }
+        let img = Image::from_vec(w, h, Channels::Rgba, data).unwrap();
+        let clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(img))]);
+        let node = HsvAutoMask {
+            clip: ClipOf::new(clip),
+            hue_min: 20.0,
+            hue_max: 70.0,
+            blue_base: true,
+            s_min_floor: 40.0,
+            stride: 1,
+            core: true,
+            core_level: 0.85,
+            core_s_max: 40.0,
+        };
+        let ctx = CookCtx::new();
+        let out = node.cook(&ctx).unwrap();
+        let Value::Mask(mask) = out.mask.get(0, &ctx).unwrap() else { panic!("a mask") };
+        assert!(mask.get(22, 8) && mask.get(27, 20), "the flame and its white core are kept");
+        assert!(!mask.get(45, 30) && !mask.get(36, 25), "the lit wax is left out");
     }
 
     #[test]

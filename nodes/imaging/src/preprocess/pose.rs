@@ -350,11 +350,12 @@ pub fn guarded_turn(
     max_angle: f64,
     max_width: f64,
 ) -> (f64, Option<String>) {
+    // One wording for every frame (no per-frame numbers), so a clip reports each guard once
+    // (see CookCtx::warn) instead of once per frame.
     if outline_width >= max_width * frame_width {
         let msg = format!(
-            "the flame's outline spans {:.0} % of the frame's width (max_width {:.0} %): a fire filling the picture has no \
-             single axis, so frames like this are not turned (measured lean {lean_deg:.1}°); crop to one flame to straighten it",
-            100.0 * outline_width / frame_width,
+            "the flame's outline spans max_width ({:.0} %) of the frame's width or more: a fire filling the picture has no \
+             single axis, so frames like this are not turned; crop to one flame to straighten it",
             100.0 * max_width
         );
         return (0.0, Some(msg));
@@ -362,8 +363,8 @@ pub fn guarded_turn(
     if lean_deg.abs() > max_angle {
         let turn = max_angle.copysign(lean_deg);
         let msg = format!(
-            "the flame leans {lean_deg:.1}°, more than max_angle {max_angle}°: turned {turn}° only; raise max_angle if \
-             flames this tilted should stand upright"
+            "the flame leans more than max_angle ({max_angle}°): frames like this are turned {max_angle}° only; raise \
+             max_angle if flames this tilted should stand upright"
         );
         return (turn, Some(msg));
     }
@@ -477,10 +478,13 @@ pub(crate) mod tests {
         assert_eq!(guarded_turn(10.0, 30.0, 200.0, 45.0, 0.9), (10.0, None));
         let (turn, w) = guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9);
         assert_eq!(turn, -45.0);
-        assert!(w.is_some_and(|w| w.contains("leans -60.0°") && w.contains("turned -45° only")));
+        assert!(w.is_some_and(|w| w.contains("leans more than max_angle (45°)") && w.contains("turned 45° only")));
+        // Every frame over the limit words it alike, so a clip reports it once.
+        assert_eq!(guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9).1, guarded_turn(70.0, 30.0, 200.0, 45.0, 0.9).1);
         let (turn, w) = guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9);
         assert_eq!(turn, 0.0);
-        assert!(w.is_some_and(|w| w.contains("95 % of the frame's width")));
+        assert!(w.is_some_and(|w| w.contains("spans max_width (90 %) of the frame's width")));
+        assert_eq!(guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9).1, guarded_turn(-5.0, 199.0, 200.0, 45.0, 0.9).1);
     }
 
     /// Cooks the node with its defaults on `m` (the mask as the frame), returning the output and

@@ -1,8 +1,10 @@
 //! What `pyrograph check` and Python's `Graph.check()` report: load-time diagnostics, then
-//! the source nodes cooked so a missing or corrupt input file shows up without rendering.
+//! the source nodes cooked so a missing or corrupt input file shows up without rendering, and
+//! (for `check`) warnings that can be known without cooking the rest.
 
 use std::path::PathBuf;
 
+use crate::core::graph::InputSource;
 use crate::core::{CookCtx, Diagnostic, Diagnostics, Evaluator, Graph, Location, NodeError, TimeDep};
 
 /// One problem found in a graph, located as precisely as it is known.
@@ -85,6 +87,64 @@ pub fn diagnostics(d: &Diagnostics) -> Vec<Problem> {
 /// Cooks the source nodes (loaders), which open and probe their files, and reports those that
 /// failed.
 pub fn probe_sources(graph: &Graph) -> Vec<Problem> {
+    probe_with(graph, &CookCtx::new())
+}
+
+/// What `check` finds in a graph that built: its sources' failures (errors) and what can be
+/// warned about without cooking the rest (warnings, kind `Warning`): the sources' own warnings,
+/// and nodes wired so that an assumption of theirs cannot hold.
+pub fn check_graph(graph: &Graph) -> (Vec<Problem>, Vec<Problem>) {
+    let ctx = CookCtx::new();
+    let errors = probe_with(graph, &ctx);
+    let mut warnings: Vec<Problem> =
+        ctx.warnings().into_iter().map(|w| warning(graph, w.node.as_deref().unwrap_or("?"), w.message)).collect();
+    warnings.extend(unframed_fits(graph));
+    (errors, warnings)
+}
+
+fn warning(graph: &Graph, node: &str, message: String) -> Problem {
+    Problem {
+        file: graph.file.clone(),
+        node: Some(node.to_string()),
+        port: None,
+        location: format!("node '{node}'"),
+        kind: "Warning".into(),
+        message,
+    }
+}
+
+/// `flame_model.fit` nodes fed straight from a loader: they fit the whole frame, while the model
+/// (Learning Flames §3) describes one whole flame framed in the picture — the mistake behind
+/// "orange smears filling the top of the frame" on a new plate.
+fn unframed_fits(graph: &Graph) -> Vec<Problem> {
+    let mut out = Vec::new();
+    for &i in graph.topo_order() {
+        let n = graph.node(i);
+        let desc = n.node.desc();
+        if desc.type_name != "flame_model.fit" {
+            continue;
+        }
+        let Some(clip) = desc.inputs.iter().position(|p| p.name == "clip") else { continue };
+        let Some(InputSource::Edge { from, .. }) = n.inputs.get(clip) else { continue };
+        let up = graph.node(*from);
+        if up.node.desc().time == TimeDep::Source {
+            out.push(warning(
+                graph,
+                &n.id,
+                format!(
+                    "fits the whole frame of '{}' ({}): the flame model needs one whole flame framed in the picture; put \
+                     imaging.auto_crop (its mask from imaging.hsv_auto_mask) before it, as graphs/learning-flames-candle.ron \
+                     does, unless the footage is framed already",
+                    up.id,
+                    up.node.desc().type_name
+                ),
+            ));
+        }
+    }
+    out
+}
+
+fn probe_with(graph: &Graph, ctx: &CookCtx) -> Vec<Problem> {
     let sources: Vec<String> = graph
         .topo_order()
         .iter()
@@ -93,7 +153,7 @@ pub fn probe_sources(graph: &Graph) -> Vec<Problem> {
         .map(|n| n.id.to_string())
         .collect();
     let refs: Vec<&str> = sources.iter().map(String::as_str).collect();
-    match Evaluator::new().cook(graph, &refs, &CookCtx::new()) {
+    match Evaluator::new().cook(graph, &refs, ctx) {
         Ok(res) => res.root_errors().into_iter().map(|(n, e)| Problem::from_cook(graph.file.clone(), n, e)).collect(),
         Err(e) => vec![Problem {
             file: graph.file.clone(),
@@ -111,6 +171,14 @@ pub fn problems(built: Result<&Graph, &Diagnostics>) -> Vec<Problem> {
     match built {
         Ok(g) => probe_sources(g),
         Err(d) => diagnostics(d),
+    }
+}
+
+/// [`problems`] and the warnings of a graph that built (none for one that did not).
+pub fn problems_and_warnings(built: Result<&Graph, &Diagnostics>) -> (Vec<Problem>, Vec<Problem>) {
+    match built {
+        Ok(g) => check_graph(g),
+        Err(d) => (diagnostics(d), Vec::new()),
     }
 }
 

@@ -536,12 +536,22 @@ fn problem_json(p: &pyrograph::check::Problem) -> serde_json::Value {
 
 fn check(registry: &Registry, path: &Path, options: &BuildOptions, json_out: bool) -> Result<(), Failure> {
     let built = Graph::load(path, registry, options).map(|(_, g)| g);
-    let problems = pyrograph::check::problems(built.as_ref());
+    let (problems, warnings) = pyrograph::check::problems_and_warnings(built.as_ref());
     if json_out {
         let list: Vec<_> = problems.iter().map(problem_json).collect();
+        let warned: Vec<_> = warnings.iter().map(problem_json).collect();
         let counts = built.as_ref().ok().map(|g| json!({"nodes": g.node_count(), "edges": g.edge_count()}));
-        println!("{}", json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list}));
-    } else if let (Ok(g), true) = (&built, problems.is_empty()) {
+        println!(
+            "{}",
+            json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list, "warnings": warned})
+        );
+        return if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) };
+    }
+    // Warnings do not fail a check: the graph cooks, its result may be wrong.
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    if let (Ok(g), true) = (&built, problems.is_empty()) {
         println!("ok: {}: {} nodes, {} edges", path.display(), g.node_count(), g.edge_count());
     } else {
         for p in &problems {

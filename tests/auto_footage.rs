@@ -111,7 +111,8 @@ struct Run {
     out: PathBuf,
 }
 
-/// Makes the first `count` frames of the candle clip into `case`, as PNG frames in `dir`.
+/// Makes `count` frames of the case's footage (the candle clip from its start, the tea-light clip
+/// from 5 s) into `case`, as PNG frames in `dir`.
 fn make_clip(case: &Case, dir: &Path, count: usize) -> PathBuf {
     let frames = dir.join(case.name);
     std::fs::create_dir_all(&frames).unwrap();

@@ -275,3 +275,41 @@ fn render_reports_a_flame_cut_by_the_bottom_edge_as_a_warning() {
     let warnings = v["warnings"].as_array().unwrap();
     assert!(warnings.iter().any(|w| w["node"] == "crop" && w["message"].as_str().unwrap().contains("bottom edge")), "{v}");
 }
+
+/// `check` warns, without cooking, about a flame-model fit fed straight from a loader (it would fit
+/// the whole frame), names the node and the fix, and still passes: warnings do not fail a check.
+/// The learning-flames graph, which frames the flame first, gets no such warning.
+#[test]
+fn check_warns_about_a_flame_model_fit_of_whole_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in 0..3u32 {
+        image::RgbaImage::from_pixel(32, 24, image::Rgba([200, 120, 20, 255]))
+            .save(dir.path().join(format!("f_{f:04}.png")))
+            .unwrap();
+    }
+    let graph = dir.path().join("fit.ron");
+    std::fs::write(
+        &graph,
+        r#"(version: 1, nodes: {
+            "plate": (type: "imaging.load_sequence", params: {"path": "f_####.png"}),
+            "fit": (type: "flame_model.fit"),
+        }, edges: [("plate.clip", "fit.clip")])"#,
+    )
+    .unwrap();
+    let o = run(&["check", graph.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("warning:") && stderr.contains("node 'fit'") && stderr.contains("fits the whole frame of 'plate'"),
+        "{stderr}"
+    );
+    let o = run(&["check", "--json", graph.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["ok"], true, "{v}");
+    let warnings = v["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w["node"] == "fit" && w["kind"] == "Warning"), "{v}");
+    let learning = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
+    let o = bin().args(["check", "--json", learning.to_str().unwrap()]).env("PYROGRAPH_FOOTAGE", dir.path()).output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["warnings"].as_array().unwrap().iter().all(|w| w["node"] != "fit"), "{v}");
+}

@@ -58,6 +58,7 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("nodes/flame-model/src/arp/sampler.rs", "height", "a column name of a parameter series"),
     ("nodes/flame-model/src/model/fit.rs", "height", "a column name of a parameter series"),
     ("nodes/flame-model/src/arp/mod.rs", "log_likelihood", "the column name of the likelihood series"),
+    ("nodes/flame-model/src/model/mod.rs", "frame", "a column name of the fit's quality series"),
     ("nodes/particles/src/wind.rs", "k_g", "a field of a connected wind value, named in its validation error"),
     ("nodes/particles/src/wind.rs", "k_p", "a field of a connected wind value, named in its validation error"),
     ("nodes/particles/src/wind.rs", "k_s", "a field of a connected wind value, named in its validation error"),

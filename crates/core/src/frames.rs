@@ -184,7 +184,7 @@ fn parse_term(term: &str) -> Result<FrameRange, String> {
     Ok(FrameRange { start, end: start + (end - start) / step * step, step })
 }
 
-/// Frame numbers for a message: the first twelve, then how many more ("3, 17, 40 and 9 more").
+/// Frame numbers for a message: the first twelve, then how many more ("0, 1, … 11 and 8 more").
 pub fn list_for_message(frames: &[usize]) -> String {
     let listed: Vec<String> = frames.iter().take(12).map(|f| f.to_string()).collect();
     let more = if frames.len() > listed.len() { format!(" and {} more", frames.len() - listed.len()) } else { String::new() };

@@ -74,8 +74,10 @@ pyrograph_core::ports! {
         /// A clip whose flame base is outside the picture in a quarter of its frames or more: refuse to fit (the
         /// model needs the whole flame, base at the bottom, §3), or fit it with a warning.
         cut_base: CutBase = CutBase::Refuse,
-        // A frame the eigenflames cannot represent (a flare, a second plume merged in, a bad mask)
-        // would teach the dynamics a jump; 0 keeps every frame.
+        // A frame far from the others (a bad mask, a merged second plume) pulls the eigenflames
+        // towards it; dropped, it leaves a gap in the series as a skipped two-plume frame does.
+        // Frames are scored against eigenflames trained on them all, so a single strong outlier
+        // may take an eigenflame of its own and score well: this catches frames unlike most.
         /// Drop frames whose normalized image the eigenflames reconstruct with a relative error above this (0 = keep all).
         #[range(0.0, 10.0)]
         max_residual: f64 = 0.0,
@@ -362,7 +364,7 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
     if flames.is_empty() {
         return Err(if skipped_plumes.is_empty() {
             format!(
-                "no flame found in any of the {} frames: every pixel is at or below the threshold {} (lower `threshold`, or check the footage is a bright flame on a dark background)",
+                "no flame found in any of the {} frames: every pixel is at or below the gray value {} (`threshold`, times the clip's peak brightness when relative_threshold is on; lower it, or check the footage is a bright flame on a dark background)",
                 frames.len(),
                 s.threshold
             )
@@ -436,15 +438,18 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         let good: Vec<usize> = used.iter().copied().filter(|&f| residuals[f] <= s.max_residual).collect();
         if good.len() < used.len() {
             if good.len() < 2 {
+                let mut sorted = residuals.clone();
+                sorted.sort_by(f64::total_cmp);
                 return Err(format!(
-                    "only {} of {} frames are reconstructed within max_residual {}: raise it (the worst frame's residual is {:.3})",
+                    "only {} of {} frames are reconstructed within max_residual {}: raise it to at least {:.3} to keep two",
                     good.len(),
                     used.len(),
                     s.max_residual,
-                    residuals.iter().fold(0.0_f64, |a, &b| a.max(b))
+                    sorted.get(1).copied().unwrap_or(0.0)
                 ));
             }
-            // The eigenflames of the good frames alone; the dropped frames keep their first-pass scores.
+            // The eigenflames of the good frames alone; the dropped frames keep their first-pass
+            // scores, the kept ones are scored again (and may then exceed the limit a little).
             let (db2, r2) = train_scored(s, &data, &good, &kept)?;
             for (&f, r) in good.iter().zip(r2) {
                 residuals[f] = r;
@@ -453,7 +458,9 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
             used = good;
         }
     }
-    let skipped_quality: Vec<usize> = (0..shaped.len()).filter(|f| !used.contains(f)).map(|f| kept[f]).collect();
+    let mut is_used = vec![false; shaped.len()];
+    used.iter().for_each(|&f| is_used[f] = true);
+    let skipped_quality: Vec<usize> = (0..shaped.len()).filter(|&f| !is_used[f]).map(|f| kept[f]).collect();
     if !skipped_quality.is_empty() {
         warnings.push(format!(
             "{} of {} frames dropped: the eigenflames reconstruct them with a relative error above max_residual {} ({})",
@@ -464,7 +471,7 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         ));
     }
     let quality: Vec<FrameQuality> = (0..shaped.len())
-        .map(|f| FrameQuality { frame: kept[f], residual: residuals[f], edge: edges.touches[f], used: used.contains(&f) })
+        .map(|f| FrameQuality { frame: kept[f], residual: residuals[f], edge: edges.touches[f], used: is_used[f] })
         .collect();
     let e = db.basis.components();
     let shaped: Vec<&(Shape, Vec<f32>)> = used.iter().map(|&f| &shaped[f]).collect();

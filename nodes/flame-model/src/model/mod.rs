@@ -53,8 +53,10 @@ pyrograph_core::node! {
     /// equidistant heights. Slices are centred and scaled by the cubic splines through those samples, the
     /// height scaled to 1 and (optionally) the intensity to the clip's average; PCA of these normalized
     /// images gives the eigenflames and n_e appearance weights per frame (fewer if the frames do not vary
-    /// that much). Frames with two or more disjoint plumes (and frames with no flame) are skipped, as in §5;
-    /// `skipped` counts them. Parameter rows are [path_0.., width_0.., eig_0.., height] in pixels.
+    /// that much). Frames with two or more disjoint plumes (and frames with no flame) are skipped, as in §5, and
+    /// with max_residual so are frames the eigenflames reconstruct badly; `skipped` counts them all, `quality` scores
+    /// every frame. The threshold is relative to the clip's peak brightness by default. A clip whose flame base is
+    /// outside the picture is refused (cut_base). Parameter rows are [path_0.., width_0.., eig_0.., height] in pixels.
     #[node("flame_model.fit", "Flame model", WholeClip)]
     pub struct FitModel {
         /// Flame frames on a dark background (gray or RGBA; RGBA uses luma).
@@ -491,8 +493,13 @@ mod tests {
     fn frames_the_eigenflames_reconstruct_badly_are_dropped_and_reported() {
         let (w, h, m) = (96, 144, 16);
         let s = FitSettings { n_e: 2, ..FitSettings::default() };
-        let all = fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &s, 24.0).unwrap();
+        // Frame 0 is empty, so positions among the flame frames and clip frames differ by one.
+        let mut clip = vec![vec![0.0_f32; w * h]];
+        clip.extend(flames(w, h, m));
+        let size = (w as u32, h as u32);
+        let all = fit_gray_frames(&clip, size, &s, 24.0).unwrap();
         assert_eq!(all.quality.len(), m);
+        assert_eq!(all.quality[0].frame, 1);
         assert!(all.quality.iter().all(|q| q.used && q.residual > 0.0 && q.residual < 1.0), "{:?}", all.quality);
         let mut sorted: Vec<f64> = all.quality.iter().map(|q| q.residual).collect();
         sorted.sort_by(f64::total_cmp);
@@ -500,17 +507,16 @@ mod tests {
         let limit = 0.5 * (sorted[11] + sorted[12]);
         let worst: Vec<usize> = all.quality.iter().filter(|q| q.residual > limit).map(|q| q.frame).collect();
         assert_eq!(worst.len(), 4);
-        let fit =
-            fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings { max_residual: limit, ..s }, 24.0).unwrap();
+        let fit = fit_gray_frames(&clip, size, &FitSettings { max_residual: limit, ..s }, 24.0).unwrap();
         assert_eq!(fit.skipped_quality, worst);
+        assert_eq!(fit.skipped_empty, vec![0]);
         assert_eq!(fit.params.frames, m - 4);
-        assert!(fit.kept.iter().all(|f| !worst.contains(f)));
+        assert!(fit.kept.iter().all(|f| *f >= 1 && !worst.contains(f)));
         assert_eq!(fit.quality.iter().filter(|q| !q.used).map(|q| q.frame).collect::<Vec<_>>(), worst);
         assert!(fit.warnings.iter().any(|w| w.contains("4 of 16 frames dropped")), "{:?}", fit.warnings);
-        // A limit nothing meets is an error that says how far off the frames are.
-        let err =
-            fit_gray_frames(&flames(w, h, m), (w as u32, h as u32), &FitSettings { max_residual: 1e-9, ..s }, 24.0).unwrap_err();
-        assert!(err.contains("max_residual") && err.contains("worst"), "{err}");
+        // A limit nothing meets is an error that says what limit keeps two frames.
+        let err = fit_gray_frames(&clip, size, &FitSettings { max_residual: 1e-9, ..s }, 24.0).unwrap_err();
+        assert!(err.contains("max_residual") && err.contains(&format!("at least {:.3} to keep two", sorted[1])), "{err}");
     }
 
     #[test]

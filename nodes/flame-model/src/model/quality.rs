@@ -12,7 +12,8 @@ use super::fit::{FitSettings, Plume};
 pub struct FrameQuality {
     /// Frame of the clip.
     pub frame: usize,
-    /// ‖x − x̂‖ / ‖x‖ of its normalized image x and the eigenflames' reconstruction x̂ (N_e of them).
+    /// ‖x − x̂‖ / ‖x‖ of its normalized image x and the eigenflames' reconstruction x̂ (N_e of them;
+    /// for a used frame, those of the final fit).
     pub residual: f64,
     /// The flame touches an edge of the picture.
     pub edge: bool,
@@ -27,8 +28,8 @@ const EDGES: [(&str, [f64; 2]); 4] = [("left", [-1.0, 0.0]), ("top", [0.0, -1.0]
 pub struct EdgeReport {
     /// Per flame frame: it touches any edge.
     pub touches: Vec<bool>,
-    /// Per edge (left, top, right, bottom): the share of flame frames touching it.
-    share: [f64; 4],
+    /// Per edge (left, top, right, bottom): how many flame frames touch it.
+    count: [usize; 4],
     /// Unit main axis, base → tip.
     axis: [f64; 2],
 }
@@ -39,23 +40,25 @@ impl EdgeReport {
         let (w, h) = (width as usize, height as usize);
         let per_frame: Vec<[bool; 4]> =
             flames.iter().map(|p| [p.x0 == 0, p.y0 == 0, p.x0 + p.width >= w, p.y0 + p.height >= h]).collect();
-        let mut share = [0.0; 4];
+        let mut count = [0; 4];
         for t in &per_frame {
-            for (s, &hit) in share.iter_mut().zip(t) {
-                *s += f64::from(u8::from(hit)) / per_frame.len().max(1) as f64;
+            for (c, &hit) in count.iter_mut().zip(t) {
+                *c += usize::from(hit);
             }
         }
-        EdgeReport { touches: per_frame.iter().map(|t| t.iter().any(|&b| b)).collect(), share, axis }
+        EdgeReport { touches: per_frame.iter().map(|t| t.iter().any(|&b| b)).collect(), count, axis }
     }
 
     /// The most touched edge on the side `dir` points to (within 60° of its normal), if a quarter
     /// of the frames or more touch it: a flame grazing an edge now and then is a flare.
     fn cut_towards(&self, dir: [f64; 2]) -> Option<(&'static str, f64)> {
+        // Counted in whole frames (4·k ≥ n), as imaging.auto_crop does, so both agree at exactly 25 %.
+        let n = self.touches.len();
         EDGES
             .iter()
-            .zip(self.share)
-            .filter(|((_, n), s)| n[0] * dir[0] + n[1] * dir[1] > 0.5 && *s >= 0.25)
-            .map(|((name, _), s)| (*name, s))
+            .zip(self.count)
+            .filter(|((_, e), k)| e[0] * dir[0] + e[1] * dir[1] > 0.5 && *k > 0 && 4 * k >= n)
+            .map(|((name, _), k)| (*name, k as f64 / n as f64))
             .max_by(|a, b| a.1.total_cmp(&b.1))
     }
 
@@ -127,6 +130,10 @@ mod tests {
         let r = EdgeReport::of(&refs, (100, 100), [0.0, 1.0]);
         assert!(r.base_cut().is_none());
         assert!(r.tip_cut().unwrap().contains("tip is outside"));
+        // Exactly a quarter of the frames counts (6 of 24, where adding 1/24 six times falls short of 0.25).
+        let quarter: Vec<Plume> = (0..24).map(|i| plume(40, 10, 20, if i < 6 { 90 } else { 80 })).collect();
+        let refs: Vec<&Plume> = quarter.iter().collect();
+        assert!(EdgeReport::of(&refs, (100, 100), up).base_cut().is_some_and(|m| m.contains("in 25 % of frames")));
         // Touching now and then (under a quarter of the frames) is a flare, not a framing problem.
         let flare: Vec<Plume> = (0..8).map(|i| plume(40, 10, 20, if i == 0 { 90 } else { 80 })).collect();
         let refs: Vec<&Plume> = flare.iter().collect();

@@ -8,6 +8,7 @@ use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, PortType, Value, port};
 
 use super::hsv::{Blend, HsvLayer, HsvRange, hsv_mask, rgb_to_hsv};
+use crate::convert::unit_to_u8;
 
 /// The threshold of Otsu's method on a 256-bin histogram: the level `t` that maximizes the
 /// between-class variance of `< t` against `≥ t`; `None` for an empty histogram or one level.
@@ -62,7 +63,8 @@ pub fn auto_levels<'a>(
             }
         }
     }
-    let v_min = otsu(&v_hist)?;
+    // One level only (a flat synthetic flame): every band pixel is flame.
+    let v_min = otsu(&v_hist).or_else(|| v_hist.iter().position(|&c| c > 0).map(|v| v as u8))?;
     let mut s_hist = [0u64; 256];
     for row in &s_by_v[v_min as usize..] {
         for (a, b) in s_hist.iter_mut().zip(row) {
@@ -122,13 +124,14 @@ pub fn join_core(band: &Mask, core: &Mask) -> Mask {
 pyrograph_core::node! {
     /// The HSV flame mask of the Eigenfires thesis (§3.2, eq. 3–4) with thresholds chosen per clip: Otsu's
     /// method on the value of the pixels whose hue lies in the flame's band (sampled every `stride` frames)
-    /// splits flame from background, then Otsu's on their saturation drops pale glare (glowing wax and glass
-    /// are bright but unsaturated), never below `s_min_floor`. Every frame is masked with one layer of that
+    /// splits flame from background, then Otsu's on their saturation drops pale glare, never below `s_min_floor`;
+    /// lit wax and glass, which glow pink-orange, stay out by hue. Every frame is masked with one layer of that
     /// band and, when `blue_base` is on, one of the blue base (200–260°), both at the chosen thresholds.
-    /// The chosen thresholds are outputs, so an artist can freeze them in imaging.hsv_mask.
+    /// The chosen thresholds are outputs, so an artist can freeze them in imaging.hsv_mask. A gray clip (no hue) is
+    /// split by Otsu's method on the value alone.
     #[node("imaging.hsv_auto_mask", "Pre-processing", WholeClip)]
     pub struct HsvAutoMask {
-        /// RGBA frames to segment.
+        /// Frames to segment (RGBA; gray frames are split by value alone).
         clip: ClipOf<Arc<Image>>,
         // Candle and wood flames are 20–60° where they are bright; lit wax and glass glow
         // pink-orange below 20° (a tea-light's holder fills a frame with it).
@@ -175,6 +178,8 @@ struct MaskSource {
     layers: Vec<HsvLayer>,
     /// The core's layers (none with core off), joined where they touch the band.
     core: Vec<HsvLayer>,
+    /// For a gray clip: the value (0–255) from which a pixel is flame, instead of the layers.
+    gray: Option<f32>,
 }
 
 impl FrameSource for MaskSource {
@@ -185,6 +190,18 @@ impl FrameSource for MaskSource {
         let Value::Image(img) = self.clip.get(index, ctx)? else {
             return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {index} is not an image")));
         };
+        if let Some(t) = self.gray {
+            if img.channels() != Channels::Gray {
+                return Err(NodeError::port(
+                    port!(HsvAutoMask, clip),
+                    format!("frame {index} is RGBA but the clip's sampled frames are gray; every frame must be the same kind"),
+                ));
+            }
+            let data = img.data().iter().map(|&v| if f32::from(unit_to_u8(v)) >= t { 255 } else { 0 }).collect();
+            let mask = Mask::from_vec(img.width(), img.height(), data)
+                .ok_or_else(|| NodeError::port(port!(HsvAutoMask, clip), format!("frame {index}: mask size")))?;
+            return Ok(Value::Mask(Arc::new(mask)));
+        }
         let band = hsv_mask(&img, &self.layers)?;
         let mask = if self.core.is_empty() { band } else { join_core(&band, &hsv_mask(&img, &self.core)?) };
         Ok(Value::Mask(Arc::new(mask)))
@@ -200,10 +217,17 @@ impl Cook for HsvAutoMask {
             let Value::Image(img) = clip.get(i, ctx)? else {
                 return Err(NodeError::port(port!(HsvAutoMask, clip), format!("frame {i} is not an image")));
             };
-            if img.channels() != Channels::Rgba {
-                return Err(NodeError::port(port!(HsvAutoMask, clip), "needs RGBA frames: hue is undefined for gray ones"));
-            }
             sampled.push(img);
+        }
+        let gray = sampled.iter().filter(|i| i.channels() == Channels::Gray).count();
+        if gray > 0 && gray < sampled.len() {
+            return Err(NodeError::port(
+                port!(HsvAutoMask, clip),
+                "the clip mixes gray and RGBA frames; every frame must be the same kind",
+            ));
+        }
+        if gray > 0 {
+            return gray_masks(clip, &sampled);
         }
         let (v_min, s_min, v_hist) =
             auto_levels(sampled.iter().map(|i| i.as_ref()), (self.hue_min, self.hue_max), self.s_min_floor).ok_or_else(|| {
@@ -238,7 +262,7 @@ impl Cook for HsvAutoMask {
         };
         let mut h = Fingerprinter::new();
         ("imaging.hsv_auto_mask", clip.fingerprint(), format!("{layers:?} {core:?}")).hash(&mut h);
-        let source = MaskSource { clip: clip.clone(), layers, core };
+        let source = MaskSource { clip: clip.clone(), layers, core, gray: None };
         let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(source));
         Ok(HsvAutoMaskOut {
             mask: ClipOf::new(masks),
@@ -247,6 +271,25 @@ impl Cook for HsvAutoMask {
             core_threshold: core_v,
         })
     }
+}
+
+/// The masks of a gray clip (no hue to select by: a pre-processed or monochrome plate): Otsu's
+/// threshold on the value of every sampled pixel.
+fn gray_masks(clip: &Clip, sampled: &[Arc<Image>]) -> Result<HsvAutoMaskOut, NodeError> {
+    let mut hist = [0u64; 256];
+    for img in sampled {
+        for &v in img.data() {
+            hist[usize::from(unit_to_u8(v))] += 1;
+        }
+    }
+    let t = f32::from(otsu(&hist).ok_or_else(|| {
+        NodeError::port(port!(HsvAutoMask, clip), "every sampled gray frame has one value: no flame to tell from the background")
+    })?);
+    let mut h = Fingerprinter::new();
+    ("imaging.hsv_auto_mask gray", clip.fingerprint(), t.to_bits()).hash(&mut h);
+    let source = MaskSource { clip: clip.clone(), layers: Vec::new(), core: Vec::new(), gray: Some(t) };
+    let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(source));
+    Ok(HsvAutoMaskOut { mask: ClipOf::new(masks), value_threshold: t, saturation_threshold: 0.0, core_threshold: 255.0 })
 }
 
 #[cfg(test)]
@@ -305,6 +348,10 @@ mod tests {
             assert!(!inside(2, 2) && !inside(58, 38), "{brightness}: the background is dropped (v {v}, s {s})");
             assert!(!inside(50, 15), "{brightness}: the pale glare is dropped (v {v}, s {s})");
         }
+        // A flat flame on a background outside the band: one level, all of it flame.
+        let flat = Image::from_vec(2, 1, Channels::Rgba, vec![1.0, 0.55, 0.1, 1.0, 0.02, 0.01, 0.01, 1.0]).unwrap();
+        let (v, _) = auto_thresholds(std::iter::once(&flat), (20.0, 70.0), 40.0).unwrap();
+        assert_eq!(v, 255.0);
         let black = Image::new(8, 8, Channels::Rgba);
         assert!(auto_levels(std::iter::once(&black), (340.0, 70.0), 40.0).is_none());
         assert_eq!(auto_thresholds(std::iter::once(&black), (340.0, 70.0), 40.0), None);
@@ -370,6 +417,25 @@ mod tests {
         let Value::Mask(mask) = out.mask.get(0, &ctx).unwrap() else { panic!("a mask") };
         assert!(mask.get(22, 8) && mask.get(27, 20), "the flame and its white core are kept");
         assert!(!mask.get(45, 30) && !mask.get(36, 25), "the lit wax is left out");
+    }
+
+    #[test]
+    fn a_gray_clip_is_split_by_value() {
+        let mut data = vec![0.05_f32; 40 * 30];
+        for y in 8..25 {
+            for x in 15..25 {
+                data[y * 40 + x] = 0.9;
+            }
+        }
+        let img = Image::from_vec(40, 30, Channels::Gray, data).unwrap();
+        let clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(img))]);
+        let ctx = CookCtx::new();
+        let out = gray_masks(&clip, &[clip.image(0, &ctx).unwrap()]).unwrap();
+        let Value::Mask(mask) = out.mask.get(0, &ctx).unwrap() else { panic!("a mask") };
+        assert!(mask.get(20, 15) && !mask.get(2, 2), "flame in, background out (threshold {})", out.value_threshold);
+        let flat = Image::from_vec(4, 4, Channels::Gray, vec![0.5; 16]).unwrap();
+        let flat_clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(flat))]);
+        assert!(gray_masks(&flat_clip, &[flat_clip.image(0, &ctx).unwrap()]).is_err());
     }
 
     #[test]

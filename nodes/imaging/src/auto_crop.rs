@@ -134,6 +134,21 @@ pub fn frame_box(b: PixelBox, margin: f64, square: bool, multiple: u32, width: u
     (place(cx, w, width), place(cy, h, height), w, h)
 }
 
+/// What a flame cut by the edge below it means, and what to do (also `flame_model.fit`'s words).
+pub const BASE_OUTSIDE: &str = "its base is outside the picture; crop lower or use a clip where the base is visible";
+
+/// Whether `touching` of `frames` flame frames touching an edge is a framing problem: a flame
+/// grazing an edge now and then is a flare, a quarter of the frames or more is the framing.
+/// Counted in whole frames, so exactly a quarter counts.
+pub fn is_framing_problem(touching: usize, frames: usize) -> bool {
+    touching > 0 && 4 * touching >= frames
+}
+
+/// The warning for a flame touching `edge` in `touching` of `frames` frames, and what it means.
+pub fn edge_warning(edge: &str, touching: usize, frames: usize, what: &str) -> String {
+    format!("the flame touches the {edge} edge in {:.0} % of frames: {what}", 100.0 * touching as f64 / frames.max(1) as f64)
+}
+
 /// What the masks say about the footage that the user should know: frames without a flame, and
 /// a flame cut by an edge of the picture (its base below the frame, its tip above it).
 pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (width, height): (u32, u32)) -> Vec<String> {
@@ -145,21 +160,16 @@ pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (wid
             pyrograph_core::frames::list_for_message(empty)
         ));
     }
-    let share = |f: &dyn Fn(&PixelBox) -> bool| boxes.iter().filter(|b| f(b)).count() as f64 / boxes.len().max(1) as f64;
-    let edges: [(&str, f64, &str); 4] = [
-        (
-            "bottom",
-            share(&|b| b[3] >= height),
-            "its base is outside the picture; crop lower or use a clip where the base is visible",
-        ),
-        ("top", share(&|b| b[1] == 0), "its tip is outside the picture; the flame's height is cut"),
-        ("left", share(&|b| b[0] == 0), "the flame is cut at the side"),
-        ("right", share(&|b| b[2] >= width), "the flame is cut at the side"),
+    let touching = |f: &dyn Fn(&PixelBox) -> bool| boxes.iter().filter(|b| f(b)).count();
+    let edges: [(&str, usize, &str); 4] = [
+        ("bottom", touching(&|b| b[3] >= height), BASE_OUTSIDE),
+        ("top", touching(&|b| b[1] == 0), "its tip is outside the picture; the flame's height is cut"),
+        ("left", touching(&|b| b[0] == 0), "the flame is cut at the side"),
+        ("right", touching(&|b| b[2] >= width), "the flame is cut at the side"),
     ];
-    for (edge, s, what) in edges {
-        // A flame grazing an edge now and then is a flare; most of the time, a framing problem.
-        if s >= 0.25 {
-            out.push(format!("the flame touches the {edge} edge in {:.0} % of frames: {what}", 100.0 * s));
+    for (edge, k, what) in edges {
+        if is_framing_problem(k, boxes.len()) {
+            out.push(edge_warning(edge, k, boxes.len(), what));
         }
     }
     out

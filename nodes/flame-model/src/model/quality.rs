@@ -4,6 +4,7 @@
 
 use pyrograph_nodes_eigen::pca::{self, Database};
 use pyrograph_nodes_eigen::values::FrameRef;
+use pyrograph_nodes_imaging::auto_crop::{BASE_OUTSIDE, edge_warning, is_framing_problem};
 
 use super::fit::{FitSettings, Plume};
 
@@ -49,37 +50,34 @@ impl EdgeReport {
         EdgeReport { touches: per_frame.iter().map(|t| t.iter().any(|&b| b)).collect(), count, axis }
     }
 
-    /// The most touched edge on the side `dir` points to (within 60° of its normal), if a quarter
-    /// of the frames or more touch it: a flame grazing an edge now and then is a flare.
-    fn cut_towards(&self, dir: [f64; 2]) -> Option<(&'static str, f64)> {
-        // Counted in whole frames (4·k ≥ n), as imaging.auto_crop does, so both agree at exactly 25 %.
+    /// The most touched edge on the side `dir` points to (within 60° of its normal), if it is a
+    /// framing problem (imaging.auto_crop's rule: a quarter of the frames or more).
+    fn cut_towards(&self, dir: [f64; 2]) -> Option<(&'static str, usize)> {
         let n = self.touches.len();
         EDGES
             .iter()
             .zip(self.count)
-            .filter(|((_, e), k)| e[0] * dir[0] + e[1] * dir[1] > 0.5 && *k > 0 && 4 * k >= n)
-            .map(|((name, _), k)| (*name, k as f64 / n as f64))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .filter(|((_, e), k)| e[0] * dir[0] + e[1] * dir[1] > 0.5 && is_framing_problem(*k, n))
+            .map(|((name, _), k)| (*name, k))
+            .max_by_key(|&(_, k)| k)
     }
 
-    /// The message when the flame's base is outside the picture.
+    /// The message when the flame's base is outside the picture (imaging.auto_crop's words).
     pub fn base_cut(&self) -> Option<String> {
-        self.cut_towards([-self.axis[0], -self.axis[1]]).map(|(edge, s)| {
-            format!(
-                "the flame touches the {edge} edge in {:.0} % of frames: its base is outside the picture; crop lower or use a clip \
-                 where the base is visible",
-                100.0 * s
-            )
-        })
+        let n = self.touches.len();
+        self.cut_towards([-self.axis[0], -self.axis[1]]).map(|(edge, k)| edge_warning(edge, k, n, BASE_OUTSIDE))
     }
 
     /// The message when the flame's tip is outside the picture.
     pub fn tip_cut(&self) -> Option<String> {
-        self.cut_towards(self.axis).map(|(edge, s)| {
-            format!(
-                "the flame touches the {edge} edge in {:.0} % of frames: its tip is outside the picture, so the fitted heights \
-                 are cut; crop higher or use a clip where the whole flame is visible",
-                100.0 * s
+        let n = self.touches.len();
+        self.cut_towards(self.axis).map(|(edge, k)| {
+            edge_warning(
+                edge,
+                k,
+                n,
+                "its tip is outside the picture, so the fitted heights are cut; crop higher or use a clip where the whole \
+                 flame is visible",
             )
         })
     }

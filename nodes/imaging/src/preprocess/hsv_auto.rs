@@ -311,26 +311,35 @@ mod tests {
         assert_eq!(otsu(&one), None);
     }
 
-    /// A frame of dim reddish noise (background lit by the flame), a bright saturated orange flame
-    /// and a bright pale pink glare (glowing wax).
-    fn frame(brightness: f32) -> Image {
+    /// A 60×40 frame of `paint`'s colours (times `brightness`) over dim reddish noise (background
+    /// lit by the flame) where it paints nothing.
+    fn painted(brightness: f32, paint: impl Fn(u32, u32) -> Option<[f32; 3]>) -> Image {
         let (w, h) = (60u32, 40u32);
         let mut data = Vec::with_capacity((w * h * 4) as usize);
         for y in 0..h {
             for x in 0..w {
-                let rgb = if (20..35).contains(&x) && (5..30).contains(&y) {
-                    [1.0, 0.55, 0.1]
-                } else if (45..55).contains(&x) && (10..20).contains(&y) {
-                    [1.0, 0.85, 0.85]
-                } else {
+                let rgb = paint(x, y).unwrap_or_else(|| {
                     let n = ((x * 7 + y * 13) % 10) as f32 / 100.0;
                     [0.06 + n, 0.03 + n / 2.0, 0.02]
-                };
+                });
                 data.extend(rgb.map(|c| c * brightness));
                 data.push(1.0);
             }
         }
         Image::from_vec(w, h, Channels::Rgba, data).unwrap()
+    }
+
+    /// A bright saturated orange flame and a bright pale pink glare (glowing wax).
+    fn frame(brightness: f32) -> Image {
+        painted(brightness, |x, y| {
+            if (20..35).contains(&x) && (5..30).contains(&y) {
+                Some([1.0, 0.55, 0.1])
+            } else if (45..55).contains(&x) && (10..20).contains(&y) {
+                Some([1.0, 0.85, 0.85])
+            } else {
+                None
+            }
+        })
     }
 
     #[test]
@@ -381,25 +390,17 @@ mod tests {
     /// pink-orange (hue 14°, saturation 0.35), touching it: a tea-light in its holder.
     #[test]
     fn lit_wax_touching_the_flame_stays_out_of_the_mask() {
-        let (w, h) = (60u32, 40u32);
-        let mut data = Vec::with_capacity((w * h * 4) as usize);
-        for y in 0..h {
-            for x in 0..w {
-                let rgb = if (25..30).contains(&x) && (15..25).contains(&y) {
-                    [1.0, 1.0, 1.0]
-                } else if (20..35).contains(&x) && (5..30).contains(&y) {
-                    [1.0, 0.75, 0.2]
-                } else if (35..55).contains(&x) && (20..38).contains(&y) {
-                    [0.97, 0.71, 0.63]
-                } else {
-                    let n = ((x * 7 + y * 13) % 10) as f32 / 100.0;
-                    [0.06 + n, 0.03 + n / 2.0, 0.02]
-                };
-                data.extend(rgb);
-                data.push(1.0);
+        let img = painted(1.0, |x, y| {
+            if (25..30).contains(&x) && (15..25).contains(&y) {
+                Some([1.0, 1.0, 1.0])
+            } else if (20..35).contains(&x) && (5..30).contains(&y) {
+                Some([1.0, 0.75, 0.2])
+            } else if (35..55).contains(&x) && (20..38).contains(&y) {
+                Some([0.97, 0.71, 0.63])
+            } else {
+                None
             }
-        }
-        let img = Image::from_vec(w, h, Channels::Rgba, data).unwrap();
+        });
         let clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(img))]);
         let node = HsvAutoMask {
             clip: ClipOf::new(clip),

@@ -5,7 +5,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use pyrograph::bench::{Bench, Shape, Workload};
 
 fn evaluator(c: &mut Criterion) {
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let mut group = c.benchmark_group("evaluator_200");
     for shape in [Shape::Chain, Shape::Fan] {
         for workload in [Workload::Cold, Workload::Warm, Workload::Recook] {

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = Path::new("build_and_cook");
@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .connect("add.image", "gray.image")
         .connect("gray.image", "write.clip");
 
-    let graph = Graph::build(&doc, &pyrograph::registry(), out, &BuildOptions::default())?;
+    let graph = Graph::build(&doc, &pyrograph_frontend::registry(), out, &BuildOptions::default())?;
     let result = Evaluator::new().cook(&graph, &["write"], &CookCtx::new())?;
     let frames = result.output(&graph, "write", "frames")?;
     println!("wrote {} frames to {}", frames.summary(), out.join("frames").display());

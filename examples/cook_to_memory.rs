@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, Value};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, Value};
 use rayon::prelude::*;
 
 fn main() -> Result<(), String> {
@@ -15,7 +15,7 @@ fn main() -> Result<(), String> {
         return Err("usage: cook_to_memory GRAPH NODE.PORT FRAMES".into());
     };
     let frames: usize = frames.parse().map_err(|e| format!("FRAMES: {e}"))?;
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let started = std::time::Instant::now();
     let (_, graph) = Graph::load(&PathBuf::from(graph), &registry, &BuildOptions::default()).map_err(|d| d.to_string())?;
     let ctx = CookCtx::new();

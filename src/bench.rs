@@ -109,7 +109,7 @@ mod tests {
 
     #[test]
     fn recook_touches_the_middle_node_and_its_downstream_only() {
-        let r = crate::registry();
+        let r = pyrograph_frontend::registry();
         let mut chain = Bench::new(&r, Shape::Chain, 200, Workload::Recook);
         assert_eq!(chain.run(), 100, "n100..n199");
         let mut fan = Bench::new(&r, Shape::Fan, 200, Workload::Recook);

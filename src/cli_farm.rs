@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
 use pyrograph::wedge::{Variant, Wedges, cell_image};
 use rayon::prelude::*;
 
@@ -26,7 +26,7 @@ pub fn collect(job_dir: &Path, json_out: bool) -> Result<(), Failure> {
     let report = pyrograph::manifest::collect(job_dir).map_err(|e| Failure(format!("error: {e}")))?;
     let text = serde_json::to_string_pretty(&report).map_err(|e| Failure(format!("error: {e}")))?;
     let merged = job_dir.join("manifest.json");
-    pyrograph::core::document::write_atomic(&merged, text.as_bytes(), true)
+    pyrograph_frontend::core::document::write_atomic(&merged, text.as_bytes(), true)
         .map_err(|e| Failure(format!("error: writing {}: {e}", merged.display())))?;
     if json_out {
         println!("{text}");
@@ -102,7 +102,7 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
         )));
     }
     for (f, text) in &bundle.files {
-        pyrograph::core::document::write_atomic(&job_dir.join(f), text.as_bytes(), overwrite)
+        pyrograph_frontend::core::document::write_atomic(&job_dir.join(f), text.as_bytes(), overwrite)
             .map_err(|e| Failure(format!("error: writing {}: {e}", job_dir.join(f).display())))?;
     }
     let tasks = a.frames.chunks(a.chunk).len() * variants.len().max(1);
@@ -138,7 +138,7 @@ pub fn write_manifest(
         std::fs::create_dir_all(dir).map_err(fail)?;
     }
     let text = serde_json::to_string_pretty(&manifest).map_err(|e| Failure(format!("error: manifest: {e}")))?;
-    pyrograph::core::document::write_atomic(file, text.as_bytes(), true).map_err(fail)
+    pyrograph_frontend::core::document::write_atomic(file, text.as_bytes(), true).map_err(fail)
 }
 
 /// What one wedge variant's cook left.
@@ -229,13 +229,13 @@ fn write_sheet(runs: &[VariantRun], wedges: &Wedges, path: &Path, overwrite: boo
     for r in runs {
         let file = cell_image(&r.written)
             .ok_or_else(|| Failure(format!("error: --sheet: wedge {} wrote no PNG or EXR image", r.variant.name)))?;
-        let img = pyrograph::imaging::io::load_image(file).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
+        let img = pyrograph_frontend::imaging::io::load_image(file).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
         let mut label = vec![format!("#{}", r.variant.index)];
         label.extend(r.variant.label());
         cells.push((img, label));
     }
     let columns = wedges.shape().last().copied().unwrap_or(1);
     let sheet = pyrograph::wedge::sheet(&cells, columns, 320).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
-    let format = pyrograph::imaging::io::OutputFormat::Png { sixteen_bit: false };
-    pyrograph::imaging::io::write_image(&sheet, path, format, overwrite).map_err(|e| Failure(format!("error: --sheet: {e}")))
+    let format = pyrograph_frontend::imaging::io::OutputFormat::Png { sixteen_bit: false };
+    pyrograph_frontend::imaging::io::write_image(&sheet, path, format, overwrite).map_err(|e| Failure(format!("error: --sheet: {e}")))
 }

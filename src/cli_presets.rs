@@ -4,9 +4,10 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::{BuildOptions, Graph, GraphDoc, NodeDoc, ParamValue, Registry};
-use pyrograph::preset_cook::{PRESET_NODE, thumbnail, thumbnail_path, wrap};
-use pyrograph::presets::{Library, PRESET_PATH_VAR, Preset, builtin_dir, matches, search_path};
+use pyrograph_frontend::core::builtin::INCLUDE_PATH;
+use pyrograph_frontend::core::{BuildOptions, Graph, GraphDoc, NodeDoc, ParamValue, Registry};
+use pyrograph_frontend::preset_cook::{PRESET_NODE, thumbnail, thumbnail_path, wrap};
+use pyrograph_frontend::presets::{Library, PRESET_PATH_VAR, Preset, builtin_dir, matches, search_path};
 use serde_json::json;
 
 use crate::{Failure, RenderOpts, apply_sets, cook_graph};
@@ -155,13 +156,13 @@ fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite
         .map_or(Ok(()), std::fs::create_dir_all)
         .map_err(|e| e.to_string())
         .and_then(|()| {
-            pyrograph::imaging::io::files::encode_image(
+            pyrograph_frontend::imaging::io::files::encode_image(
                 &thumb.image,
-                pyrograph::imaging::io::files::OutputFormat::Png { sixteen_bit: false },
+                pyrograph_frontend::imaging::io::files::OutputFormat::Png { sixteen_bit: false },
             )
             .map_err(|e| e.to_string())
         })
-        .and_then(|bytes| pyrograph::core::document::write_atomic(&target, &bytes, true).map_err(|e| e.to_string()));
+        .and_then(|bytes| pyrograph_frontend::core::document::write_atomic(&target, &bytes, true).map_err(|e| e.to_string()));
     if let Err(e) = written {
         eprintln!("error: preset '{}': writing {}: {e}", p.name, target.display());
         return false;
@@ -173,9 +174,9 @@ fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite
 
 /// A preset's exposed ports, read by including it the way a graph would.
 fn preset_entry(registry: &Registry, file: &Path) -> Result<serde_json::Value, String> {
-    let desc = pyrograph::core::include::preset_desc(file, registry).map_err(|d| d.to_string())?;
+    let desc = pyrograph_frontend::core::graph::preset_desc(file, registry).map_err(|d| d.to_string())?;
     let iface = GraphDoc::load(file).ok().and_then(|d| d.interface).unwrap_or_default();
-    let port = |p: &pyrograph::core::PortDesc| json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary())});
+    let port = |p: &pyrograph_frontend::core::PortDesc| json!({"name": p.name, "type": p.ty.to_string(), "default": p.default.as_ref().map(|v| v.summary())});
     let inputs: Vec<_> = desc.inputs.iter().filter(|p| iface.inputs.contains_key(&p.name)).map(port).collect();
     let params: Vec<_> = desc.inputs.iter().filter(|p| iface.params.contains_key(&p.name)).map(port).collect();
     let outputs: Vec<_> = desc.outputs.iter().map(port).collect();
@@ -219,7 +220,8 @@ pub fn render_preset(
     }
     let err = |m: String| Failure(format!("error: preset {}: {m}", file.display()));
     let mut wrapped = wrap(registry, &file, &[], &sources).map_err(err)?;
-    if o.set.iter().any(|s| s.split_once('=').is_some_and(|(l, _)| l == "path" || l == "preset.path")) {
+    let names_the_file = |l: &str| l == INCLUDE_PATH || l.strip_prefix(PRESET_NODE).and_then(|r| r.strip_prefix('.')) == Some(INCLUDE_PATH);
+    if o.set.iter().any(|s| s.split_once('=').is_some_and(|(l, _)| names_the_file(l))) {
         return Err(err("`path` names the preset file itself; set the preset's exposed parameters".into()));
     }
     // `--set flames=200` sets the preset's own parameter; `--set node.param=v` any wrapper node.

@@ -239,7 +239,7 @@ pub fn graph_look(graph: &Path, endpoint: &str, sets: &[&str], threshold: f32, s
         let (node, param) = split_endpoint(lhs).ok_or_else(|| format!("{s}: expected node.param=value"))?;
         doc.set_param(node, param, ParamValue::parse_cli(value)).map_err(|e| format!("{s}: {e}"))?;
     }
-    let graph = Graph::build_file(&doc, graph, &crate::registry(), &BuildOptions::default()).map_err(|d| d.to_string())?;
+    let graph = Graph::build_file(&doc, graph, &pyrograph_frontend::registry(), &BuildOptions::default()).map_err(|d| d.to_string())?;
     let ctx = CookCtx::new();
     let Value::Clip(clip) = Evaluator::new().output(&graph, endpoint, &ctx).map_err(|e| e.to_string())? else {
         return Err(format!("{endpoint} is not a clip"));
@@ -267,7 +267,7 @@ pub fn footage_look(dir: &Path, limit: usize, threshold: f32, steps: usize) -> R
     if files.is_empty() {
         return Err(format!("{}: no PNG frames", dir.display()));
     }
-    measure(files.len(), |k| crate::imaging::io::files::load_image(&files[k]).map_err(|e| e.to_string()), threshold, steps)
+    measure(files.len(), |k| pyrograph_frontend::imaging::io::load_image(&files[k]).map_err(|e| e.to_string()), threshold, steps)
 }
 
 /// Runs of covered columns, gaps under 3 columns bridged, runs under 3 columns dropped (noise).

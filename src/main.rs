@@ -14,7 +14,7 @@ mod cli_presets;
 
 use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use cli_presets::{PresetQuery, presets, render_preset};
-use pyrograph::core::{
+use pyrograph_frontend::core::{
     BuildOptions, CookCtx, CookResult, CookSettings, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError, ParamValue,
     Progress, Registry, Warning,
 };
@@ -40,7 +40,7 @@ enum Command {
         opts: RenderOpts,
         /// Memory for cached frames, in MiB, shared by every clip of the graph (least recently
         /// used frames are dropped and recomputed when needed again).
-        #[arg(long, value_name = "MIB", default_value_t = pyrograph::core::frame_cache::DEFAULT_BUDGET >> 20)]
+        #[arg(long, value_name = "MIB", default_value_t = pyrograph_frontend::core::value::frame_cache::DEFAULT_BUDGET >> 20)]
         cache_mb: usize,
         /// Hold cached frames of 8-bit content at one byte a sample (four times as many in the
         /// budget, for graphs that revisit frames; costs a pass over each frame cached).
@@ -210,13 +210,13 @@ impl From<Diagnostics> for Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
         Some(Command::Render { graph, opts, cache_mb, compact_cache }) => {
-            pyrograph::core::FrameCache::global().set_budget(cache_mb << 20);
-            pyrograph::core::FrameCache::global().set_compact(compact_cache);
+            pyrograph_frontend::core::FrameCache::global().set_budget(cache_mb << 20);
+            pyrograph_frontend::core::FrameCache::global().set_compact(compact_cache);
             render(&registry, &graph, &opts)
         }
         Some(Command::Job { action: Some(JobAction::Collect { job_dir, json }), .. }) => collect(&job_dir, json),
@@ -334,7 +334,7 @@ impl RenderOpts {
 fn apply_sets(doc: &mut GraphDoc, sets: &[String]) -> Result<(), Failure> {
     for s in sets {
         let (lhs, value) = s.split_once('=').ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
-        let (node, param) = pyrograph::core::document::split_endpoint(lhs)
+        let (node, param) = pyrograph_frontend::core::document::split_endpoint(lhs)
             .ok_or_else(|| Failure(format!("error: --set {s}: expected node.param=value")))?;
         doc.set_param(node, param, ParamValue::parse_cli(value)).map_err(|e| Failure(format!("error: --set {s}: {e}")))?;
     }
@@ -349,7 +349,7 @@ fn load(registry: &Registry, path: &Path, sets: &[String], options: &BuildOption
 }
 
 /// Progress bars per node, drawn on stderr (hidden when it is not a terminal).
-fn progress_bars(enabled: bool) -> Option<pyrograph::core::ProgressFn> {
+fn progress_bars(enabled: bool) -> Option<pyrograph_frontend::core::ProgressFn> {
     if !enabled {
         return None;
     }
@@ -442,7 +442,7 @@ fn report(
             })
             .collect();
         let errs: Vec<_> = errors.iter().map(|(n, e)| json!({"node": n, "error": e.to_string()})).collect();
-        let cache = pyrograph::core::FrameCache::global().stats();
+        let cache = pyrograph_frontend::core::FrameCache::global().stats();
         println!(
             "{}",
             json!({
@@ -483,15 +483,15 @@ fn memory_kib(field: &str) -> Option<u64> {
 }
 
 fn explain(node: &str, e: &NodeError) -> String {
-    pyrograph::check::explain(node, e)
+    pyrograph_frontend::check::explain(node, e)
 }
 
-fn output_map(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> serde_json::Value {
+fn output_map(graph: &Graph, id: &str, values: &[pyrograph_frontend::core::Value]) -> serde_json::Value {
     let Some(desc) = graph.desc(id) else { return json!({}) };
     desc.outputs.iter().zip(values).map(|(p, v)| (p.name.clone(), json!(v.summary()))).collect::<serde_json::Map<_, _>>().into()
 }
 
-fn describe_outputs(graph: &Graph, id: &str, values: &[pyrograph::core::Value]) -> String {
+fn describe_outputs(graph: &Graph, id: &str, values: &[pyrograph_frontend::core::Value]) -> String {
     let Some(desc) = graph.desc(id) else { return String::new() };
     desc.outputs.iter().zip(values).map(|(p, v)| format!("{} = {}", p.name, v.summary())).collect::<Vec<_>>().join(", ")
 }
@@ -523,7 +523,7 @@ fn demo(registry: &Registry, out: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-fn problem_json(p: &pyrograph::check::Problem) -> serde_json::Value {
+fn problem_json(p: &pyrograph_frontend::check::Problem) -> serde_json::Value {
     json!({
         "file": p.file.as_ref().map(|f| f.display().to_string()),
         "location": p.location,
@@ -536,7 +536,7 @@ fn problem_json(p: &pyrograph::check::Problem) -> serde_json::Value {
 
 fn check(registry: &Registry, path: &Path, options: &BuildOptions, json_out: bool) -> Result<(), Failure> {
     let built = Graph::load(path, registry, options).map(|(_, g)| g);
-    let (problems, warnings) = pyrograph::check::problems_and_warnings(built.as_ref());
+    let (problems, warnings) = pyrograph_frontend::check::problems_and_warnings(built.as_ref());
     if json_out {
         let list: Vec<_> = problems.iter().map(problem_json).collect();
         let warned: Vec<_> = warnings.iter().map(problem_json).collect();
@@ -574,9 +574,9 @@ fn save(path: &Path, output: &Path, sets: &[String], overwrite: bool) -> Result<
 
 fn nodes(registry: &Registry, markdown: bool, json_out: bool) {
     if markdown {
-        print!("{}", pyrograph::reference::markdown(registry));
+        print!("{}", pyrograph_frontend::reference::markdown(registry));
     } else if json_out {
-        println!("{}", pyrograph::reference::json(registry));
+        println!("{}", pyrograph_frontend::reference::json(registry));
     } else {
         for d in registry.descs() {
             println!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());

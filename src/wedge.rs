@@ -203,11 +203,11 @@ pub fn sheet(cells: &[(Image, Vec<String>)], columns: usize, cell_width: u32) ->
     let pics: Vec<Image> = cells
         .iter()
         .map(|(img, _)| {
-            pyrograph_nodes_imaging::basic::resize(
+            pyrograph_frontend::imaging::resize::resize(
                 &img.to_rgba(),
                 cell_width,
                 0,
-                pyrograph_nodes_imaging::basic::ResizeFilter::Bilinear.filter_type(),
+                pyrograph_frontend::imaging::resize::ResizeFilter::Bilinear.filter_type(),
             )
             .map_err(|e| e.to_string())
         })

@@ -211,9 +211,9 @@ fn save_migrates_applies_set_and_refuses_to_overwrite() {
     let graph = graph.to_str().unwrap();
     let o = run(&["save", graph, "-o", out_s, "--set", "calm.turbulence=0.8"]);
     assert!(o.status.success(), "{}", text(&o));
-    let saved = pyrograph::core::GraphDoc::load(&out).expect("the saved file loads");
-    let mut expected = pyrograph::core::GraphDoc::load(std::path::Path::new(graph)).unwrap();
-    expected.set_param("calm", "turbulence", pyrograph::core::ParamValue::Float(0.8)).unwrap();
+    let saved = pyrograph_frontend::core::GraphDoc::load(&out).expect("the saved file loads");
+    let mut expected = pyrograph_frontend::core::GraphDoc::load(std::path::Path::new(graph)).unwrap();
+    expected.set_param("calm", "turbulence", pyrograph_frontend::core::ParamValue::Float(0.8)).unwrap();
     assert_eq!(saved, expected);
     assert_eq!(std::fs::read_to_string(&out).unwrap(), expected.to_ron(), "what the editor and Python write");
 

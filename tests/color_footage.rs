@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use pyrograph::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, Image, Value};
-use pyrograph::imaging::color::{ColoringLayers, original_coloring};
+use pyrograph_frontend::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, Image, Value};
+use pyrograph_frontend::imaging::color::{ColoringLayers, original_coloring};
 
 fn footage() -> Option<PathBuf> {
     std::env::var_os("PYROGRAPH_FOOTAGE").map(PathBuf::from)
@@ -29,7 +29,7 @@ fn original_coloring_keeps_the_flame_colours_and_blacks_out_the_rest() {
     let Some(dir) = footage() else { panic!("set PYROGRAPH_FOOTAGE to the shared footage folder") };
     assert!(dir.join("tealight-candle/candle.mp4").exists(), "no tealight-candle/candle.mp4 under {}", dir.display());
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/tealight-color.ron");
-    let (_, graph) = Graph::load(&path, &pyrograph::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let (_, graph) = Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
     let mut eval = Evaluator::new();
     let (source, original, colored) =
         (clip(&mut eval, &graph, "source.image"), clip(&mut eval, &graph, "pre.crop"), clip(&mut eval, &graph, "color.image"));

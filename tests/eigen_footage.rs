@@ -7,10 +7,10 @@
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
-use pyrograph::eigen::motion::{Method, transition};
-use pyrograph::eigen::transition::{distance, lowpass_kernel};
-use pyrograph::eigen::values::{FrameItem, Weights};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
+use pyrograph_frontend::eigen::motion::{Method, transition};
+use pyrograph_frontend::eigen::transition::{distance, lowpass_kernel};
+use pyrograph_frontend::eigen::values::{FrameItem, Weights};
 
 fn footage() -> PathBuf {
     std::env::var_os("PYROGRAPH_FOOTAGE")
@@ -35,7 +35,7 @@ fn pca_weights(source: &std::path::Path, pre: NodeDoc, (pre_in, pre_out): (&str,
         (format!("pre.{pre_out}"), "small.image".into()),
         ("small.image".into(), "pca.clip1".into()),
     ];
-    let g = Graph::build(&doc, &pyrograph::registry(), &root.join("graphs"), &BuildOptions::default())
+    let g = Graph::build(&doc, &pyrograph_frontend::registry(), &root.join("graphs"), &BuildOptions::default())
         .unwrap_or_else(|d| panic!("{d}"));
     let out = Evaluator::new().output(&g, "pca.weights", &CookCtx::new()).unwrap();
     match out.downcast::<Weights>() {

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, PortType, Registry};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, PortType, Registry};
 
 /// Frames of the shared test flame: the transition nodes' default motions reach frame 149.
 const FLAME_FRAMES: i64 = 150;
@@ -222,7 +222,7 @@ fn make_files(registry: &Registry) -> Files {
 
 #[test]
 fn every_registered_node_cooks_with_its_defaults() {
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let files = make_files(&registry);
     let mut failures = Vec::new();
     let mut cooked = 0;

@@ -245,7 +245,7 @@ fn a_local_wedge_writes_variants_apart_and_a_labelled_sheet() {
     for name in ["wind.seed-1_flames.steps-10", "wind.seed-2_flames.steps-30"] {
         assert_eq!(tree(&out.join(name)).len(), 4, "{name}");
     }
-    let sheet = pyrograph::imaging::io::load_image(&out.join("wedges.png")).unwrap();
+    let sheet = pyrograph_frontend::imaging::io::load_image(&out.join("wedges.png")).unwrap();
     assert_eq!(sheet.width(), 2 * (320 + 8) + 8, "two cells across (the zipped axis)");
     // A bad value stops the wedge before anything is written.
     let bad = dir.path().join("bad");

@@ -38,11 +38,11 @@ fn candle_gray_graph_writes_150_gray_frames_of_the_cropped_flame() {
 #[test]
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn tealight_video_loads_through_ffmpeg_as_796_frames_of_480x480() {
-    use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
+    use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
     let video = footage().join("tealight-candle/candle.mp4");
     let mut doc = GraphDoc::new();
     doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
-    let g = Graph::build(&doc, &pyrograph::registry(), std::path::Path::new("."), &BuildOptions::default()).unwrap();
+    let g = Graph::build(&doc, &pyrograph_frontend::registry(), std::path::Path::new("."), &BuildOptions::default()).unwrap();
     let ctx = CookCtx::new();
     let Value::Clip(clip) = Evaluator::new().output(&g, "video.clip", &ctx).unwrap() else { panic!("expected a clip") };
     assert_eq!(clip.len(), 796);

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Value};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Value};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -40,8 +40,8 @@ fn every_graph_round_trips_load_save_load() {
 #[test]
 fn the_unversioned_shape_migrates_and_cooks() {
     let path = root().join("tests/fixtures/migrate/v0.ron");
-    let (doc, graph) = Graph::load(&path, &pyrograph::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
-    assert_eq!(doc.version, pyrograph::core::document::CURRENT_VERSION, "migrated to the newest version in memory");
+    let (doc, graph) = Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(doc.version, pyrograph_frontend::core::document::CURRENT_VERSION, "migrated to the newest version in memory");
     assert_eq!(doc.node("card").unwrap().pos, Some((10.0, 20.0)));
     let gray = Evaluator::new().output(&graph, "gray.image", &CookCtx::new()).unwrap();
     let Value::Image(img) = gray else { panic!("expected an image") };
@@ -73,7 +73,7 @@ fn only_regenerate_1_regenerates() {
 
 #[test]
 fn docs_nodes_md_is_current() {
-    let expected = pyrograph::reference::markdown(&pyrograph::registry());
+    let expected = pyrograph_frontend::reference::markdown(&pyrograph_frontend::registry());
     let path = root().join("docs/nodes.md");
     if regenerate() {
         std::fs::write(&path, &expected).unwrap();
@@ -84,7 +84,7 @@ fn docs_nodes_md_is_current() {
 
 #[test]
 fn every_registered_node_has_a_doc_and_documented_ports() {
-    for d in pyrograph::registry().descs() {
+    for d in pyrograph_frontend::registry().descs() {
         assert!(!d.doc.trim().is_empty(), "{} has no doc", d.type_name);
         for p in d.inputs.iter().chain(&d.outputs) {
             assert!(!p.doc.trim().is_empty(), "{}.{} has no doc", d.type_name, p.name);
@@ -97,7 +97,7 @@ fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
     let out = tempfile::tempdir().unwrap();
     let path = root().join("graphs").join(graph);
     let options = BuildOptions { output_dir: Some(out.path().to_path_buf()), ..BuildOptions::default() };
-    let (_, g) = Graph::load(&path, &pyrograph::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
+    let (_, g) = Graph::load(&path, &pyrograph_frontend::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
     let sinks: Vec<String> = g.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
     let ctx = CookCtx::new()

@@ -71,7 +71,7 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
 
 #[test]
 fn no_port_name_is_a_string_literal_outside_its_declaration() {
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let ports: BTreeSet<String> =
         registry.descs().flat_map(|d| d.inputs.iter().chain(&d.outputs).map(|p| p.name.clone())).collect();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use pyrograph::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
 
 fn footage() -> PathBuf {
     std::env::var_os("PYROGRAPH_FOOTAGE")
@@ -77,10 +77,10 @@ fn lean_of(g: &image::GrayImage) -> f64 {
 }
 
 /// The pipeline's flame axis (main contour, uniform weights) of the bright part of a gray frame.
-fn axis_of(g: &image::GrayImage) -> Option<pyrograph::imaging::preprocess::pose::FlameAxis> {
-    use pyrograph::imaging::preprocess::{contours::trace_contours, pose};
+fn axis_of(g: &image::GrayImage) -> Option<pyrograph_frontend::imaging::preprocess::pose::FlameAxis> {
+    use pyrograph_frontend::imaging::preprocess::{contours::trace_contours, pose};
     let bits = g.pixels().map(|p| if p[0] > 127 { 255 } else { 0 }).collect();
-    let mask = pyrograph::core::Mask::from_vec(g.width(), g.height(), bits).unwrap();
+    let mask = pyrograph_frontend::core::Mask::from_vec(g.width(), g.height(), bits).unwrap();
     let contours = trace_contours(&mask);
     pose::main_contour(&contours).and_then(|c| pose::flame_axis(c, pose::Weighting::Uniform))
 }
@@ -178,7 +178,7 @@ fn tealight_mask_excludes_the_glowing_wax_and_glass_and_keeps_the_blue_base() {
 
 /// The tea-light video cropped as the tealight preset crops it (300×300 at 90, 100), as a clip of
 /// the original colours, and the context to read it with.
-fn tealight_crop() -> (pyrograph::core::Clip, CookCtx) {
+fn tealight_crop() -> (pyrograph_frontend::core::Clip, CookCtx) {
     let mut doc = GraphDoc::new();
     let video = footage().join("tealight-candle/candle.mp4");
     doc.add_node("v", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(video.display().to_string())));
@@ -191,7 +191,7 @@ fn tealight_crop() -> (pyrograph::core::Clip, CookCtx) {
             .param("height", ParamValue::Int(300)),
     );
     doc.connect("v.clip", "crop.image");
-    let g = Graph::build(&doc, &pyrograph::registry(), Path::new("."), &BuildOptions::default()).unwrap();
+    let g = Graph::build(&doc, &pyrograph_frontend::registry(), Path::new("."), &BuildOptions::default()).unwrap();
     let ctx = CookCtx::new();
     let Value::Clip(frames) = Evaluator::new().output(&g, "crop.image", &ctx).unwrap() else { panic!("expected a clip") };
     (frames, ctx)

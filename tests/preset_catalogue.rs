@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use pyrograph::core::{BuildOptions, Graph};
-use pyrograph::preset_cook::{THUMB_SIZE, thumbnail, thumbnail_path};
-use pyrograph::presets::{Library, Preset, builtin_dir};
+use pyrograph_frontend::core::{BuildOptions, Graph};
+use pyrograph_frontend::preset_cook::{THUMB_SIZE, thumbnail, thumbnail_path};
+use pyrograph_frontend::presets::{Library, Preset, builtin_dir};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -43,12 +43,12 @@ fn compare(made: &image::RgbaImage, want: &image::RgbaImage) -> Result<(), Strin
 
 /// Checks, cooks and compares every preset `pick` selects; returns the failures.
 fn cook_all(pick: impl Fn(&Preset) -> bool) -> usize {
-    let registry = pyrograph::registry();
+    let registry = pyrograph_frontend::registry();
     let mut failures = Vec::new();
     let mut cooked = 0;
     for p in library().presets.iter().filter(|p| pick(p)) {
         let built = Graph::load(&p.file, &registry, &BuildOptions::default()).map(|(_, g)| g);
-        let problems = pyrograph::check::problems(built.as_ref());
+        let problems = pyrograph_frontend::check::problems(built.as_ref());
         if !problems.is_empty() {
             failures.push(format!(
                 "{}: check: {}",
@@ -65,17 +65,17 @@ fn cook_all(pick: impl Fn(&Preset) -> bool) -> usize {
             }
         };
         cooked += 1;
-        let made = pyrograph::imaging::convert::to_rgba8(&thumb.image);
+        let made = pyrograph_frontend::imaging::convert::to_rgba8(&thumb.image);
         let file = thumbnail_path(&p.file, p.meta.thumbnail.as_deref());
         if regenerate() {
             // Atomically: another test of this binary reads the thumbnails meanwhile.
-            let bytes = pyrograph::imaging::io::encode_image(
+            let bytes = pyrograph_frontend::imaging::io::encode_image(
                 &thumb.image,
-                pyrograph::imaging::io::OutputFormat::Png { sixteen_bit: false },
+                pyrograph_frontend::imaging::io::OutputFormat::Png { sixteen_bit: false },
             )
             .unwrap();
             std::fs::create_dir_all(file.parent().unwrap()).unwrap();
-            pyrograph::core::document::write_atomic(&file, &bytes, true).unwrap();
+            pyrograph_frontend::core::document::write_atomic(&file, &bytes, true).unwrap();
         }
         match image::open(&file) {
             Ok(want) => {
@@ -148,7 +148,7 @@ fn thumbnails_are_the_catalogue_size() {
 
 #[test]
 fn docs_presets_md_is_current() {
-    let made = pyrograph::preset_docs::markdown(&pyrograph::registry(), &library(), &root()).unwrap();
+    let made = pyrograph_frontend::preset_docs::markdown(&pyrograph_frontend::registry(), &library(), &root()).unwrap();
     let path = root().join("docs/presets.md");
     if regenerate() {
         std::fs::write(&path, &made).unwrap();

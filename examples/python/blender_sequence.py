@@ -3,7 +3,7 @@
 Run inside Blender (Scripting workspace, or `blender --python examples/python/blender_sequence.py`)
 with pyrograph installed into Blender's Python:
 
-    <blender>/<version>/python/bin/python3 -m pip install ./crates/python
+    <blender>/<version>/python/bin/python3 -m pip install ./apps/python
 
 Not run in CI (it needs Blender). Blender reads image sequences from files, so the frames are
 rendered with the graph's own writer (atomic PNGs, as the CLI writes them), then loaded as an

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use petgraph::stable_graph::NodeIndex;
 use rayon::prelude::*;
 
-pub use crate::ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn, Warning};
+use crate::ctx::{CookCtx, Progress};
 use crate::error::NodeError;
 use crate::fingerprint::{Fingerprinter, hash_path_on_disk};
 use crate::graph::{Graph, GraphNode, InputSource};

@@ -11,23 +11,20 @@ pub mod eval;
 pub mod fingerprint;
 pub mod frames;
 pub mod graph;
-pub mod include;
 pub mod node;
 pub mod params;
 pub mod registry;
 pub mod stepping;
 pub mod value;
 
-/// Clips and the shared frame cache live with the values they hold and are made of.
-pub use value::{clip, frame_cache};
-
+pub use ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn, Warning};
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
-pub use eval::{CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Progress, ProgressFn, Warning};
-pub use frame_cache::{CacheStats, FrameCache};
+pub use eval::{CookResult, Evaluator};
 pub use frames::FrameSet;
 pub use graph::{BuildOptions, Graph};
-pub use node::{FnNode, Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
+pub use node::{Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
 pub use params::{ClipOf, Cook, InputPath, OutputPath};
 pub use registry::Registry;
+pub use value::frame_cache::{CacheStats, FrameCache};
 pub use value::{Channels, Clip, Contour, Contours, FrameSource, Image, Mask, PortType, TypeInfo, Value, ValueType};

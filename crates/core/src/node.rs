@@ -1,11 +1,10 @@
 //! Node descriptions (ports, defaults, ranges, docs) and the trait every node type implements.
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
 use crate::ctx::CookCtx;
 use crate::error::NodeError;
-use crate::value::{Clip, Image, Mask, PortType, Value};
+use crate::value::{PortType, Value};
 
 /// How a node relates to time; decides lifting and caching.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -190,7 +189,8 @@ impl NodeDesc {
     }
 }
 
-/// A node type: a description plus the function that cooks it.
+/// A node type: a description plus the function that cooks it. Node types are declared with
+/// `node!` and an `impl Cook` beside it (see `params`), which implements this trait.
 pub trait Node: Send + Sync {
     /// The static description.
     fn desc(&self) -> &NodeDesc;
@@ -203,33 +203,9 @@ pub trait Node: Send + Sync {
     }
 }
 
-/// The cook function of a [`FnNode`].
-pub type CookFn = fn(&Inputs<'_>, &CookCtx) -> Result<Vec<Value>, NodeError>;
-
-/// A node made of a description and a plain function: the usual way to declare one.
-pub struct FnNode {
-    desc: NodeDesc,
-    cook: CookFn,
-}
-
-impl FnNode {
-    /// Pairs a description with its cook function, ready for [`crate::Registry::add`].
-    #[allow(clippy::new_ret_no_self)]
-    pub fn new(desc: NodeDesc, cook: CookFn) -> Arc<dyn Node> {
-        Arc::new(FnNode { desc, cook })
-    }
-}
-
-impl Node for FnNode {
-    fn desc(&self) -> &NodeDesc {
-        &self.desc
-    }
-    fn cook(&self, inputs: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-        (self.cook)(inputs, ctx)
-    }
-}
-
-/// The input values of one cook, addressed by port name, with typed accessors whose errors name the port.
+/// The input values of one cook, in `desc.inputs` order, with their description. A node reads
+/// them through its declared fields (`Declared::read`, made by `node!`): typed, with errors
+/// that name the port, so no node reads a port by a string name.
 pub struct Inputs<'a> {
     desc: &'a NodeDesc,
     values: &'a [Value],
@@ -241,129 +217,12 @@ impl<'a> Inputs<'a> {
         Inputs { desc, values }
     }
 
-    /// The raw value of port `name` with the port's description (one lookup for both).
-    pub fn get_port(&self, name: &str) -> Result<(&'a Value, &'a PortDesc), NodeError> {
+    /// The raw value of port `name` with the port's description (one lookup for both); the
+    /// typed field readers of `params` build on it.
+    pub(crate) fn get_port(&self, name: &str) -> Result<(&'a Value, &'a PortDesc), NodeError> {
         self.desc
             .input_index(name)
             .and_then(|i| Some((self.values.get(i)?, &self.desc.inputs[i])))
             .ok_or_else(|| NodeError::port(name, "no such input on this node"))
-    }
-
-    /// The raw value of port `name`.
-    pub fn get(&self, name: &str) -> Result<&'a Value, NodeError> {
-        self.get_port(name).map(|(v, _)| v)
-    }
-
-    fn wrong(&self, name: &str, wanted: &str, got: &Value) -> NodeError {
-        NodeError::port(name, format!("needs {wanted}, got {}", got.type_name()))
-    }
-
-    /// A Float (an Int is widened).
-    pub fn float(&self, name: &str) -> Result<f64, NodeError> {
-        match self.get(name)? {
-            Value::Float(v) => Ok(*v),
-            Value::Int(v) => Ok(*v as f64),
-            other => Err(self.wrong(name, "Float", other)),
-        }
-    }
-
-    /// An Int.
-    pub fn int(&self, name: &str) -> Result<i64, NodeError> {
-        match self.get(name)? {
-            Value::Int(v) => Ok(*v),
-            other => Err(self.wrong(name, "Int", other)),
-        }
-    }
-
-    /// A non-negative Int as `usize`.
-    pub fn usize(&self, name: &str) -> Result<usize, NodeError> {
-        let v = self.int(name)?;
-        usize::try_from(v).map_err(|_| NodeError::port(name, format!("must not be negative, got {v}")))
-    }
-
-    /// A Bool.
-    pub fn bool(&self, name: &str) -> Result<bool, NodeError> {
-        match self.get(name)? {
-            Value::Bool(v) => Ok(*v),
-            other => Err(self.wrong(name, "Bool", other)),
-        }
-    }
-
-    /// A Color.
-    pub fn color(&self, name: &str) -> Result<[f32; 4], NodeError> {
-        match self.get(name)? {
-            Value::Color(v) => Ok(*v),
-            other => Err(self.wrong(name, "Color", other)),
-        }
-    }
-
-    /// A String.
-    pub fn string(&self, name: &str) -> Result<&'a str, NodeError> {
-        match self.get(name)? {
-            Value::String(v) => Ok(v),
-            other => Err(self.wrong(name, "String", other)),
-        }
-    }
-
-    /// The chosen option of an Enum.
-    pub fn choice(&self, name: &str) -> Result<&'a str, NodeError> {
-        match self.get(name)? {
-            Value::Enum(v) => Ok(v),
-            other => Err(self.wrong(name, "Enum", other)),
-        }
-    }
-
-    /// A Path (already resolved by the graph loader).
-    pub fn path(&self, name: &str) -> Result<&'a std::path::Path, NodeError> {
-        match self.get(name)? {
-            Value::Path(v) => Ok(v),
-            other => Err(self.wrong(name, "Path", other)),
-        }
-    }
-
-    /// An Image.
-    pub fn image(&self, name: &str) -> Result<&'a Arc<Image>, NodeError> {
-        match self.get(name)? {
-            Value::Image(v) => Ok(v),
-            other => Err(self.wrong(name, "Image", other)),
-        }
-    }
-
-    /// A Mask.
-    pub fn mask(&self, name: &str) -> Result<&'a Arc<Mask>, NodeError> {
-        match self.get(name)? {
-            Value::Mask(v) => Ok(v),
-            other => Err(self.wrong(name, "Mask", other)),
-        }
-    }
-
-    /// Contours.
-    pub fn contours(&self, name: &str) -> Result<&'a Arc<crate::value::Contours>, NodeError> {
-        match self.get(name)? {
-            Value::Contours(v) => Ok(v),
-            other => Err(self.wrong(name, "Contours", other)),
-        }
-    }
-
-    /// A value of a type declared by a node crate.
-    pub fn custom<T: crate::value::ValueType>(&self, name: &str) -> Result<Arc<T>, NodeError> {
-        let v = self.get(name)?;
-        v.downcast::<T>().ok_or_else(|| self.wrong(name, T::INFO.name, v))
-    }
-
-    /// A Vec3.
-    pub fn vec3(&self, name: &str) -> Result<[f64; 3], NodeError> {
-        match self.get(name)? {
-            Value::Vec3(v) => Ok(*v),
-            other => Err(self.wrong(name, "Vec3", other)),
-        }
-    }
-
-    /// A Clip.
-    pub fn clip(&self, name: &str) -> Result<&'a Clip, NodeError> {
-        match self.get(name)? {
-            Value::Clip(v) => Ok(v),
-            other => Err(self.wrong(name, "Clip", other)),
-        }
     }
 }

@@ -5,61 +5,125 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use pyrograph_core::{
-    BuildOptions, CancelToken, Clip, CookCtx, FnNode, Graph, GraphDoc, Inputs, NodeDesc, NodeDoc, NodeError, ParamValue,
-    PathRole, PortDesc, PortType, Progress, Registry, TimeDep, Value,
+    BuildOptions, CancelToken, Clip, ClipOf, Cook, CookCtx, Graph, GraphDoc, InputPath, NodeDoc, NodeError, ParamValue, PortType,
+    Progress, Registry, Value, port,
 };
+
+pyrograph_core::node! {
+    /// Fails when `fail` is set.
+    #[node("test.fail", "Test", PerFrame)]
+    pub struct Fail {
+        /// passed through
+        #[range(-1e9, 1e9)]
+        a: f64 = 0.0,
+        /// whether to fail
+        fail: bool = false,
+    }
+    pub struct FailOut {
+        /// a
+        value: f64,
+    }
+}
+
+impl Cook for Fail {
+    fn cook(self, _: &CookCtx) -> Result<FailOut, NodeError> {
+        if self.fail {
+            return Err(NodeError::port(port!(Fail, fail), "asked to fail"));
+        }
+        Ok(FailOut { value: self.a })
+    }
+}
+
+pyrograph_core::node! {
+    /// A clip of floats 0, 1, 2, …
+    #[node("test.ramp", "Test", Source)]
+    pub struct Ramp {
+        /// length
+        #[range(0, 100_000)]
+        frames: usize = 10,
+    }
+    pub struct RampOut {
+        /// the ramp
+        clip: ClipOf<f64>,
+    }
+}
+
+impl Cook for Ramp {
+    fn cook(self, _: &CookCtx) -> Result<RampOut, NodeError> {
+        let frames = (0..self.frames).map(|f| Value::Float(f as f64)).collect();
+        Ok(RampOut { clip: ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)) })
+    }
+}
+
+pyrograph_core::node! {
+    /// Sums a float clip, pulling frames in parallel.
+    #[node("test.sum", "Test", WholeClip)]
+    pub struct Sum {
+        /// input
+        clip: ClipOf<f64>,
+    }
+    pub struct SumOut {
+        /// sum
+        value: f64,
+    }
+}
+
+impl Cook for Sum {
+    fn cook(self, ctx: &CookCtx) -> Result<SumOut, NodeError> {
+        let frames = self.clip.materialize(ctx)?;
+        let value = frames.iter().map(|v| if let Value::Float(f) = v { *f } else { 0.0 }).sum();
+        Ok(SumOut { value })
+    }
+}
+
+pyrograph_core::node! {
+    /// The size in bytes of the file it reads.
+    #[node("test.file_size", "Test", PerFrame)]
+    pub struct FileSize {
+        /// file to read
+        path: InputPath,
+    }
+    pub struct FileSizeOut {
+        /// its size
+        value: f64,
+    }
+}
+
+impl Cook for FileSize {
+    fn cook(self, _: &CookCtx) -> Result<FileSizeOut, NodeError> {
+        let bytes = std::fs::read(&*self.path).map_err(|e| NodeError::port(port!(FileSize, path), e.to_string()))?;
+        Ok(FileSizeOut { value: bytes.len() as f64 })
+    }
+}
+
+pyrograph_core::node! {
+    /// Sleeps 5 ms, then passes `a` through.
+    #[node("test.slow", "Test", PerFrame)]
+    pub struct Slow {
+        /// passed through
+        #[range(-1e9, 1e9)]
+        a: f64 = 0.0,
+    }
+    pub struct SlowOut {
+        /// a
+        value: f64,
+    }
+}
+
+impl Cook for Slow {
+    fn cook(self, _: &CookCtx) -> Result<SlowOut, NodeError> {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+        Ok(SlowOut { value: self.a })
+    }
+}
 
 fn registry() -> Registry {
     let mut r = Registry::with_builtins();
-    r.add(FnNode::new(
-        NodeDesc::new("test.fail", "Test", TimeDep::PerFrame, "Fails when `fail` is set.")
-            .input(PortDesc::float("a", 0.0, (-1e9, 1e9), "passed through"))
-            .input(PortDesc::bool("fail", false, "whether to fail"))
-            .output("value", PortType::Float, "a"),
-        |i: &Inputs<'_>, _: &CookCtx| {
-            if i.bool("fail")? {
-                return Err(NodeError::port("fail", "asked to fail"));
-            }
-            Ok(vec![Value::Float(i.float("a")?)])
-        },
-    ));
-    r.add(FnNode::new(
-        NodeDesc::new("test.ramp", "Test", TimeDep::Source, "A clip of floats 0, 1, 2, …")
-            .input(PortDesc::int("frames", 10, (0, 100_000), "length"))
-            .output("clip", PortType::clip_of(PortType::Float), "the ramp"),
-        |i: &Inputs<'_>, _: &CookCtx| {
-            let frames = (0..i.usize("frames")?).map(|f| Value::Float(f as f64)).collect();
-            Ok(vec![Value::Clip(Clip::from_frames(PortType::Float, 24.0, frames))])
-        },
-    ));
-    r.add(FnNode::new(
-        NodeDesc::new("test.sum", "Test", TimeDep::WholeClip, "Sums a float clip, pulling frames in parallel.")
-            .input(PortDesc::new("clip", PortType::clip_of(PortType::Float), "input"))
-            .output("value", PortType::Float, "sum"),
-        |i: &Inputs<'_>, ctx: &CookCtx| {
-            let frames = i.clip("clip")?.materialize(ctx)?;
-            let sum = frames.iter().map(|v| if let Value::Float(f) = v { *f } else { 0.0 }).sum();
-            Ok(vec![Value::Float(sum)])
-        },
-    ));
-    r.add(FnNode::new(
-        NodeDesc::new("test.file_size", "Test", TimeDep::PerFrame, "The size in bytes of the file it reads.")
-            .input(PortDesc::path("path", PathRole::Input, None, "file to read"))
-            .output("value", PortType::Float, "its size"),
-        |i: &Inputs<'_>, _: &CookCtx| {
-            let bytes = std::fs::read(i.path("path")?).map_err(|e| NodeError::port("path", e.to_string()))?;
-            Ok(vec![Value::Float(bytes.len() as f64)])
-        },
-    ));
-    r.add(FnNode::new(
-        NodeDesc::new("test.slow", "Test", TimeDep::PerFrame, "Sleeps 5 ms, then passes `a` through.")
-            .input(PortDesc::float("a", 0.0, (-1e9, 1e9), "passed through"))
-            .output("value", PortType::Float, "a"),
-        |i: &Inputs<'_>, _: &CookCtx| {
-            std::thread::sleep(std::time::Duration::from_millis(5));
-            Ok(vec![Value::Float(i.float("a")?)])
-        },
-    ));
+    r.declare::<Fail>();
+    r.declare::<Ramp>();
+    r.declare::<Sum>();
+    r.declare::<FileSize>();
+    r.declare::<Slow>();
     r
 }
 

@@ -3,8 +3,7 @@
 //! at those ports.
 
 use pyrograph_core::{
-    BuildOptions, CookCtx, DiagnosticKind, Evaluator, FnNode, Graph, Inputs, Location, NodeDesc, PortDesc, PortType, Registry,
-    TimeDep, Value,
+    BuildOptions, ClipOf, Cook, CookCtx, DiagnosticKind, Evaluator, Graph, Location, NodeError, Registry, Value,
 };
 
 const PRESET: &str = r#"(
@@ -39,14 +38,28 @@ const NEEDS: &str = r#"(
     nodes: {"len": (type: "test.len")},
 )"#;
 
+pyrograph_core::node! {
+    /// The length of a clip.
+    #[node("test.len", "Test", WholeClip)]
+    pub struct Len {
+        /// input
+        clip: ClipOf<f64>,
+    }
+    pub struct LenOut {
+        /// its length
+        n: i64,
+    }
+}
+
+impl Cook for Len {
+    fn cook(self, _: &CookCtx) -> Result<LenOut, NodeError> {
+        Ok(LenOut { n: self.clip.len() as i64 })
+    }
+}
+
 fn registry() -> Registry {
     let mut r = Registry::with_builtins();
-    r.add(FnNode::new(
-        NodeDesc::new("test.len", "Test", TimeDep::WholeClip, "The length of a clip.")
-            .input(PortDesc::new("clip", PortType::clip_of(PortType::Float), "input"))
-            .output("n", PortType::Int, "its length"),
-        |i: &Inputs<'_>, _: &CookCtx| Ok(vec![Value::Int(i.clip("clip")?.len() as i64)]),
-    ));
+    r.declare::<Len>();
     r
 }
 

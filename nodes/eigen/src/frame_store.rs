@@ -1,4 +1,4 @@
-//! A scratch file of training frames for out-of-core Eigenfires training ([`crate::pca_blocks`]).
+//! A scratch file of training frames for out-of-core Eigenfires training ([`crate::pca::blocks`]).
 //!
 //! The block-wise Gram matrix reads every block of frames `B(B+1)/2 + 2B` times (B blocks). When
 //! the frames come from a video or a chain of nodes, each read decodes or cooks them again: for

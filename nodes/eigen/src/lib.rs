@@ -10,7 +10,6 @@ pub mod database;
 pub mod frame_store;
 pub mod motion;
 pub mod pca;
-pub mod pca_blocks;
 pub mod transition;
 pub mod values;
 pub mod view;

@@ -4,7 +4,8 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use pyrograph_core::{Channels, Image};
-use pyrograph_nodes_imaging::bloom::{BloomParams, Plane, bloom, gaussian_sum};
+use pyrograph_nodes_imaging::bloom::{BloomParams, bloom};
+use pyrograph_nodes_imaging::filters::{Plane, gaussian_sum};
 use std::hint::black_box;
 
 /// A synthetic flame frame: a few soft bright blobs (red body, yellow core) on a dark background.

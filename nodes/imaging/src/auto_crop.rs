@@ -7,7 +7,7 @@ use std::sync::Arc;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Registry, Value, port};
 
-use crate::basic::crop;
+use crate::crop::crop;
 
 /// Adds `imaging.auto_crop`.
 pub fn register(registry: &mut Registry) {

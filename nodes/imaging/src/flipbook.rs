@@ -11,10 +11,10 @@ use pyrograph_core::document::write_atomic;
 use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, Registry, port};
 use rayon::prelude::*;
 
-use crate::basic::resize;
-use crate::bloom::{Plane, convolve_separable, gaussian_kernel};
 use crate::color::AlphaMode;
-use crate::io::{OutputFormat, output_format, write_image};
+use crate::filters::{Plane, convolve_separable, gaussian_kernel};
+use crate::io::{BitDepth, ExrType, IoError, OutputFormat, output_format, write_image_file};
+use crate::resize::resize;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
@@ -451,8 +451,13 @@ impl Cook for WriteFlipbook {
         check_cells(clip.len(), opts.rows, opts.cols)?;
         let ext = base.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
         let path_port = port!(WriteFlipbook, path);
-        let format: OutputFormat = output_format(base, crate::io::BitDepth::Eight, crate::io::ExrType::Half)
-            .map_err(|e| if let NodeError::Port { message, .. } = e { NodeError::port(path_port, message) } else { e })?;
+        // A problem with a file written is one with this node's `path` (or `overwrite`).
+        let file_error = |e: IoError| match e {
+            IoError::Exists(message) => NodeError::port(port!(WriteFlipbook, overwrite), message),
+            IoError::Other(e) => e,
+            e => NodeError::port(path_port, e.to_string()),
+        };
+        let format: OutputFormat = output_format(base, BitDepth::Eight, ExrType::Half).map_err(file_error)?;
         let overwrite = self.overwrite || ctx.settings().overwrite;
         let fb = build_flipbook(&self.inputs.frames(ctx)?, opts)?;
         let sheet_file = sheet_path(base, opts.rows, opts.cols, "", &ext);
@@ -469,9 +474,9 @@ impl Cook for WriteFlipbook {
                 ));
             }
         }
-        write_image(&fb.sheet, &sheet_file, format, overwrite)?;
+        write_image_file(&fb.sheet, &sheet_file, format, overwrite).map_err(file_error)?;
         if let Some(mp) = &motion_path {
-            write_image(&fb.motion, mp, format, overwrite)?;
+            write_image_file(&fb.motion, mp, format, overwrite).map_err(file_error)?;
         }
         let name = |p: &Path| p.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_string();
         let json =

@@ -1,13 +1,17 @@
-//! Combining masks with the blend modes of the HSV mask layers (thesis §3.2, Figure 17), so masks
-//! made by different nodes (a colour range, a dilated flame region) can be joined or cut.
+//! Mask nodes: combining masks with the blend modes of the HSV mask layers (thesis §3.2, Figure
+//! 17), so masks made by different nodes (a colour range, a dilated flame region) can be joined or
+//! cut, and showing a mask as a gray image.
 
 use std::sync::Arc;
 
-use pyrograph_core::{Cook, CookCtx, Mask, NodeError, Registry, port};
+use pyrograph_core::{Cook, CookCtx, Image, Mask, NodeError, Registry, port};
+
+use crate::convert;
 
 /// Adds this module's node types.
 pub fn register(registry: &mut Registry) {
     registry.add(MaskCombine::node());
+    registry.add(MaskToImage::node());
 }
 
 pyrograph_core::choice! {
@@ -69,9 +73,30 @@ impl Cook for MaskCombine {
     }
 }
 
+pyrograph_core::node! {
+    /// Turns a mask into a gray image (0 outside, 1 inside), so masks can be viewed, composited and written.
+    #[node("imaging.mask_to_image", "Imaging", PerFrame)]
+    pub struct MaskToImage {
+        /// The mask.
+        mask: Arc<Mask>,
+    }
+    pub struct MaskToImageOut {
+        /// The gray image.
+        image: Arc<Image>,
+    }
+}
+
+impl Cook for MaskToImage {
+    fn cook(self, _: &CookCtx) -> Result<MaskToImageOut, NodeError> {
+        Ok(MaskToImageOut { image: Arc::new(convert::mask_to_image(&self.mask)) })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::cook_node;
+    use pyrograph_core::{Channels, Value};
 
     fn mask(bits: &[u8]) -> Mask {
         Mask::from_vec(bits.len() as u32, 1, bits.to_vec()).unwrap()
@@ -90,5 +115,12 @@ mod tests {
     #[test]
     fn sizes_must_match() {
         assert!(combine_masks(&mask(&[1]), &mask(&[1, 0]), MaskOp::Add).unwrap_err().contains("differ in size"));
+    }
+
+    #[test]
+    fn mask_to_image_cook_reads_its_port() {
+        let values = [Value::Mask(Arc::new(Mask::from_vec(2, 1, vec![0, 255]).unwrap()))];
+        let out = cook_node::<MaskToImage>(&values).unwrap();
+        assert!(matches!(&out[0], Value::Image(img) if img.data() == [0.0, 1.0] && img.channels() == Channels::Gray));
     }
 }

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
 
-use crate::basic::{GrayMode, to_gray};
 use crate::color::{check_size, check_threshold};
+use crate::gray::{GrayMode, to_gray};
 use crate::preprocess::morphology::gaussian_blur;
 
 /// Adds this module's node types.

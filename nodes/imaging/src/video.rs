@@ -17,9 +17,9 @@ use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value, port};
+use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value};
 
-use crate::io::{DEFAULT_FPS, LoadSequence, fingerprint_files};
+use crate::io::{DEFAULT_FPS, IoError, ReportError, fingerprint_files};
 
 const MISSING_FFMPEG: &str = "install ffmpeg (apt-get install ffmpeg) or convert the video to PNG frames";
 
@@ -36,19 +36,25 @@ pub struct VideoInfo {
     pub height: u32,
     /// Frame rate, when the container states one.
     pub fps: Option<f64>,
-    /// Frame count, when the container states one.
+    /// Frame count: what decodes where it could be measured, else what the container states.
     pub frames: Option<usize>,
+    /// The count the container states, when it differs from what decodes (the header's count is
+    /// an estimate in many real files, e.g. an edit list that hides frames of a trimmed clip).
+    pub stated_frames: Option<usize>,
+    /// Time of the first frame in seconds (the stream's start time, 0 when not stated).
+    pub start: f64,
     /// Whether the stream has a constant frame rate (its average rate equals its base rate), so
     /// frame `i` is at time `i / fps` and can be reached by seeking.
     pub constant_rate: bool,
 }
 
-/// An error about the video, on the loader's `path` port (videos are read by `imaging.load_sequence`).
-fn path_error(message: String) -> NodeError {
-    NodeError::port(port!(LoadSequence, path), message)
+/// An error about the video file (videos are read by `imaging.load_sequence`, which puts these on
+/// its `path` port).
+fn path_error(message: String) -> IoError {
+    IoError::Path(message)
 }
 
-fn run_error(program: &str, path: &Path, e: &std::io::Error) -> NodeError {
+fn run_error(program: &str, path: &Path, e: &std::io::Error) -> IoError {
     if e.kind() == std::io::ErrorKind::NotFound {
         path_error(format!("{}: '{program}' is not on PATH; {MISSING_FFMPEG}", path.display()))
     } else {
@@ -56,7 +62,7 @@ fn run_error(program: &str, path: &Path, e: &std::io::Error) -> NodeError {
     }
 }
 
-fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> Result<String, NodeError> {
+fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> Result<String, IoError> {
     let out = Command::new(ffprobe)
         .args(["-v", "error", "-select_streams", "v:0"])
         .args(extra)
@@ -74,16 +80,79 @@ fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> 
 
 /// Probes size, frame rate and frame count with the `ffprobe` executable named `ffprobe`. When
 /// the container does not state a frame count (Matroska, WebM), the packets are counted: a read
-/// of the file without decoding.
-pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, NodeError> {
-    let text = ffprobe_fields(ffprobe, path, &[], "stream=width,height,avg_frame_rate,r_frame_rate,nb_frames")?;
+/// of the file without decoding. When it does and the rate is constant, the count is checked
+/// against what decodes at the end of the stream ([`decoded_count`]); results are cached per file
+/// (path, size and modification time), so a re-cook does not probe again.
+pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
+    let key = probe_key(path);
+    if let Some(info) = key.as_ref().and_then(|k| probe_cache().lock().ok()?.get(k).cloned()) {
+        return Ok(info);
+    }
+    let entries = "stream=width,height,avg_frame_rate,r_frame_rate,nb_frames,start_time";
+    let text = ffprobe_fields(ffprobe, path, &[], entries)?;
     let mut info = parse_probe(&text).ok_or_else(|| path_error(format!("{}: no video stream found", path.display())))?;
-    if info.frames.is_none() {
-        let text = ffprobe_fields(ffprobe, path, &["-count_packets"], "stream=nb_read_packets")?;
-        let field = text.lines().find_map(|l| l.trim().strip_prefix("nb_read_packets=")?.parse().ok());
-        info.frames = field;
+    match info.frames {
+        None => {
+            let text = ffprobe_fields(ffprobe, path, &["-count_packets"], "stream=nb_read_packets")?;
+            let field = text.lines().find_map(|l| l.trim().strip_prefix("nb_read_packets=")?.parse().ok());
+            info.frames = field;
+        }
+        Some(stated) if info.constant_rate => {
+            if let Some(real) = decoded_count(ffprobe, path, &info, stated).filter(|&n| n != stated && n > 0) {
+                info.frames = Some(real);
+                info.stated_frames = Some(stated);
+            }
+        }
+        Some(_) => {}
+    }
+    if let (Some(k), Ok(mut cache)) = (key, probe_cache().lock()) {
+        cache.insert(k, info.clone());
     }
     Ok(info)
+}
+
+/// What identifies a probed file: its path, size and modification time.
+type ProbeKey = (PathBuf, u64, Option<std::time::SystemTime>);
+
+fn probe_key(path: &Path) -> Option<ProbeKey> {
+    let meta = std::fs::metadata(path).ok()?;
+    Some((std::fs::canonicalize(path).ok()?, meta.len(), meta.modified().ok()))
+}
+
+fn probe_cache() -> &'static Mutex<std::collections::HashMap<ProbeKey, VideoInfo>> {
+    static CACHE: std::sync::OnceLock<Mutex<std::collections::HashMap<ProbeKey, VideoInfo>>> = std::sync::OnceLock::new();
+    CACHE.get_or_init(Default::default)
+}
+
+/// How many frames a constant-rate video really decodes to, measured cheaply: `ffprobe` seeks to
+/// shortly before the last frame the header states (to the keyframe before it) and decodes from
+/// there to the end; the last frame's time gives its index. A read of one group of pictures, not of
+/// the file. `None` when that cannot be measured: nothing decodes there or ffprobe reports an error,
+/// as a file cut short does; the stated count then stands, and decoding stops at the frame where the
+/// file breaks with an error that names it.
+pub fn decoded_count(ffprobe: &str, path: &Path, info: &VideoInfo, stated: usize) -> Option<usize> {
+    let fps = info.fps?;
+    let from = (info.start + (stated as f64 - 1.0) / fps - 1.0).max(info.start);
+    let out = Command::new(ffprobe)
+        .args(["-v", "error", "-select_streams", "v:0", "-read_intervals"])
+        .arg(format!("{from:.6}%"))
+        .args(["-show_entries", "frame=best_effort_timestamp_time", "-of", "csv=p=0"])
+        .arg(path)
+        .stdin(Stdio::null())
+        .output()
+        .ok()?;
+    if !out.status.success() || !out.stderr.trim_ascii().is_empty() {
+        return None;
+    }
+    last_frame_index(&String::from_utf8_lossy(&out.stdout), info.start, fps).map(|last| last + 1)
+}
+
+/// The index of the latest frame time among `ffprobe`'s `csv=p=0` lines (seconds, one a line),
+/// counting frame 0 at `start`.
+fn last_frame_index(text: &str, start: f64, fps: f64) -> Option<usize> {
+    let last = text.lines().filter_map(|l| l.trim().trim_end_matches(',').parse::<f64>().ok()).reduce(f64::max)?;
+    let index = ((last - start) * fps).round();
+    (index.is_finite() && index >= 0.0).then_some(index as usize)
 }
 
 /// Parses `key=value` lines printed by `ffprobe -show_entries stream=...`.
@@ -95,7 +164,8 @@ pub fn parse_probe(text: &str) -> Option<VideoInfo> {
     let base = field("r_frame_rate").and_then(parse_rate);
     let constant_rate = matches!((avg, base), (Some(a), Some(b)) if (a - b).abs() <= 1e-6 * b);
     let frames = field("nb_frames").and_then(|n| n.parse().ok()).filter(|&n| n > 0);
-    Some(VideoInfo { width, height, fps: avg.or(base), frames, constant_rate })
+    let start = field("start_time").and_then(|t| t.parse::<f64>().ok()).filter(|t| t.is_finite()).unwrap_or(0.0);
+    Some(VideoInfo { width, height, fps: avg.or(base), frames, stated_frames: None, start, constant_rate })
 }
 
 /// `30000/1001` or `25` → frames per second; `None` for `0/0` and other non-rates.
@@ -117,7 +187,7 @@ struct Cursor {
 
 impl Cursor {
     /// Starts decoding at frame `start`, seeking to its time when `seek` is given (seconds).
-    fn spawn(ffmpeg: &str, path: &Path, start: usize, seek: Option<f64>) -> Result<Cursor, NodeError> {
+    fn spawn(ffmpeg: &str, path: &Path, start: usize, seek: Option<f64>) -> Result<Cursor, IoError> {
         let mut cmd = Command::new(ffmpeg);
         cmd.args(["-v", "error", "-nostdin", "-noautorotate"]);
         if let Some(t) = seek {
@@ -145,7 +215,7 @@ impl Cursor {
         let Some(stdout) = child.stdout.take() else {
             let _ = child.kill();
             let _ = child.wait();
-            return Err(NodeError::msg("ffmpeg's output pipe is missing"));
+            return Err(NodeError::msg("ffmpeg's output pipe is missing").into());
         };
         Ok(Cursor { child, stdout, stderr, next: start })
     }
@@ -198,13 +268,15 @@ struct VideoFrames {
     fps: f64,
     cursors: Mutex<Vec<Cursor>>,
     max_cursors: usize,
+    /// The loader's way of naming its ports, for errors while decoding after the cook.
+    report: ReportError,
 }
 
 impl VideoFrames {
     /// The cursor to serve `index` from: the nearest one at or before it within [`SKIP_LIMIT`]
     /// frames, else a new one started at `index` (by seeking where the rate allows, else from
     /// the start).
-    fn cursor_for(&self, index: usize) -> Result<Cursor, NodeError> {
+    fn cursor_for(&self, index: usize) -> Result<Cursor, IoError> {
         {
             let mut pool = self.cursors.lock().unwrap_or_else(|p| p.into_inner());
             let best = pool
@@ -242,7 +314,7 @@ impl FrameSource for VideoFrames {
     }
 
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
-        let mut cursor = self.cursor_for(index)?;
+        let mut cursor = self.cursor_for(index).map_err(self.report)?;
         let (w, h) = (self.info.width, self.info.height);
         let mut buf = vec![0u8; w as usize * h as usize * 3];
         while cursor.next <= index {
@@ -287,15 +359,32 @@ pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, Node
     })
 }
 
-/// A video as a clip whose frames decode on demand; `fps` of 0 takes the video's own rate.
-pub fn video_clip(path: &Path, fps: f64, _ctx: &CookCtx) -> Result<Clip, NodeError> {
-    video_clip_with("ffmpeg", "ffprobe", path, fps)
+/// A video as a clip whose frames decode on demand; `fps` of 0 takes the video's own rate. A
+/// container that states more (or fewer) frames than decode gives the frames that decode, with a
+/// warning naming both counts. Errors of frames decoded later (ffmpeg cannot start) reach the
+/// user through `report`, the loader's.
+pub fn video_clip(path: &Path, fps: f64, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
+    video_clip_with("ffmpeg", "ffprobe", path, fps, ctx, report)
 }
 
 /// [`video_clip`] with the executables named.
-pub fn video_clip_with(ffmpeg: &str, ffprobe: &str, path: &Path, fps: f64) -> Result<Clip, NodeError> {
+pub fn video_clip_with(
+    ffmpeg: &str,
+    ffprobe: &str,
+    path: &Path,
+    fps: f64,
+    ctx: &CookCtx,
+    report: ReportError,
+) -> Result<Clip, IoError> {
     let info = probe_video(ffprobe, path)?;
     let len = info.frames.ok_or_else(|| path_error(format!("{}: the video has no frames", path.display())))?;
+    if let Some(stated) = info.stated_frames {
+        ctx.warn(format!(
+            "{}: the video's header states {stated} frames but {len} decode (the count in a header is an \
+             estimate, e.g. where a trimmed clip hides frames); using the {len} that decode",
+            path.display()
+        ));
+    }
     let source_fps = info.fps.unwrap_or(DEFAULT_FPS);
     let fps = if fps > 0.0 { fps } else { source_fps };
     let fingerprint = fingerprint_files(&[path.to_path_buf()])?;
@@ -307,6 +396,7 @@ pub fn video_clip_with(ffmpeg: &str, ffprobe: &str, path: &Path, fps: f64) -> Re
         fps: source_fps,
         cursors: Mutex::new(Vec::new()),
         max_cursors: rayon::current_num_threads() + 1,
+        report,
     };
     Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(source)))
 }
@@ -314,6 +404,7 @@ pub fn video_clip_with(ffmpeg: &str, ffprobe: &str, path: &Path, fps: f64) -> Re
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::LoadSequence;
 
     #[test]
     fn probe_output_parses_size_rate_and_count() {
@@ -364,12 +455,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = make_video(dir.path(), "t.mp4", 90, &[]);
         let ctx = CookCtx::new();
-        let walk = video_clip(&path, 0.0, &ctx).unwrap();
+        let walk = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
         assert_eq!((walk.len(), walk.fps()), (90, 24.0));
         let frames: Vec<Arc<Image>> = (0..90).map(|i| walk.image(i, &ctx).unwrap()).collect();
         assert!(frames.windows(2).all(|w| w[0].data() != w[1].data()), "every frame differs (the counter runs)");
         // A second clip of the same file, asked out of order: every answer seeks or skips.
-        let jump = video_clip(&path, 0.0, &ctx).unwrap();
+        let jump = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
         for i in [75, 3, 50, 89, 20, 21, 60, 0, 12, 11, 88, 47] {
             assert!(jump.image(i, &ctx).unwrap().data() == frames[i].data(), "frame {i} differs after a seek");
         }
@@ -384,7 +475,7 @@ mod tests {
         let bytes = std::fs::read(&path).unwrap();
         std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
         let ctx = CookCtx::new();
-        let clip = video_clip(&path, 0.0, &ctx).unwrap();
+        let clip = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
         assert_eq!(clip.len(), 240);
         let out = dir.path().join("out").join("f_####.png");
         let options = crate::io::WriteOptions {
@@ -402,19 +493,83 @@ mod tests {
     }
 
     #[test]
+    fn the_last_frame_time_gives_the_count() {
+        assert_eq!(last_frame_index("1.166667\n1.625000\n1.583333\n", 0.0, 24.0), Some(39));
+        assert_eq!(last_frame_index("N/A\n2.5,\n", 0.5, 10.0), Some(20));
+        assert_eq!(last_frame_index("", 0.0, 24.0), None);
+        assert_eq!(last_frame_index("N/A\n", 0.0, 24.0), None);
+    }
+
+    /// Every frame of `path` as ffmpeg itself decodes it (packed RGB, 128×96).
+    fn ffmpeg_frames(path: &Path) -> Vec<Vec<u8>> {
+        let out = Command::new("ffmpeg")
+            .args(["-v", "error", "-nostdin", "-i"])
+            .arg(path)
+            .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .output()
+            .expect("ffmpeg runs");
+        assert!(out.status.success());
+        out.stdout.chunks_exact(128 * 96 * 3).map(<[u8]>::to_vec).collect()
+    }
+
+    #[test]
+    #[ignore = "needs ffmpeg: .ci/run installs it and runs the ignored tests"]
+    fn a_header_that_overstates_the_count_loses_only_the_missing_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let full = make_video(dir.path(), "t.mp4", 48, &[]);
+        // A trim by stream copy, as editing tools make: the file keeps all 48 samples (and states
+        // 48 frames) while its edit list hides the first 8, so 40 decode.
+        let path = dir.path().join("trimmed.mp4");
+        let status = Command::new("ffmpeg")
+            .args(["-v", "error", "-nostdin", "-ss", "0.3", "-i"])
+            .arg(&full)
+            .args(["-c", "copy"])
+            .arg(&path)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let stated = parse_probe(&ffprobe_fields("ffprobe", &path, &[], "stream=width,height,nb_frames").unwrap());
+        assert_eq!(stated.and_then(|i| i.frames), Some(48), "the header states 48 frames");
+        let want = ffmpeg_frames(&path);
+        assert_eq!(want.len(), 40, "ffmpeg decodes 40");
+
+        let ctx = CookCtx::new();
+        let clip = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
+        assert_eq!(clip.len(), 40);
+        let warnings = ctx.warnings();
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(warnings[0].message.contains("states 48 frames but 40 decode"), "{}", warnings[0].message);
+        let rgb = |img: &Image| -> Vec<u8> {
+            img.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).map(|v| (v * 255.0).round() as u8).collect()
+        };
+        for (i, frame) in want.iter().enumerate() {
+            assert!(rgb(&clip.image(i, &ctx).unwrap()) == *frame, "frame {i} differs from ffmpeg's decode");
+        }
+        // Asked out of order, each answer seeks: the same frames.
+        let jump = video_clip(&path, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
+        for i in [39, 5, 30, 0, 17, 38] {
+            assert!(rgb(&jump.image(i, &ctx).unwrap()) == want[i], "frame {i} differs after a seek");
+        }
+        // The untouched file keeps its stated count and gives no warning.
+        let ctx = CookCtx::new();
+        assert_eq!(video_clip(&full, 0.0, &ctx, LoadSequence::node_error).unwrap().len(), 48);
+        assert!(ctx.warnings().is_empty());
+    }
+
+    #[test]
     #[ignore = "needs ffmpeg: .ci/run installs it and runs the ignored tests"]
     fn a_cancelled_read_leaves_the_clip_usable() {
         let dir = tempfile::tempdir().unwrap();
         let path = make_video(dir.path(), "t.mp4", 48, &[]);
         let token = pyrograph_core::CancelToken::new();
         let ctx = CookCtx::new().with_cancel(token.clone());
-        let clip = video_clip(&path, 0.0, &ctx).unwrap();
+        let clip = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
         let a = clip.image(10, &ctx).unwrap();
         token.cancel();
         assert!(clip.image(30, &ctx).is_err(), "a cancelled cook stops");
         token.reset();
         assert!(clip.image(10, &ctx).unwrap().data() == a.data());
-        let fresh = video_clip(&path, 0.0, &ctx).unwrap();
+        let fresh = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
         assert!(clip.image(30, &ctx).unwrap().data() == fresh.image(30, &ctx).unwrap().data());
     }
 }

@@ -5,10 +5,11 @@
 //! [`wind::WindSampler`], [`render::flame_lights`]); the node wrappers only read ports.
 #![deny(missing_docs)]
 
-pub mod char;
+pub mod char_marks;
 pub mod embers;
 pub mod fire;
 pub mod flame;
+pub mod lit_mesh;
 pub mod mesh;
 pub mod mesh_roots;
 pub mod render;
@@ -26,7 +27,7 @@ pub fn register(registry: &mut Registry) {
     render::register(registry);
     mesh::register(registry);
     spread::register(registry);
-    char::register(registry);
+    char_marks::register(registry);
     fire::register(registry);
     mesh_roots::register(registry);
     embers::register(registry);

@@ -278,16 +278,40 @@ fn fmt_v(p: Vec3) -> String {
 /// more than two faces and neighbours of opposite winding are errors naming the face; without,
 /// degenerate triangles are dropped and bad edges become boundaries.
 pub fn build_mesh(soup: &PolygonSoup, levels: usize, strict: bool) -> Result<Mesh, String> {
-    let n = soup.positions.len();
     if soup.polygons.is_empty() {
         return Err("the mesh has no faces".into());
     }
     if let Some(p) = soup.positions.iter().find(|p| !p.is_finite()) {
         return Err(format!("a vertex position is not finite: {}", fmt_v(*p)));
     }
+    let mut positions = soup.positions.clone();
+    let (mut tris, mut polys) = fan_triangles(soup, strict)?;
+    subdivide(&mut positions, &mut tris, &mut polys, levels);
+    let normals: Vec<Vec3> = tris
+        .iter()
+        .map(|t| {
+            let (a, b, c) = (positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
+    let (neighbors, rotations) = adjacency(&positions, &tris, &polys, &normals, strict)?;
+    Ok(Mesh {
+        positions: positions.iter().map(|p| p.to_array()).collect(),
+        triangles: tris,
+        normals: normals.iter().map(|n| n.to_array()).collect(),
+        neighbors,
+        edge_rotations: rotations,
+        polygons: polys,
+    })
+}
+
+/// The polygons of `soup` as fans of triangles, with each triangle's polygon index; zero-area
+/// polygons are errors naming the face with `strict`, else dropped (as are zero-area triangles).
+fn fan_triangles(soup: &PolygonSoup, strict: bool) -> Result<(Vec<[u32; 3]>, Vec<u32>), String> {
+    let n = soup.positions.len();
     let (lo, hi) = soup.positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
     let diag2 = (hi - lo).length_squared().max(f32::MIN_POSITIVE);
-    let mut positions = soup.positions.clone();
+    let positions = &soup.positions;
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut polys: Vec<u32> = Vec::new();
     for (k, poly) in soup.polygons.iter().enumerate() {
@@ -324,14 +348,17 @@ pub fn build_mesh(soup: &PolygonSoup, levels: usize, strict: bool) -> Result<Mes
     if tris.is_empty() {
         return Err("the mesh has no faces with a non-zero area".into());
     }
-    subdivide(&mut positions, &mut tris, &mut polys, levels);
-    let normals: Vec<Vec3> = tris
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
-            (b - a).cross(c - a).normalize_or_zero()
-        })
-        .collect();
+    Ok((tris, polys))
+}
+
+/// Per triangle, the neighbour across each edge ([`NO_NEIGHBOR`] on a boundary) and the
+/// rotation (a quaternion) that carries a heading across that edge.
+type Adjacency = (Vec<[u32; 3]>, Vec<[[f32; 4]; 3]>);
+
+/// Face adjacency and the per-edge rotations of Perry §3.3.2 (the rotation carrying a heading
+/// across each edge into the neighbour's plane). Neighbours of opposite winding and edges of more
+/// than two faces are errors with `strict`, else boundaries.
+fn adjacency(positions: &[Vec3], tris: &[[u32; 3]], polys: &[u32], normals: &[Vec3], strict: bool) -> Result<Adjacency, String> {
     let mut directed: HashMap<(u32, u32), (u32, u8)> = HashMap::with_capacity(tris.len() * 3);
     let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(tris.len() * 3);
     let mut bad_edges: Vec<(u32, u32)> = Vec::new();
@@ -389,14 +416,7 @@ pub fn build_mesh(soup: &PolygonSoup, levels: usize, strict: bool) -> Result<Mes
             }
         }
     }
-    Ok(Mesh {
-        positions: positions.iter().map(|p| p.to_array()).collect(),
-        triangles: tris,
-        normals: normals.iter().map(|n| n.to_array()).collect(),
-        neighbors,
-        edge_rotations: rotations,
-        polygons: polys,
-    })
+    Ok((neighbors, rotations))
 }
 
 fn obj_options() -> tobj::LoadOptions {

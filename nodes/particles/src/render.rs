@@ -13,7 +13,7 @@ use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use pyrograph_render::{Particle, Particles};
 use rayon::prelude::*;
 
-use crate::fire::{MeshShading, draw_mesh};
+use crate::lit_mesh::{MeshShading, draw_mesh};
 use crate::swept::{Exposure, SweptScratch, draw_steps, swept_flame, trails};
 use crate::types::Mesh;
 

@@ -15,7 +15,7 @@
 //! frame from the particles; the rasterizer (`pyrograph_render`) draws it.
 
 use glam::{Vec2, Vec3, Vec4};
-use pyrograph_render::{Blend, DrawList, Particle, Vertex, View};
+use pyrograph_render::{Blend, Camera, DrawList, Particle, Vertex, View};
 
 pyrograph_core::choice! {
     /// How `particles.render_flames` draws a flame's trajectory.
@@ -89,57 +89,13 @@ fn exposed(centre: [f32; 4], rim: [f32; 4], exposure: f32, blend: Blend) -> [[f3
 /// point) is drawn as its particles, which is what a long exposure of a still particle is.
 pub fn swept_flame(list: &mut DrawList, path: &[Particle], sides: u32, blend: Blend, scratch: &mut SweptScratch) {
     let n = path.len();
-    let pos = |k: usize| Vec3::from_array(path[k].position);
     if n < 2 || path.iter().any(|q| !Vec3::from_array(q.position).is_finite() || !Vec2::from_array(q.size).is_finite()) {
         draw_steps(list, path, sides, blend);
         return;
     }
     let camera = *list.view().camera();
-    // The path in the billboard plane of each step: tangent, and step lengths.
     let frames = &mut scratch.frames;
-    frames.clear();
-    let mut last_tangent = Vec2::Y;
-    let mut moved = false;
-    for (k, q) in path.iter().enumerate() {
-        let (r, u) = camera.billboard_axes(pos(k));
-        let plane = |d: Vec3| Vec2::new(d.dot(r), d.dot(u));
-        let before = if k > 0 { plane(pos(k) - pos(k - 1)) } else { Vec2::ZERO };
-        let after = if k + 1 < n { plane(pos(k + 1) - pos(k)) } else { Vec2::ZERO };
-        let size = Vec2::from_array(q.size).abs();
-        let scale = size.max_element().max(1e-12);
-        let chord = before + after;
-        let step_moved = chord.length() > 1e-6 * scale;
-        let tangent = if step_moved { chord.normalize() } else { last_tangent };
-        moved |= step_moved;
-        last_tangent = tangent;
-        let normal = Vec2::new(-tangent.y, tangent.x);
-        // The particle's ellipse measured across and along the path.
-        let width = (size * normal).length();
-        let reach = (size * tangent).length();
-        let step = match (k > 0, k + 1 < n) {
-            (true, true) => 0.5 * (before.length() + after.length()),
-            (true, false) => before.length(),
-            _ => after.length(),
-        };
-        // A cone of half-extent `reach` integrates to `reach` along the path; particles every
-        // `step` sum to `reach / step` on average, never more than all of them at once.
-        let mut exposure = if step > 0.0 { (reach / step).min(n as f32) } else { coincident(path, k) as f32 };
-        if k == 0 || k + 1 == n {
-            // At an end of the path only the particles on one side overlap: about half as many,
-            // plus the end particle itself.
-            exposure = (0.5 * (exposure + 1.0)).min(exposure);
-        }
-        let world = |v: Vec2| r * v.x + u * v.y;
-        let [centre, rim] = exposed(q.center, q.edge, exposure, blend).map(Vec4::from_array);
-        frames.push(StepFrame {
-            at: pos(k),
-            centre,
-            rim,
-            across: world(normal) * width,
-            along: world(tangent) * reach,
-            moved: step_moved,
-        });
-    }
+    let moved = step_frames(&camera, path, blend, frames);
     if !moved {
         draw_steps(list, path, sides, blend);
         return;
@@ -207,6 +163,57 @@ pub fn swept_flame(list: &mut DrawList, path: &[Particle], sides: u32, blend: Bl
         tris.push([centre, prev, across * sample + across - 1]);
     }
     list.mesh(verts, tris, None, blend);
+}
+
+/// Fills `frames` with the path in the billboard plane of each step (tangent, across and along
+/// offsets, exposed colours); returns whether the path moves on screen at all.
+fn step_frames(camera: &Camera, path: &[Particle], blend: Blend, frames: &mut Vec<StepFrame>) -> bool {
+    let n = path.len();
+    let pos = |k: usize| Vec3::from_array(path[k].position);
+    frames.clear();
+    let mut last_tangent = Vec2::Y;
+    let mut moved = false;
+    for (k, q) in path.iter().enumerate() {
+        let (r, u) = camera.billboard_axes(pos(k));
+        let plane = |d: Vec3| Vec2::new(d.dot(r), d.dot(u));
+        let before = if k > 0 { plane(pos(k) - pos(k - 1)) } else { Vec2::ZERO };
+        let after = if k + 1 < n { plane(pos(k + 1) - pos(k)) } else { Vec2::ZERO };
+        let size = Vec2::from_array(q.size).abs();
+        let scale = size.max_element().max(1e-12);
+        let chord = before + after;
+        let step_moved = chord.length() > 1e-6 * scale;
+        let tangent = if step_moved { chord.normalize() } else { last_tangent };
+        moved |= step_moved;
+        last_tangent = tangent;
+        let normal = Vec2::new(-tangent.y, tangent.x);
+        // The particle's ellipse measured across and along the path.
+        let width = (size * normal).length();
+        let reach = (size * tangent).length();
+        let step = match (k > 0, k + 1 < n) {
+            (true, true) => 0.5 * (before.length() + after.length()),
+            (true, false) => before.length(),
+            _ => after.length(),
+        };
+        // A cone of half-extent `reach` integrates to `reach` along the path; particles every
+        // `step` sum to `reach / step` on average, never more than all of them at once.
+        let mut exposure = if step > 0.0 { (reach / step).min(n as f32) } else { coincident(path, k) as f32 };
+        if k == 0 || k + 1 == n {
+            // At an end of the path only the particles on one side overlap: about half as many,
+            // plus the end particle itself.
+            exposure = (0.5 * (exposure + 1.0)).min(exposure);
+        }
+        let world = |v: Vec2| r * v.x + u * v.y;
+        let [centre, rim] = exposed(q.center, q.edge, exposure, blend).map(Vec4::from_array);
+        frames.push(StepFrame {
+            at: pos(k),
+            centre,
+            rim,
+            across: world(normal) * width,
+            along: world(tangent) * reach,
+            moved: step_moved,
+        });
+    }
+    moved
 }
 
 /// How finely a flame is drawn, from its size on screen: a far flame a few pixels wide needs

@@ -1,93 +1,24 @@
-//! The AVX2 kernels, and the token that proves they may run.
+//! The AVX2 kernels, each reachable only through a method of the [`Avx2`] token.
 //!
 //! Each kernel is a `#[target_feature(enable = "avx2")]` function: running one on a CPU
-//! without AVX2 is undefined behaviour. They are called only from the methods of [`Avx2`], a
-//! zero-sized token that [`Avx2::detect`] alone creates, after checking the CPU; holding one is
-//! the proof. The rasterizer's safe functions are generic over [`Isa`] and reach a kernel only
-//! through the token `Isa::avx2` gives them, so the AVX2 path cannot be taken without
-//! detection (it used to be chosen by a `const AVX2: bool` parameter, whose soundness rested on
-//! every caller setting it only after checking). No kernel uses FMA: each is bit-identical to
-//! the portable code it replaces.
+//! without AVX2 is undefined behaviour. They are called only from the methods of [`Avx2`],
+//! which only [`Avx2::detect`] creates, after checking the CPU (see the `isa` module). The
+//! kernels compute with the data of the `lanes` and `texture` modules and know nothing of the
+//! portable code that calls them. No kernel uses FMA: each is bit-identical to the portable code
+//! it replaces.
 
-use super::Band;
-use super::draw::DrawList;
-use super::fan::FAN_LANES;
+use super::isa::Avx2;
+use super::lanes::{FAN_LANES, SmallTri, TileShading};
 use super::texture::Texels;
-use super::tiles::{SmallTri, TileShading};
-use super::view::View;
 #[cfg(target_arch = "x86_64")]
 use {
-    super::fan::add_in_range,
-    super::raster_band_generic,
-    super::texture::Footprints,
-    super::tiles::{SMALL_LANES, TileLanes},
+    super::add_in_range,
+    super::lanes::{Footprints, SMALL_LANES, TileLanes},
     glam::Vec4,
 };
 
-/// The instruction set a band is rasterized with: [`Portable`] code, or AVX2 kernels given the
-/// [`Avx2`] proof. A type parameter rather than a run-time flag so that each path is compiled
-/// on its own: the portable one without the kernels, the AVX2 one inlined into a
-/// `#[target_feature(enable = "avx2")]` function (see [`Avx2::raster_band`]), where the
-/// compiler may use AVX2 for the portable code around the kernels too.
-pub(super) trait Isa: Copy {
-    /// The proof that the AVX2 kernels may run, on the AVX2 path.
-    fn avx2(self) -> Option<Avx2>;
-}
-
-/// Portable code only (SSE2 on x86-64).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Portable;
-
-impl Isa for Portable {
-    #[inline(always)]
-    fn avx2(self) -> Option<Avx2> {
-        None
-    }
-}
-
-/// Proof that the CPU running this process supports AVX2: the private field keeps it from
-/// being made anywhere but [`Avx2::detect`], which checks first.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Avx2 {
-    _checked: (),
-}
-
-/// Proof that the CPU supports AVX2, which on this architecture cannot exist: no value, and the
-/// kernels are not compiled.
-#[cfg(not(target_arch = "x86_64"))]
-#[derive(Clone, Copy, Debug)]
-pub(super) enum Avx2 {}
-
-impl Isa for Avx2 {
-    #[inline(always)]
-    fn avx2(self) -> Option<Avx2> {
-        Some(self)
-    }
-}
-
-impl Avx2 {
-    /// The proof, if this CPU supports AVX2 (after the first call, a cached flag is read).
-    #[inline]
-    pub(super) fn detect() -> Option<Avx2> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // The one place a token is made: just after the check.
-            return Some(Avx2 { _checked: () });
-        }
-        None
-    }
-}
-
 #[cfg(target_arch = "x86_64")]
 impl Avx2 {
-    /// Rasterizes band `bi` as `raster_band` does, compiled for AVX2 (see [`Isa`]).
-    #[inline(always)]
-    pub(super) fn raster_band(self, lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
-        // SAFETY: `self` proves that the CPU supports AVX2 (see `Avx2::detect`).
-        unsafe { raster_band_avx2(self, lists, view, bi, band) }
-    }
-
     /// `envelope` (see the `fan` module) with four independent chains of minima.
     #[inline(always)]
     pub(super) fn envelope(self, env: &[[f32; 2]], base: f32) -> [f32; FAN_LANES] {
@@ -133,12 +64,6 @@ impl Avx2 {
 impl Avx2 {
     /// Unreachable: there is no `Avx2` here.
     #[inline(always)]
-    pub(super) fn raster_band(self, _lists: &[DrawList], _view: &View, _bi: usize, _band: &mut Band<'_>) {
-        match self {}
-    }
-
-    /// Unreachable: there is no `Avx2` here.
-    #[inline(always)]
     pub(super) fn envelope(self, _env: &[[f32; 2]], _base: f32) -> [f32; FAN_LANES] {
         match self {}
     }
@@ -166,15 +91,6 @@ impl Avx2 {
     pub(super) unsafe fn straight_pairs(self, _color: &[[f32; 4]], _out: *mut f32) -> usize {
         match self {}
     }
-}
-
-/// `raster_band_generic` compiled for AVX2: the kernels inline, and the portable code around
-/// them may use AVX2 too (the particle envelope runs 8 lanes wide). Results are bit-identical
-/// to the baseline build: no fused multiply-adds, no library calls.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn raster_band_avx2(avx2: Avx2, lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
-    raster_band_generic(avx2, lists, view, bi, band)
 }
 
 /// `envelope` (see the `fan` module) in AVX2 with four running minima merged at the end. Written

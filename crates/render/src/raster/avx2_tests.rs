@@ -3,12 +3,12 @@
 use glam::{Vec2, Vec3};
 use pyrograph_core::{Channels, Image};
 
-use super::avx2::{Avx2, Portable};
-use super::draw::SVert;
 use super::fan::envelope;
+use super::isa::{Avx2, Portable};
+use super::lanes::SMALL_LANES;
 use super::test_support::{lcg, screen_view};
-use super::tiles::{SMALL_LANES, raster_tri};
-use super::{BAND_ROWS, Band, Blend, DrawList, SUB, Vertex, ceil_sub, floor_sub, raster_band_generic, round_i64};
+use super::tiles::raster_tri;
+use super::{BAND_ROWS, Band, Blend, DrawList, SUB, SVert, Vertex, ceil_sub, floor_sub, raster_band_generic, round_i64};
 
 /// AVX2 where the CPU has it. Without it the comparison cannot run and says so — unless
 /// `PYROGRAPH_REQUIRE_AVX2` is set (`.ci/run` sets it when /proc/cpuinfo lists avx2): then a

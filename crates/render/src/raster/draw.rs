@@ -6,23 +6,11 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 use pyrograph_core::{Channels, Image};
 
-use super::avx2::Isa;
-use super::fan::{FanEdge, FanSetup, KeptEdge, MAX_FAN, add_in_range, raster_fan};
+use super::fan::{FanEdge, FanSetup, KeptEdge, MAX_FAN, raster_fan};
+use super::isa::Isa;
 use super::tiles::raster_tri;
 use super::view::{ClipVert, View, clip_polygon, inside_all};
-use super::{BAND_ROWS, Band, Blend, SUB, ScreenVertex, Vertex, blend_vec4, ceil_sub, floor_sub, round_i64};
-
-/// A snapped screen vertex; colour and uv are pre-multiplied by `iw` (1/w) for
-/// perspective-correct interpolation.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct SVert {
-    pub(super) x: i64,
-    pub(super) y: i64,
-    pub(super) z: f32,
-    pub(super) iw: f32,
-    pub(super) c: [f32; 4],
-    pub(super) uv: [f32; 2],
-}
+use super::{BAND_ROWS, Band, Blend, SUB, SVert, ScreenVertex, Vertex, add_in_range, blend_vec4, ceil_sub, floor_sub, round_i64};
 
 /// A primitive of a [`DrawList`], binned into the bands it touches.
 #[derive(Clone, Copy, Debug)]
@@ -41,7 +29,7 @@ pub struct DrawList {
     prims: Vec<Prim>,
     pub(super) fans: Vec<FanSetup>,
     pub(super) fan_edges: Vec<FanEdge>,
-    /// `fan_setup`'s per-edge working list, reused.
+    /// `FanSetup::new`'s per-edge working list, reused.
     pub(super) fan_scratch: Vec<KeptEdge>,
     textures: Vec<Arc<Image>>,
     /// Per pass (0 opaque, 1 blended), per band, the primitives touching it in submission order.
@@ -150,6 +138,19 @@ impl DrawList {
         let col0 = ceil_sub(x0 - SUB / 2).max(0);
         let col1 = floor_sub(x1 - SUB / 2).min(w - 1);
         (row0 <= row1 && col0 <= col1).then_some((row0, row1))
+    }
+
+    /// Prepares the scanline form of the fan whose centre is `vs[0]` and rim the rest of `vs`
+    /// (see [`FanSetup::new`]) and keeps it with its edges; `false` (nothing kept) when it cannot
+    /// take that path.
+    fn fan_setup(&mut self, vs: &[SVert], rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
+        match FanSetup::new(vs, rows, center, edge, &mut self.fan_edges, &mut self.fan_scratch) {
+            Some(fan) => {
+                self.fans.push(fan);
+                true
+            }
+            None => false,
+        }
     }
 
     fn band_range<'v>(&self, verts: impl Iterator<Item = &'v SVert>) -> Option<(usize, usize)> {

@@ -1,11 +1,11 @@
 //! Fuzzy particles (Perry 1994 §3.2.1) on the scanline path: the fan's set-up when it is drawn,
 //! and its rasterization row by row as the lower envelope of its rim edges.
 
-use glam::{BVec4A, Vec4, Vec4Swizzles};
+use glam::Vec4;
 
-use super::avx2::Isa;
-use super::draw::{DrawList, SVert};
-use super::{Band, SUB, edge_fn};
+use super::isa::Isa;
+use super::lanes::FAN_LANES;
+use super::{Band, SUB, SVert, edge_fn};
 
 /// Most rim vertices a particle may have and still take the scanline fast path (its per-pixel
 /// cost grows with the side count; Perry's particles have 3–20 sides).
@@ -55,22 +55,30 @@ pub(super) struct FanSetup {
     z: [f32; 3],
 }
 
-impl DrawList {
-    /// Prepares the scanline form of the fan whose centre is `vs[0]` and rim the rest of `vs`;
-    /// `false` (nothing pushed) when it cannot take that path: degenerate, not convex around its
-    /// centre, beyond the far plane or too many sides.
-    pub(super) fn fan_setup(&mut self, vs: &[SVert], rows: (i64, i64), center: [f32; 4], edge: [f32; 4]) -> bool {
+impl FanSetup {
+    /// The scanline form of the fan whose centre is `vs[0]` and rim the rest of `vs`, its edges
+    /// pushed to `fan_edges` (`scratch` is a working list, reused); `None` (nothing pushed) when
+    /// it cannot take that path: degenerate, not convex around its centre, beyond the far plane
+    /// or too many sides.
+    pub(super) fn new(
+        vs: &[SVert],
+        rows: (i64, i64),
+        center: [f32; 4],
+        edge: [f32; 4],
+        fan_edges: &mut Vec<FanEdge>,
+        scratch: &mut Vec<KeptEdge>,
+    ) -> Option<FanSetup> {
         let n = vs.len() - 1;
         if !(3..=MAX_FAN).contains(&n) {
-            return false;
+            return None;
         }
         let (c, rim) = (&vs[0], &vs[1..]);
         if vs.iter().any(|v| !(0.0..=1.0).contains(&v.z)) {
-            return false;
+            return None;
         }
         // Each kept edge with the halves its fan triangle reaches (bit 0: rows at or above the
         // centre, bit 1: at or below) and its side (0 left-facing, 1 right-facing, 2 horizontal).
-        let mut kept = std::mem::take(&mut self.fan_scratch);
+        let mut kept = std::mem::take(scratch);
         kept.clear();
         let mut sign = 0i64;
         for k in 0..n {
@@ -81,8 +89,8 @@ impl DrawList {
             }
             let ec = edge_fn(p, q, c.x, c.y);
             if ec == 0 || (sign != 0 && ec.signum() != sign) {
-                self.fan_scratch = kept;
-                return false;
+                *scratch = kept;
+                return None;
             }
             sign = ec.signum();
             let (exf, eyf, ecf, sub) = (ex as f64, ey as f64, ec as f64, SUB as f64);
@@ -107,27 +115,27 @@ impl DrawList {
             kept.push((edge, halves, side, (ymin, ymax)));
         }
         if kept.len() < 3 {
-            self.fan_scratch = kept;
-            return false;
+            *scratch = kept;
+            return None;
         }
-        let first = self.fan_edges.len();
+        let first = fan_edges.len();
         let mut counts = [[0u8; 3]; 2];
         for (half, count) in counts.iter_mut().enumerate() {
             for (side, count) in count.iter_mut().enumerate() {
-                let group = self.fan_edges.len();
+                let group = fan_edges.len();
                 for (e, halves, s, (ymin, ymax)) in &kept {
                     if halves & (1 << half) != 0 && usize::from(*s) == side {
                         let mut e = *e;
                         e[4] = if half == 0 { *ymin } else { -*ymax };
-                        self.fan_edges.push(e);
+                        fan_edges.push(e);
                         *count += 1;
                     }
                 }
                 // Nearest reach first, so a row's edges are a prefix of the group.
-                self.fan_edges[group..].sort_unstable_by(|a, b| a[4].total_cmp(&b[4]));
+                fan_edges[group..].sort_unstable_by(|a, b| a[4].total_cmp(&b[4]));
             }
         }
-        self.fan_scratch = kept;
+        *scratch = kept;
         // Depth plane through the centre and the two rim vertices spanning the largest area
         // (found with exact fixed-point cross products).
         let (x0, y0) = (rim[0].x - c.x, rim[0].y - c.y);
@@ -142,7 +150,7 @@ impl DrawList {
         };
         let delta = std::array::from_fn(|i| center[i] - edge[i]);
         let in_range = [center, edge].iter().all(|c| (0.0..=1.0).contains(&c[3]) && c[..3].iter().all(|&v| v >= 0.0));
-        self.fans.push(FanSetup {
+        Some(FanSetup {
             cx: c.x as f32 / SUB as f32,
             cy: c.y as f32 / SUB as f32,
             rows: (rows.0 as i32, rows.1 as i32),
@@ -152,8 +160,7 @@ impl DrawList {
             edge,
             delta,
             z: [c.z, gx as f32, gy as f32],
-        });
-        true
+        })
     }
 }
 
@@ -232,10 +239,6 @@ fn ceil_i32(x: f32) -> i32 {
     i + i32::from((i as f32) < x)
 }
 
-/// Pixels per block of [`fill_fan_span`]: the lower envelope is evaluated for a block at a time
-/// so the loop over edges vectorizes.
-pub(super) const FAN_LANES: usize = 8;
-
 /// Blends one row span of a particle starting `xd0` pixels right of its centre: per pixel,
 /// `L = min_k (offset_k + slope_k·xd)` over every rim edge, branch-free in blocks of
 /// [`FAN_LANES`]. Walking the envelope sector by sector needs fewer multiplies but a
@@ -297,13 +300,4 @@ pub(super) fn envelope<I: Isa>(isa: I, env: &[[f32; 2]], base: f32) -> [f32; FAN
 #[inline(always)]
 fn lane_min(v: f32, m: f32) -> f32 {
     if v < m { v } else { m }
-}
-
-/// Additive blending of a straight-alpha source already known to have alpha in [0, 1] and colour ≥
-/// 0 (see `FanSetup::in_range`): [`blend_pixel`](super::blend_pixel)'s `Additive` without its
-/// clamps, four lanes at once.
-#[inline(always)]
-pub(super) fn add_in_range(dst: &mut [f32; 4], src: Vec4) {
-    let weight = Vec4::select(BVec4A::new(true, true, true, false), src.wwww(), Vec4::ONE);
-    *dst = (Vec4::from_array(*dst) + src * weight).min(Vec4::ONE).to_array();
 }

@@ -7,7 +7,7 @@ use pyrograph_core::{Channels, Image};
 use rayon::prelude::*;
 
 use super::BAND_ROWS;
-use super::avx2::Avx2;
+use super::isa::Avx2;
 
 /// A rendered frame: premultiplied RGBA and depth.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,13 +7,16 @@
 //! triangles that share an edge (the fan of a fuzzy particle) never touch a pixel twice.
 //! Opaque primitives are drawn first (depth test and write), blended ones after (depth test only).
 //!
-//! The files split it by topic: `view` (camera, viewport, clipping), `draw` (draw lists), `fan`
-//! (particles on the scanline path), `tiles` (triangles, small ones in vector tiles), `texture`
-//! (bilinear sampling), `framebuffer` (the frame and its straight alpha) and `avx2` (the AVX2
-//! kernels, reachable only through the `Avx2` proof that the CPU has AVX2). This file holds the
-//! shared types and the band-parallel driver.
+//! The files split it by topic, in layers, each importing only from those before it: `view`
+//! (camera, viewport, clipping), `isa` (the instruction set a band is drawn with, and the `Avx2`
+//! proof that the CPU has AVX2), `lanes` (the lane counts and per-lane data the portable code
+//! and the kernels share), `texture` (bilinear sampling), `avx2` (the AVX2 kernels, reachable
+//! only through that proof), `fan` (particles on the scanline path), `tiles` (triangles, small
+//! ones in vector tiles), `framebuffer` (the frame and its straight alpha) and `draw` (draw
+//! lists). This file holds the types and helpers they all share (snapped vertices, bands, edge
+//! functions, blending) and the band-parallel driver on top.
 
-use glam::{BVec4A, Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4, Vec4Swizzles};
 use pyrograph_core::{Channels, Image};
 use rayon::prelude::*;
 
@@ -21,6 +24,8 @@ mod avx2;
 mod draw;
 mod fan;
 mod framebuffer;
+mod isa;
+mod lanes;
 mod texture;
 mod tiles;
 mod view;
@@ -36,11 +41,10 @@ mod framebuffer_tests;
 #[cfg(test)]
 mod test_support;
 
-use avx2::{Avx2, Isa, Portable};
-use draw::SVert;
 pub use draw::{DrawList, TextureId};
 pub use framebuffer::Framebuffer;
 use framebuffer::write_straight_uninit;
+use isa::{Avx2, Isa, Portable};
 pub use texture::sample_bilinear;
 pub use view::View;
 
@@ -113,6 +117,18 @@ fn ceil_sub(a: i64) -> i64 {
 
 const _: () = assert!(SUB == 1 << 8, "floor_sub and ceil_sub shift by log2(SUB)");
 
+/// A snapped screen vertex; colour and uv are pre-multiplied by `iw` (1/w) for
+/// perspective-correct interpolation.
+#[derive(Clone, Copy, Debug)]
+struct SVert {
+    x: i64,
+    y: i64,
+    z: f32,
+    iw: f32,
+    c: [f32; 4],
+    uv: [f32; 2],
+}
+
 /// Rows `y0..y1` of the framebuffer.
 struct Band<'a> {
     color: &'a mut [[f32; 4]],
@@ -159,6 +175,15 @@ fn blend_vec4(dst: &mut [f32; 4], src: Vec4, blend: Blend) {
     .to_array();
 }
 
+/// Additive blending of a straight-alpha source already known to have alpha in [0, 1] and colour
+/// ≥ 0 (see `FanSetup::in_range`): [`blend_pixel`]'s `Additive` without its clamps, four lanes
+/// at once.
+#[inline(always)]
+fn add_in_range(dst: &mut [f32; 4], src: Vec4) {
+    let weight = Vec4::select(BVec4A::new(true, true, true, false), src.wwww(), Vec4::ONE);
+    *dst = (Vec4::from_array(*dst) + src * weight).min(Vec4::ONE).to_array();
+}
+
 /// Rasterizes every list's primitives that touch band `bi` into `band`: opaque ones first
 /// (depth test and write), then blended ones (depth test only where something opaque was drawn).
 fn raster_band(lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
@@ -180,6 +205,34 @@ fn raster_band_generic<I: Isa>(isa: I, lists: &[DrawList], view: &View, bi: usiz
             }
         }
     }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// Rasterizes band `bi` as `raster_band` does, compiled for AVX2 (see [`Isa`]).
+    #[inline(always)]
+    fn raster_band(self, lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+        // SAFETY: `self` proves that the CPU supports AVX2 (see `Avx2::detect`).
+        unsafe { raster_band_avx2(self, lists, view, bi, band) }
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl Avx2 {
+    /// Unreachable: there is no `Avx2` here.
+    #[inline(always)]
+    fn raster_band(self, _lists: &[DrawList], _view: &View, _bi: usize, _band: &mut Band<'_>) {
+        match self {}
+    }
+}
+
+/// `raster_band_generic` compiled for AVX2: the kernels inline, and the portable code around
+/// them may use AVX2 too (the particle envelope runs 8 lanes wide). Results are bit-identical
+/// to the baseline build: no fused multiply-adds, no library calls.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn raster_band_avx2(avx2: Avx2, lists: &[DrawList], view: &View, bi: usize, band: &mut Band<'_>) {
+    raster_band_generic(avx2, lists, view, bi, band)
 }
 
 /// Whether `list` was built for a view of `view`'s size (others are skipped).

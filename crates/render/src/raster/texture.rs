@@ -3,7 +3,7 @@
 use glam::Vec4;
 use pyrograph_core::{Channels, Image};
 
-use super::tiles::SMALL_LANES;
+use super::lanes::{Footprints, SMALL_LANES};
 
 /// An RGBA texture's samples, checked once per triangle instead of once per pixel.
 pub(super) struct Texels<'a> {
@@ -90,13 +90,4 @@ pub(super) fn lane_floor(fx: f32) -> i32 {
     let f = if f < LIMIT { f } else { LIMIT };
     // SAFETY: `f` is finite and within `[0, 2^30]`, so it truncates to an `i32` exactly.
     unsafe { f.to_int_unchecked::<i32>() }
-}
-
-/// Where the bilinear samples of [`SMALL_LANES`] pixels read ([`Texels::footprints`]): the
-/// top-left texel of each and the weights of the texels right of and below it.
-pub(super) struct Footprints {
-    pub(super) x: [i32; SMALL_LANES],
-    pub(super) y: [i32; SMALL_LANES],
-    pub(super) tx: [f32; SMALL_LANES],
-    pub(super) ty: [f32; SMALL_LANES],
 }

@@ -4,10 +4,10 @@
 use glam::Vec4;
 use pyrograph_core::Image;
 
-use super::avx2::Isa;
-use super::draw::SVert;
-use super::texture::{Footprints, Texels};
-use super::{Band, Blend, SUB, blend_vec4, ceil_sub, edge_fn, floor_sub, is_top_left};
+use super::isa::Isa;
+use super::lanes::{SMALL_LANES, SmallTri, TileLanes, TileShading};
+use super::texture::Texels;
+use super::{Band, Blend, SUB, SVert, blend_vec4, ceil_sub, edge_fn, floor_sub, is_top_left};
 
 /// Rasterizes triangle `abc` (either orientation; colour and uv pre-multiplied by `iw`) into
 /// `band` with the instruction set `isa`: a triangle of at most [`SMALL_LANES`] pixels across
@@ -133,10 +133,6 @@ pub(super) fn raster_tri<const SMALL: bool, I: Isa>(
     }
 }
 
-/// Lanes of [`small_tri_tile`]: triangles whose bounding box is at most this many pixels wide
-/// are rasterized a tile of rows at a time in vector lanes.
-pub(super) const SMALL_LANES: usize = 8;
-
 /// Whether a triangle's edge functions, evaluated anywhere within its bounding box widened by
 /// [`SMALL_LANES`] pixels (and one row), fit an `i32`: both sides of its box below 64 pixels
 /// bound them by `2 · (64·SUB) · (73·SUB) < 2^31`, and their steps per row by `64·SUB²`.
@@ -146,24 +142,6 @@ pub(super) const SMALL_LANES: usize = 8;
 fn small_extent(a: &SVert, b: &SVert, c: &SVert) -> bool {
     let span = |p: i64, q: i64, r: i64| p.max(q).max(r) - p.min(q).min(r);
     span(a.x, b.x, c.x) < 64 * SUB && span(a.y, b.y, c.y) < 64 * SUB
-}
-
-/// A triangle set up for [`small_tri_tile`]: the edge functions at the first pixel of its box
-/// (top-left bias folded in) and their x and y steps, in `i32` (see [`small_extent`]), and its
-/// vertices' attributes (colour and uv pre-multiplied by `iw`).
-pub(super) struct SmallTri {
-    pub(super) x0: usize,
-    /// Pixels of the box right of `x0` (`< SMALL_LANES`).
-    pub(super) span: usize,
-    pub(super) row: [i32; 3],
-    pub(super) dx: [i32; 3],
-    pub(super) dy: [i32; 3],
-    pub(super) inv_area: f32,
-    pub(super) z: [f32; 3],
-    pub(super) iw: [f32; 3],
-    pub(super) u: [f32; 3],
-    pub(super) v: [f32; 3],
-    pub(super) colors: [Vec4; 3],
 }
 
 /// How a covered pixel is shaded and blended.
@@ -239,16 +217,6 @@ fn small_tri_tile<const W: usize, I: Isa>(
     }
 }
 
-/// What [`small_tri_tile`] needs per lane before shading: the covered lanes (bit `i` for lane
-/// `i`), the barycentric weights, depth, `1/w` and, for a textured triangle, the texel footprints.
-pub(super) struct TileShading {
-    pub(super) mask: u32,
-    pub(super) l: [[f32; SMALL_LANES]; 3],
-    pub(super) z: [f32; SMALL_LANES],
-    pub(super) inv: [f32; SMALL_LANES],
-    pub(super) foot: Option<Footprints>,
-}
-
 /// The lanes of a tile of [`small_tri_tile`] whose top-left pixel has edge functions `w`;
 /// `None` when it covers no pixel.
 #[inline(always)]
@@ -284,42 +252,4 @@ fn tile_lanes<const W: usize>(t: &SmallTri, w: [i32; 3], rows_left: usize, tex: 
         tx.footprints(&u, &v)
     });
     Some(TileShading { mask, l: [l0, l1, l2], z, inv, foot })
-}
-
-/// The pixel of each lane of a tile `W` pixels wide: its column and row in the tile.
-pub(super) struct TileLanes<const W: usize>;
-
-impl<const W: usize> TileLanes<W> {
-    pub(super) const COL: [i32; SMALL_LANES] = Self::lanes(true);
-    pub(super) const ROW: [i32; SMALL_LANES] = Self::lanes(false);
-
-    const fn lanes(col: bool) -> [i32; SMALL_LANES] {
-        let mut a = [0; SMALL_LANES];
-        let mut i = 0;
-        while i < SMALL_LANES {
-            a[i] = if col { i % W } else { i / W } as i32;
-            i += 1;
-        }
-        a
-    }
-
-    /// The lanes of the columns `0..=span` (`span < W`) of the rows `0..=rows_left` of the tile.
-    #[inline(always)]
-    pub(super) fn inside(span: usize, rows_left: usize) -> u32 {
-        // One row's columns, repeated in every row of the tile.
-        let (one_row, every_row) = ((2u32 << span) - 1, Self::every_row());
-        let rows = (rows_left + 1).min(SMALL_LANES / W);
-        (one_row * every_row) & (u32::MAX >> (32 - rows * W))
-    }
-
-    /// Bit 0 of every row of the tile.
-    const fn every_row() -> u32 {
-        let mut m = 0;
-        let mut r = 0;
-        while r < SMALL_LANES / W {
-            m |= 1 << (r * W);
-            r += 1;
-        }
-        m
-    }
 }

@@ -1,21 +1,21 @@
 //! Mass-spring flames (mass-spring flame project 2019 §Integration, §Internal Forces,
 //! §External Forces; shear and bend springs after Provot 1995): the grid topology and the
 //! per-flame state in structure-of-arrays form with the semi-implicit Euler stepper ([`model`]),
-//! the parameters and their checks, the stability limit included ([`params`]), the whole
-//! simulation ([`simulation`]), the stepping cache behind the clip ([`cache`]) and the
+//! the parameters and their checks ([`cloth_params`]), the whole simulation with its check of the
+//! stability limit ([`simulation`]), the stepping cache behind the clip ([`cache`]) and the
 //! `cloth.mass_spring_flame` node ([`node`]).
 
 pub mod cache;
+pub mod cloth_params;
 pub mod model;
 pub mod node;
-pub mod params;
 pub mod simulation;
 
 pub use cache::{CHECKPOINT_BUDGET, CHECKPOINT_EVERY, ClothSource, SNAPSHOT_BUDGET};
+pub use cloth_params::{ClothParams, validate};
 pub use model::{FlameState, Topology, unit_random, wind_active};
 pub use node::MassSpringFlame;
-pub use params::{ClothParams, check_step, validate};
-pub use simulation::{Simulation, grid_roots};
+pub use simulation::{Simulation, check_step, grid_roots};
 
 use pyrograph_core::Registry;
 use pyrograph_core::params::Cook;

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::params::ClothParams;
+use super::cloth_params::ClothParams;
 use crate::stencil::{self, GridStencil};
 
 /// A deterministic uniform number in 0..1 from `(seed, flame, salt)` (SplitMix64).

@@ -10,7 +10,7 @@ use pyrograph_core::params::Cook;
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::ClothSource;
-use super::params::{ClothParams, validate};
+use super::cloth_params::{ClothParams, validate};
 use super::simulation::{Simulation, grid_roots};
 use crate::state::ClothState;
 use pyrograph_render::Particles;

@@ -1,4 +1,5 @@
-//! A whole simulation: every flame's state stepped frame by frame.
+//! A whole simulation: every flame's state stepped frame by frame, and the check of its sub-step
+//! against the stability limit of its topology.
 
 use std::sync::Arc;
 
@@ -6,8 +7,8 @@ use glam::Vec3;
 use pyrograph_core::{NodeError, port};
 use rayon::prelude::*;
 
+use super::cloth_params::{ClothParams, validate};
 use super::model::{FlameState, Topology, mix, unit_random, wind_active};
-use super::params::{ClothParams, check_step, validate};
 use crate::state::ClothState;
 
 /// A whole simulation: shared topology, every flame's state and the frame it has reached.
@@ -121,6 +122,24 @@ impl Simulation {
     pub(super) fn bytes(&self) -> usize {
         self.flames.len() * self.topo.masses() * 24 + 64
     }
+}
+
+/// Checks `p.dt` against the stability limit of [`Topology::stable_step`].
+pub fn check_step(topo: &Topology, p: &ClothParams) -> Result<(), NodeError> {
+    let limit = topo.stable_step(p.mass, p.drag);
+    if p.dt.is_nan() || p.dt >= limit {
+        return Err(NodeError::port(
+            port!(ClothParams, dt),
+            format!(
+                "a sub-step of {} s would blow up: semi-implicit Euler is stable only below {limit:.6} s for mass {} \
+                 and springs up to k = {} (≈ 2·√(m/k_eff)); lower dt, raise mass or lower the stiffness",
+                p.dt,
+                p.mass,
+                p.stiffness.max(p.shear_stiffness).max(p.bend_stiffness)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Mass-steps (flames × masses × sub-steps) below which a call steps its flames on one thread:

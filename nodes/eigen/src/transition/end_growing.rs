@@ -195,6 +195,56 @@ pub fn end_growing_adaptive(
     excluded: &[bool],
     optimize: bool,
 ) -> Result<EndGrowing, String> {
+    check_inputs(db, (alpha, beta), e, theta, excluded)?;
+    let m = db.frames;
+    let mut rows = DistanceRows { db, e, rows: HashMap::new() };
+    let a_path = vec![alpha];
+    let b_path = vec![beta];
+    let optimized = |mut r: EndGrowing| {
+        if optimize {
+            r.path = optimize_path(db, alpha, beta, r.path, e);
+        }
+        r
+    };
+    if let Some(r) = join(&rows, theta, (alpha, beta), &a_path, &b_path, 0) {
+        return Ok(optimized(r));
+    }
+    let mut on_a = vec![false; m];
+    let mut on_b = vec![false; m];
+    on_a[alpha] = true;
+    on_b[beta] = true;
+    let mut paths = Paths { a: a_path, b: b_path, on_a, on_b };
+    let steps = max_steps.div_ceil(2);
+    for step in 1..=steps {
+        let (ca, cb) = (*paths.a.last().unwrap_or(&alpha), *paths.b.last().unwrap_or(&beta));
+        rows.ensure(ca, cb);
+        let big_d = rows.d(ca, cb);
+        if !grow_step(&rows, theta, excluded, (alpha, beta), (ca, cb), big_d, &mut paths) {
+            let t = theta.between(ca, cb);
+            return Err(format!(
+                "step {step}: no pair of frames brings the two ends (frames {ca} and {cb}, {big_d:.4} apart) closer by \
+                 theta_min = {t}; lower theta_min or use Direct Bridging"
+            ));
+        }
+        if let Some(r) = join(&rows, theta, (alpha, beta), &paths.a, &paths.b, step) {
+            return Ok(optimized(r));
+        }
+    }
+    Err(format!(
+        "the two ends did not meet within {max_steps} steps (still {:.4} apart); allow more steps, lower theta_min \
+         or use Direct Bridging / the low-pass filter",
+        rows.d(*paths.a.last().unwrap_or(&alpha), *paths.b.last().unwrap_or(&beta))
+    ))
+}
+
+/// Checks the arguments of [`end_growing_adaptive`] against the database.
+fn check_inputs(
+    db: &Weights,
+    (alpha, beta): (usize, usize),
+    e: usize,
+    theta: &ThetaMin,
+    excluded: &[bool],
+) -> Result<(), String> {
     let m = db.frames;
     if alpha >= m || beta >= m {
         return Err(format!("α = {alpha} or β = {beta} is past the database's {m} frames"));
@@ -213,115 +263,117 @@ pub fn end_growing_adaptive(
     {
         return Err(format!("{} per-frame thresholds for {m} frames", t.len()));
     }
-    let mut rows = DistanceRows { db, e, rows: HashMap::new() };
-    let mut a_path = vec![alpha];
-    let mut b_path = vec![beta];
-    let finish = |rows: &DistanceRows<'_>, a_path: &[usize], b_path: &[usize], steps: usize| -> Option<EndGrowing> {
-        // Shortest join over all pairs (p, q), p + q minimal.
-        let mut best: Option<(usize, usize, bool)> = None;
-        for (p, &x) in a_path.iter().enumerate() {
-            for (q, &y) in b_path.iter().enumerate() {
-                let shared = x == y;
-                if !(shared || rows.d(x, y) < theta.between(x, y)) {
-                    continue;
-                }
-                if best.is_none_or(|(bp, bq, _)| p + q < bp + bq) {
-                    best = Some((p, q, shared));
-                }
+    Ok(())
+}
+
+/// The two paths of Algorithm 1, grown from α and β, and which frames each holds.
+struct Paths {
+    /// The α path, α first.
+    a: Vec<usize>,
+    /// The β path, β first.
+    b: Vec<usize>,
+    /// Frames on the α path.
+    on_a: Vec<bool>,
+    /// Frames on the β path.
+    on_b: Vec<bool>,
+}
+
+/// The shortest join of the two paths after `steps` steps, if they meet: over all pairs (p, q),
+/// p + q minimal, of a shared image or a pair closer than θ_min; elements grown beyond the join
+/// are dropped.
+fn join(
+    rows: &DistanceRows<'_>,
+    theta: &ThetaMin,
+    (alpha, beta): (usize, usize),
+    a_path: &[usize],
+    b_path: &[usize],
+    steps: usize,
+) -> Option<EndGrowing> {
+    // Shortest join over all pairs (p, q), p + q minimal.
+    let mut best: Option<(usize, usize, bool)> = None;
+    for (p, &x) in a_path.iter().enumerate() {
+        for (q, &y) in b_path.iter().enumerate() {
+            let shared = x == y;
+            if !(shared || rows.d(x, y) < theta.between(x, y)) {
+                continue;
+            }
+            if best.is_none_or(|(bp, bq, _)| p + q < bp + bq) {
+                best = Some((p, q, shared));
             }
         }
-        let (p, q, shared) = best?;
-        let mut path: Vec<usize> = a_path[1..=p].to_vec();
-        let tail = if shared { &b_path[1..q] } else { &b_path[1..=q] };
-        path.extend(tail.iter().rev());
-        path.retain(|&f| f != alpha && f != beta);
-        Some(EndGrowing { path, shared: shared.then_some(a_path[p]), steps })
-    };
-    let optimized = |mut r: EndGrowing| {
-        if optimize {
-            r.path = optimize_path(db, alpha, beta, r.path, e);
-        }
-        r
-    };
-    if let Some(r) = finish(&rows, &a_path, &b_path, 0) {
-        return Ok(optimized(r));
     }
-    let mut on_a = vec![false; m];
-    let mut on_b = vec![false; m];
-    on_a[alpha] = true;
-    on_b[beta] = true;
-    let steps = max_steps.div_ceil(2);
-    for step in 1..=steps {
-        let (ca, cb) = (*a_path.last().unwrap_or(&alpha), *b_path.last().unwrap_or(&beta));
-        rows.ensure(ca, cb);
-        let big_d = rows.d(ca, cb);
-        // Candidates of one side: θ_min ≤ hop < gap (the path is built of "short distances less
-        // than the difference between α and β, and larger than θ_min"), not excluded, not on the
-        // own path.
-        let candidates = |from: usize, own: &[bool]| {
-            let ds = rows.row(from);
-            Nearest::new(ds, |i| {
-                ds[i] >= theta.between(from, i) && ds[i] < big_d && !excluded[i] && !own[i] && i != alpha && i != beta
-            })
-        };
-        let mut la = candidates(ca, &on_a);
-        let mut lb = candidates(cb, &on_b);
-        let (mut j, mut k) = (0, 0);
-        let mut found = false;
-        while !found {
-            let (Some(aj), Some(bk)) = (la.get(j), lb.get(k)) else { break };
-            // Line 7: a candidate that is already on the other side's path is a shared image.
-            if on_b[aj] {
-                a_path.push(aj);
-                on_a[aj] = true;
-                found = true;
-                continue;
-            }
-            if on_a[bk] {
-                b_path.push(bk);
-                on_b[bk] = true;
-                found = true;
-                continue;
-            }
-            let d12 = rows.d(aj, bk);
-            if big_d - d12 < theta.between(aj, bk) {
-                let short_to_alpha = rows.d(ca, bk) - big_d <= theta.between(ca, bk);
-                let short_to_beta = rows.d(cb, aj) - big_d <= theta.between(cb, aj);
-                if short_to_alpha && short_to_beta {
-                    j += 1;
-                    k += 1;
-                } else {
-                    if !short_to_alpha {
-                        k += 1;
-                    }
-                    if !short_to_beta {
-                        j += 1;
-                    }
-                }
+    let (p, q, shared) = best?;
+    let mut path: Vec<usize> = a_path[1..=p].to_vec();
+    let tail = if shared { &b_path[1..q] } else { &b_path[1..=q] };
+    path.extend(tail.iter().rev());
+    path.retain(|&f| f != alpha && f != beta);
+    Some(EndGrowing { path, shared: shared.then_some(a_path[p]), steps })
+}
+
+/// One step of Algorithm 1 from the ends `ca`, `cb` (`big_d` apart): moves both ends to the
+/// nearest pair of candidates that closes the gap by θ_min, or one end onto a frame of the other
+/// path (a shared image). Returns whether a step was found.
+fn grow_step(
+    rows: &DistanceRows<'_>,
+    theta: &ThetaMin,
+    excluded: &[bool],
+    (alpha, beta): (usize, usize),
+    (ca, cb): (usize, usize),
+    big_d: f64,
+    paths: &mut Paths,
+) -> bool {
+    // Candidates of one side: θ_min ≤ hop < gap (the path is built of "short distances less
+    // than the difference between α and β, and larger than θ_min"), not excluded, not on the
+    // own path.
+    let candidates = |from: usize, own: &[bool]| {
+        let ds = rows.row(from);
+        Nearest::new(ds, |i| {
+            ds[i] >= theta.between(from, i) && ds[i] < big_d && !excluded[i] && !own[i] && i != alpha && i != beta
+        })
+    };
+    let mut la = candidates(ca, &paths.on_a);
+    let mut lb = candidates(cb, &paths.on_b);
+    let (mut j, mut k) = (0, 0);
+    let mut found = false;
+    while !found {
+        let (Some(aj), Some(bk)) = (la.get(j), lb.get(k)) else { break };
+        // Line 7: a candidate that is already on the other side's path is a shared image.
+        if paths.on_b[aj] {
+            paths.a.push(aj);
+            paths.on_a[aj] = true;
+            found = true;
+            continue;
+        }
+        if paths.on_a[bk] {
+            paths.b.push(bk);
+            paths.on_b[bk] = true;
+            found = true;
+            continue;
+        }
+        let d12 = rows.d(aj, bk);
+        if big_d - d12 < theta.between(aj, bk) {
+            let short_to_alpha = rows.d(ca, bk) - big_d <= theta.between(ca, bk);
+            let short_to_beta = rows.d(cb, aj) - big_d <= theta.between(cb, aj);
+            if short_to_alpha && short_to_beta {
+                j += 1;
+                k += 1;
             } else {
-                a_path.push(aj);
-                b_path.push(bk);
-                on_a[aj] = true;
-                on_b[bk] = true;
-                found = true;
+                if !short_to_alpha {
+                    k += 1;
+                }
+                if !short_to_beta {
+                    j += 1;
+                }
             }
-        }
-        if !found {
-            let t = theta.between(ca, cb);
-            return Err(format!(
-                "step {step}: no pair of frames brings the two ends (frames {ca} and {cb}, {big_d:.4} apart) closer by \
-                 theta_min = {t}; lower theta_min or use Direct Bridging"
-            ));
-        }
-        if let Some(r) = finish(&rows, &a_path, &b_path, step) {
-            return Ok(optimized(r));
+        } else {
+            paths.a.push(aj);
+            paths.b.push(bk);
+            paths.on_a[aj] = true;
+            paths.on_b[bk] = true;
+            found = true;
         }
     }
-    Err(format!(
-        "the two ends did not meet within {max_steps} steps (still {:.4} apart); allow more steps, lower theta_min \
-         or use Direct Bridging / the low-pass filter",
-        rows.d(*a_path.last().unwrap_or(&alpha), *b_path.last().unwrap_or(&beta))
-    ))
+    found
 }
 
 /// Optimize_Path of Algorithm 1: repeatedly drops the interior frame whose removal lowers the

@@ -2,7 +2,9 @@
 //! (§4, §4.1, initialization §4.2), sampling new controllable parameter series from it (§4.3,
 //! §5.1), and the node types `flame_model.arp_learn` and `flame_model.arp_sample`.
 
+pub mod condensation;
 pub mod em;
+pub mod kalman;
 pub mod rng;
 pub mod sampler;
 
@@ -192,9 +194,9 @@ pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result
     for it in 0..opts.max_iterations.max(1) {
         ctx.check_cancel()?;
         let stats = match opts.e_step {
-            EStep::Kalman => em::kalman_estep(&y, frames, &lam),
+            EStep::Kalman => kalman::kalman_estep(&y, frames, &lam),
             EStep::Condensation { particles, seed } => {
-                em::condensation_estep(&y, frames, &lam, particles, seed.wrapping_add(it as u64))
+                condensation::condensation_estep(&y, frames, &lam, particles, seed.wrapping_add(it as u64))
             }
         }
         .map_err(|m| NodeError::msg(format!("EM iteration {}: {m}", it + 1)))?;

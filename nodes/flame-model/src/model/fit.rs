@@ -13,191 +13,13 @@
 
 use rayon::prelude::*;
 
+use super::fit_settings::{CutBase, FitSettings};
+use super::plume::{Frame, Plume, analyse_frame};
 use super::quality::{EdgeReport, FrameQuality, train_scored};
-use super::shape::{Moments, Spline, plumes, slice_value};
+use super::shape::{Spline, slice_value};
 use crate::values::{FlameModel, ParamSeries};
 use pyrograph_core::frames::list_for_message;
-
-pyrograph_core::ports! {
-    /// Settings of the fit: the ports of `flame_model.fit` after its clip, with their defaults.
-    #[derive(PartialEq)]
-    pub struct FitSettings {
-        /// Path samples N_p at equidistant heights (paper: 10).
-        #[range(1, 64)]
-        n_p: usize = 10,
-        /// Width samples N_w at equidistant heights (paper: 10).
-        #[range(1, 64)]
-        n_w: usize = 10,
-        // Fewer when the frames do not have that many independent variations.
-        /// Eigenflames N_e (paper: 5); at most frames − 1 are available.
-        #[range(1, 1000)]
-        n_e: usize = 5,
-        /// Height slices N_s measured per frame before sampling path and width.
-        #[range(1, 512)]
-        n_s: usize = 20,
-        /// Width of the normalized images (eigenflame size).
-        #[range(4, 1024)]
-        norm_width: u32 = 64,
-        /// Height of the normalized images (eigenflame size).
-        #[range(4, 1024)]
-        norm_height: u32 = 128,
-        /// Gray values at or below this are background (a fraction of the clip's peak when relative_threshold is on).
-        #[range(0.0, 1.0)]
-        threshold: f32 = 0.08,
-        // The median over frames of each frame's brightest pixel: 1 for footage whose flame core
-        // clips (the shared candle), lower for darker footage, which then needs no retuning.
-        /// The threshold is a fraction of the clip's peak brightness (the median of the frames' brightest pixels, at least 0.25).
-        relative_threshold: bool = true,
-        /// Plumes under this fraction of a frame's intensity are specks (removed); two larger ones skip the frame.
-        #[range(0.0, 1.0)]
-        min_plume: f64 = 0.05,
-        // A uniform ellipse is 4σ long; real flames' faint tips pull σ in, hence 6.
-        /// Flame height = this × σ along the main axis (second-order moment).
-        #[range(0.5, 20.0)]
-        height_sigmas: f64 = 6.0,
-        /// The flame base lies this many σ below the centroid along the main axis.
-        #[range(0.0, 10.0)]
-        base_sigmas: f64 = 3.6,
-        // The normalized image spans u ∈ −u_extent..u_extent.
-        /// Half-width of the normalized image, in local widths (σ of a slice).
-        #[range(0.5, 20.0)]
-        u_extent: f64 = 3.0,
-        // Heights covered by the normalized image: from −v_below to 1 + v_above flame heights.
-        /// Normalized image margin below the base, in flame heights.
-        #[range(0.0, 2.0)]
-        v_below: f64 = 0.12,
-        /// Normalized image margin above the tip, in flame heights.
-        #[range(0.0, 2.0)]
-        v_above: f64 = 0.2,
-        /// Scale every normalized image to the clip's average intensity (§3.1).
-        normalize_intensity: bool = true,
-        /// A clip whose flame base is outside the picture in a quarter of its frames or more: refuse to fit (the
-        /// model needs the whole flame, base at the bottom, §3), or fit it with a warning.
-        cut_base: CutBase = CutBase::Refuse,
-        // A frame far from the others (a bad mask, a merged second plume) pulls the eigenflames
-        // towards it; dropped, it leaves a gap in the series as a skipped two-plume frame does.
-        // Frames are scored against eigenflames trained on them all, so a single strong outlier
-        // may take an eigenflame of its own and score well: this catches frames unlike most.
-        /// Drop frames whose normalized image the eigenflames reconstruct with a relative error above this (0 = keep all).
-        #[range(0.0, 10.0)]
-        max_residual: f64 = 0.0,
-    }
-}
-
-pyrograph_core::choice! {
-    /// What `flame_model.fit` does with a clip whose flame base is outside the picture.
-    pub enum CutBase {
-        /// Refuse with an error naming the edge and the share of frames.
-        Refuse = "refuse",
-        /// Fit anyway and report a warning.
-        Warn = "warn",
-    }
-}
-
-impl FitSettings {
-    /// The normalized image size (width, height).
-    pub fn norm_size(&self) -> (u32, u32) {
-        (self.norm_width, self.norm_height)
-    }
-}
-
-impl Default for FitSettings {
-    /// The declared defaults of the ports.
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
-    }
-}
-
-/// One frame's single flame: the cleaned gray values inside its bounding box, and its moments.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Plume {
-    /// Left column of the box in the frame.
-    pub x0: usize,
-    /// Top row of the box in the frame.
-    pub y0: usize,
-    /// Box width.
-    pub width: usize,
-    /// Box height.
-    pub height: usize,
-    /// Gray values (background and specks zeroed), row-major `width × height`.
-    pub data: Vec<f32>,
-    /// Moments in frame coordinates.
-    pub moments: Moments,
-}
-
-impl Plume {
-    /// Bilinear sample at frame point (x, y) (pixel centres at +0.5), 0 outside the box.
-    fn sample(&self, x: f64, y: f64) -> f32 {
-        let fx = x - 0.5 - self.x0 as f64;
-        let fy = y - 0.5 - self.y0 as f64;
-        if fx <= -1.0 || fy <= -1.0 || fx >= self.width as f64 || fy >= self.height as f64 {
-            return 0.0;
-        }
-        let (ix, iy) = (fx.floor(), fy.floor());
-        let (tx, ty) = ((fx - ix) as f32, (fy - iy) as f32);
-        let (ix, iy) = (ix as isize, iy as isize);
-        let at = |cx: isize, cy: isize| -> f32 {
-            if cx < 0 || cy < 0 || cx >= self.width as isize || cy >= self.height as isize {
-                0.0
-            } else {
-                self.data[cy as usize * self.width + cx as usize]
-            }
-        };
-        let top = at(ix, iy) * (1.0 - tx) + at(ix + 1, iy) * tx;
-        let bottom = at(ix, iy + 1) * (1.0 - tx) + at(ix + 1, iy + 1) * tx;
-        top * (1.0 - ty) + bottom * ty
-    }
-}
-
-/// What one frame holds.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Frame {
-    /// One flame.
-    Flame(Plume),
-    /// Nothing above the threshold.
-    Empty,
-    /// This many disjoint plumes (two or more): the model cannot represent it (§5).
-    Plumes(usize),
-}
-
-/// Thresholds a row-major gray frame and isolates its flame.
-pub fn analyse_frame(gray: &[f32], width: usize, height: usize, s: &FitSettings) -> Frame {
-    let clean: Vec<f32> = gray.iter().map(|&v| if v > s.threshold && v.is_finite() { v } else { 0.0 }).collect();
-    let (labels, masses) = plumes(&clean, width, height);
-    let total: f64 = masses.iter().sum();
-    if total <= 0.0 {
-        return Frame::Empty;
-    }
-    let big = masses.iter().filter(|&&m| m >= s.min_plume * total).count();
-    if big >= 2 {
-        return Frame::Plumes(big);
-    }
-    let Some(keep) = masses.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(i, _)| i as u32 + 1) else {
-        return Frame::Empty;
-    };
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-    for (p, &l) in labels.iter().enumerate() {
-        if l == keep {
-            let (x, y) = (p % width, p / width);
-            x0 = x0.min(x);
-            y0 = y0.min(y);
-            x1 = x1.max(x);
-            y1 = y1.max(y);
-        }
-    }
-    let (bw, bh) = (x1 + 1 - x0, y1 + 1 - y0);
-    let mut data = vec![0.0_f32; bw * bh];
-    for y in 0..bh {
-        for x in 0..bw {
-            let p = (y0 + y) * width + x0 + x;
-            if labels[p] == keep {
-                data[y * bw + x] = clean[p];
-            }
-        }
-    }
-    let moments = Moments::of_image(&data, bw, bh).translated(x0 as f64, y0 as f64);
-    Frame::Flame(Plume { x0, y0, width: bw, height: bh, data, moments })
-}
+use pyrograph_nodes_eigen::pca::Database;
 
 /// The result of a fit.
 #[derive(Clone, Debug, PartialEq)]
@@ -347,6 +169,54 @@ pub fn normalize(plume: &Plume, f0: &Frame0, shape: &Shape, s: &FitSettings) -> 
 /// Fits the model to analysed frames (see [`analyse_frame`]) of a `frame_size` clip at `fps`.
 pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps: f64) -> Result<Fit, String> {
     check_settings(s)?;
+    let Sorted { kept, skipped_plumes, skipped_empty, flames } = sort_frames(frames, s)?;
+    let (axes, f0) = normalization_frame(&flames, s)?;
+    let edges = EdgeReport::of(&flames, frame_size, f0.axis);
+    let mut warnings = Vec::new();
+    if let Some(base) = edges.base_cut() {
+        match s.cut_base {
+            CutBase::Refuse => return Err(format!("{base} (cut_base: warn fits it anyway)")),
+            CutBase::Warn => warnings.push(base),
+        }
+    }
+    warnings.extend(edges.tip_cut());
+    let (shaped, data, target) = normalized_images(&flames, &axes, &f0, s);
+    let (db, residuals, used) = train_without_outliers(s, &data, &kept)?;
+    let mut is_used = vec![false; shaped.len()];
+    used.iter().for_each(|&f| is_used[f] = true);
+    let skipped_quality: Vec<usize> = (0..shaped.len()).filter(|&f| !is_used[f]).map(|f| kept[f]).collect();
+    if !skipped_quality.is_empty() {
+        warnings.push(format!(
+            "{} of {} frames dropped: the eigenflames reconstruct them with a relative error above max_residual {} ({})",
+            skipped_quality.len(),
+            shaped.len(),
+            s.max_residual,
+            list_for_message(&skipped_quality)
+        ));
+    }
+    let quality: Vec<FrameQuality> = (0..shaped.len())
+        .map(|f| FrameQuality { frame: kept[f], residual: residuals[f], edge: edges.touches[f], used: is_used[f] })
+        .collect();
+    let shaped: Vec<&Shaped> = used.iter().map(|&f| &shaped[f]).collect();
+    let kept: Vec<usize> = used.iter().map(|&f| kept[f]).collect();
+    let (model, params) = model_and_params(db, &shaped, &f0, target, frame_size, s, fps)?;
+    Ok(Fit { model, params, kept, skipped_plumes, skipped_empty, skipped_quality, quality, warnings })
+}
+
+/// The frames of a clip sorted by what they hold.
+struct Sorted<'a> {
+    /// Frames holding one flame.
+    kept: Vec<usize>,
+    /// Frames showing two or more plumes.
+    skipped_plumes: Vec<usize>,
+    /// Frames holding no flame.
+    skipped_empty: Vec<usize>,
+    /// The flame of each kept frame.
+    flames: Vec<&'a Plume>,
+}
+
+/// Sorts `frames` by what they hold; fewer than two frames of one flame is an error saying why.
+fn sort_frames<'a>(frames: &'a [Frame], s: &FitSettings) -> Result<Sorted<'a>, String> {
     let mut kept = Vec::new();
     let mut skipped_plumes = Vec::new();
     let mut skipped_empty = Vec::new();
@@ -378,10 +248,19 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
     if flames.len() < 2 {
         return Err(format!("only {} frame holds a single flame; eigenflames need at least 2", flames.len()));
     }
+    Ok(Sorted { kept, skipped_plumes, skipped_empty, flames })
+}
 
-    // The normalization frame: the mean main axis (averaged as doubled angles, orientation-free)
-    // and the mean base point.
-    let axes: Vec<([f64; 2], f64)> = flames
+/// A flame's main axis (unit direction) and its major σ along it.
+type Axis = ([f64; 2], f64);
+
+/// A frame's shape and its normalized image.
+type Shaped = (Shape, Vec<f32>);
+
+/// Each flame's main axis and major σ, and the normalization frame: the mean main axis
+/// (averaged as doubled angles, orientation-free) and the mean base point.
+fn normalization_frame(flames: &[&Plume], s: &FitSettings) -> Result<(Vec<Axis>, Frame0), String> {
+    let axes: Vec<Axis> = flames
         .iter()
         .map(|p| p.moments.main_axes().map(|(d, major, _)| (d, major)).ok_or("a plume has no intensity"))
         .collect::<Result<_, _>>()?;
@@ -401,24 +280,19 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         anchor[1] += c[1] - s.base_sigmas * major * axis[1];
     }
     anchor = [anchor[0] / flames.len() as f64, anchor[1] / flames.len() as f64];
-    let f0 = Frame0 { anchor, axis };
-    let edges = EdgeReport::of(&flames, frame_size, axis);
-    let mut warnings = Vec::new();
-    if let Some(base) = edges.base_cut() {
-        match s.cut_base {
-            CutBase::Refuse => return Err(format!("{base} (cut_base: warn fits it anyway)")),
-            CutBase::Warn => warnings.push(base),
-        }
-    }
-    warnings.extend(edges.tip_cut());
+    Ok((axes, Frame0 { anchor, axis }))
+}
 
-    // Per frame: height from the second-order moment along the main axis, slices, normalization.
-    let shaped: Vec<(Shape, Vec<f32>)> = flames
+/// Per frame: height from the second-order moment along the main axis, slices, normalization;
+/// then the normalized images one after another, scaled to the clip's average intensity
+/// `target` (returned) when `normalize_intensity` is on.
+fn normalized_images(flames: &[&Plume], axes: &[Axis], f0: &Frame0, s: &FitSettings) -> (Vec<Shaped>, Vec<f32>, f64) {
+    let shaped: Vec<Shaped> = flames
         .par_iter()
-        .zip(&axes)
+        .zip(axes)
         .map(|(p, (_, major))| {
-            let shape = measure_shape(p, &f0, (s.height_sigmas * major).max(1.0), s);
-            let img = normalize(p, &f0, &shape, s);
+            let shape = measure_shape(p, f0, (s.height_sigmas * major).max(1.0), s);
+            let img = normalize(p, f0, &shape, s);
             (shape, img)
         })
         .collect();
@@ -431,8 +305,15 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         let gain = if s.normalize_intensity && m > 0.0 { (target / m) as f32 } else { 1.0 };
         data.extend(img.iter().map(|v| v * gain));
     }
-    let all: Vec<usize> = (0..shaped.len()).collect();
-    let (mut db, mut residuals) = train_scored(s, &data, &all, &kept)?;
+    (shaped, data, target)
+}
+
+/// The eigenflames of the normalized images `data` (one per kept frame), trained again without
+/// the frames they reconstruct worse than `max_residual`: the database, every frame's residual
+/// and the frames used.
+fn train_without_outliers(s: &FitSettings, data: &[f32], kept: &[usize]) -> Result<(Database, Vec<f64>, Vec<usize>), String> {
+    let all: Vec<usize> = (0..kept.len()).collect();
+    let (mut db, mut residuals) = train_scored(s, data, &all, kept)?;
     let mut used = all;
     if s.max_residual > 0.0 {
         let good: Vec<usize> = used.iter().copied().filter(|&f| residuals[f] <= s.max_residual).collect();
@@ -450,7 +331,7 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
             }
             // The eigenflames of the good frames alone; the dropped frames keep their first-pass
             // scores, the kept ones are scored again (and may then exceed the limit a little).
-            let (db2, r2) = train_scored(s, &data, &good, &kept)?;
+            let (db2, r2) = train_scored(s, data, &good, kept)?;
             for (&f, r) in good.iter().zip(r2) {
                 residuals[f] = r;
             }
@@ -458,25 +339,21 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
             used = good;
         }
     }
-    let mut is_used = vec![false; shaped.len()];
-    used.iter().for_each(|&f| is_used[f] = true);
-    let skipped_quality: Vec<usize> = (0..shaped.len()).filter(|&f| !is_used[f]).map(|f| kept[f]).collect();
-    if !skipped_quality.is_empty() {
-        warnings.push(format!(
-            "{} of {} frames dropped: the eigenflames reconstruct them with a relative error above max_residual {} ({})",
-            skipped_quality.len(),
-            shaped.len(),
-            s.max_residual,
-            list_for_message(&skipped_quality)
-        ));
-    }
-    let quality: Vec<FrameQuality> = (0..shaped.len())
-        .map(|f| FrameQuality { frame: kept[f], residual: residuals[f], edge: edges.touches[f], used: is_used[f] })
-        .collect();
-    let e = db.basis.components();
-    let shaped: Vec<&(Shape, Vec<f32>)> = used.iter().map(|&f| &shaped[f]).collect();
-    let kept: Vec<usize> = used.iter().map(|&f| kept[f]).collect();
+    Ok((db, residuals, used))
+}
 
+/// The generic flame model and its parameter rows (path, width, eigenflame weights, height) of
+/// the `shaped` frames used, from the eigenflames `db` trained on them.
+fn model_and_params(
+    db: Database,
+    shaped: &[&Shaped],
+    f0: &Frame0,
+    target: f64,
+    frame_size: (u32, u32),
+    s: &FitSettings,
+    fps: f64,
+) -> Result<(FlameModel, ParamSeries), String> {
+    let e = db.basis.components();
     let names = param_names(s.n_p, s.n_w, e);
     let dim = names.len();
     let mut rows = Vec::with_capacity(dim * shaped.len());
@@ -499,14 +376,14 @@ pub fn fit_frames(frames: &[Frame], frame_size: (u32, u32), s: &FitSettings, fps
         basis: db.basis.eigenvectors,
         eigenvalues: db.basis.eigenvalues,
         frame_size,
-        anchor,
-        axis,
+        anchor: f0.anchor,
+        axis: f0.axis,
         v_range: [-s.v_below, 1.0 + s.v_above],
         u_extent: s.u_extent,
         mean_intensity: if s.normalize_intensity { target } else { 0.0 },
         mean_params,
     };
-    Ok(Fit { model, params, kept, skipped_plumes, skipped_empty, skipped_quality, quality, warnings })
+    Ok((model, params))
 }
 
 /// Analyses and fits row-major gray frames of one size (the node pulls clip frames instead).

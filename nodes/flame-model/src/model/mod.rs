@@ -3,6 +3,8 @@
 //! (model + parameter series → gray and coloured frames).
 
 pub mod fit;
+pub mod fit_settings;
+pub mod plume;
 pub mod quality;
 pub mod render;
 pub mod shape;
@@ -18,7 +20,9 @@ use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, Por
 use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
 use rayon::prelude::*;
 
-pub use fit::{CutBase, FitSettings, analyse_frame, fit_frames, fit_gray_frames};
+pub use fit::{fit_frames, fit_gray_frames};
+pub use fit_settings::{CutBase, FitSettings};
+pub use plume::{Frame, Plume, analyse_frame};
 pub use quality::FrameQuality;
 pub use render::{Alpha, RenderSettings, colorize, render_frame};
 
@@ -100,7 +104,7 @@ impl Cook for FitModel {
             Vec::new()
         };
         let s = &fit::absolute(s, &peaks);
-        let frames: Vec<fit::Frame> = (0..clip.len())
+        let frames: Vec<Frame> = (0..clip.len())
             .into_par_iter()
             .map(|f| {
                 ctx.check_cancel()?;
@@ -298,7 +302,7 @@ impl Cook for RenderModel {
 
 #[cfg(test)]
 mod tests {
-    use super::fit::{Frame, Frame0, measure_shape, normalize};
+    use super::fit::{Frame0, measure_shape, normalize};
     use super::shape::Moments;
     use super::shape::tests::ellipse;
     use super::*;

@@ -6,7 +6,8 @@ use pyrograph_nodes_eigen::pca::{self, Database};
 use pyrograph_nodes_eigen::values::FrameRef;
 use pyrograph_nodes_imaging::auto_crop::{BASE_OUTSIDE, edge_warning, is_framing_problem};
 
-use super::fit::{FitSettings, Plume};
+use super::fit_settings::FitSettings;
+use super::plume::Plume;
 
 /// The fit quality of one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]

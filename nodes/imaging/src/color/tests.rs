@@ -1,3 +1,5 @@
+//! Tests of the colouring in `color/`: original and synthetic colouring, ramps and alpha.
+
 use super::*;
 use proptest::prelude::*;
 use pyrograph_core::params::Port;

@@ -7,11 +7,30 @@ use std::path::Path;
 use exr::prelude::{SpecificChannels, Vec2, WritableImage as _, f16};
 use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{Channels, Image, NodeError, port};
+use pyrograph_core::{Channels, Image, NodeError};
 
-use super::nodes::{BitDepth, ExrType, LoadImage, WriteImage, WriteSequence};
-use super::{has_extension, no_such};
+use super::{IoError, has_extension, no_such};
 use crate::convert;
+
+pyrograph_core::choice! {
+    /// Bits per channel of PNG files.
+    pub enum BitDepth {
+        /// 8-bit samples.
+        Eight = "8",
+        /// 16-bit samples.
+        Sixteen = "16",
+    }
+}
+
+pyrograph_core::choice! {
+    /// Sample type of EXR files.
+    pub enum ExrType {
+        /// 16-bit half floats.
+        Half = "half",
+        /// 32-bit floats.
+        Float = "float",
+    }
+}
 
 // ---------------------------------------------------------------------------------------------
 // Reading still images
@@ -83,19 +102,17 @@ pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
     image.ok_or_else(|| named(&"channel sizes do not match the image size"))
 }
 
-/// Loads one image file; errors name the file.
-pub fn load_image(path: &Path) -> Result<Image, NodeError> {
+/// Loads one image file after checking its header; every error names the file and is an
+/// [`IoError::Path`].
+pub fn read_image_file(path: &Path) -> Result<Image, IoError> {
     if path.is_dir() {
-        return Err(NodeError::port(
-            port!(LoadImage, path),
-            format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display()),
-        ));
+        return Err(IoError::Path(format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display())));
     }
     if !path.is_file() {
-        return Err(no_such(port!(LoadImage, path), path));
+        return Err(no_such(path));
     }
-    image_dimensions(path).map_err(|e| NodeError::port(port!(LoadImage, path), e.to_string()))?;
-    decode_image(path).map_err(|e| NodeError::port(port!(LoadImage, path), e.to_string()))
+    image_dimensions(path).map_err(|e| IoError::Path(e.to_string()))?;
+    decode_image(path).map_err(|e| IoError::Path(e.to_string()))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -183,29 +200,28 @@ fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
     Ok(bytes)
 }
 
-/// The format named by the pattern's extension, with the PNG / EXR options; an error names the
-/// sequence writer's `pattern` (a single-file writer renames it to its own path port).
-pub fn output_format(pattern: &Path, bit_depth: BitDepth, exr_type: ExrType) -> Result<OutputFormat, NodeError> {
+/// The format named by the pattern's extension, with the PNG / EXR options; an unknown extension
+/// is an [`IoError::Path`].
+pub fn output_format(pattern: &Path, bit_depth: BitDepth, exr_type: ExrType) -> Result<OutputFormat, IoError> {
     let ext = pattern.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     match ext.as_str() {
         "png" => Ok(OutputFormat::Png { sixteen_bit: bit_depth == BitDepth::Sixteen }),
         "exr" => Ok(OutputFormat::Exr { half: exr_type == ExrType::Half }),
-        _ => Err(NodeError::port(port!(WriteSequence, pattern), format!("'{}' must end in .png or .exr", pattern.display()))),
+        _ => Err(IoError::Path(format!("'{}' must end in .png or .exr", pattern.display()))),
     }
 }
 
-/// Writes one image atomically; an existing file is an error unless `overwrite`.
-pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), NodeError> {
+/// Writes one image atomically; an existing file is an [`IoError::Exists`] unless `overwrite`.
+pub fn write_image_file(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), IoError> {
     if !overwrite && path.exists() {
-        return Err(NodeError::port(
-            port!(WriteImage, overwrite),
-            format!("{} already exists; nothing was written. Set overwrite to true or render with --overwrite", path.display()),
-        ));
+        return Err(IoError::Exists(format!(
+            "{} already exists; nothing was written. Set overwrite to true or render with --overwrite",
+            path.display()
+        )));
     }
-    let path_port = port!(WriteImage, path);
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| NodeError::port(path_port, format!("cannot create {}: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir).map_err(|e| IoError::Path(format!("cannot create {}: {e}", dir.display())))?;
     }
     let bytes = encode_image(img, format)?;
-    write_atomic(path, &bytes, overwrite).map_err(|e| NodeError::port(path_port, format!("writing {}: {e}", path.display())))
+    write_atomic(path, &bytes, overwrite).map_err(|e| IoError::Path(format!("writing {}: {e}", path.display())))
 }

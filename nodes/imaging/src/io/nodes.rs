@@ -1,12 +1,14 @@
 //! The input/output node types: the loaders and writers of [`super::files`] and
-//! [`super::sequence`] as declared nodes.
+//! [`super::sequence`] as declared nodes, whose cooks name the port each [`IoError`] concerns.
 
+use std::path::Path;
 use std::sync::Arc;
 
-use pyrograph_core::{ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, Registry};
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, Registry, port};
 
-use super::files::{load_image, output_format, write_image};
-use super::sequence::{WriteOptions, load_sequence, write_sequence};
+use super::IoError;
+use super::files::{BitDepth, ExrType, OutputFormat, output_format, read_image_file, write_image_file};
+use super::sequence::{WriteOptions, open_sequence, write_sequence};
 use crate::color::AlphaMode;
 
 /// Adds the loaders and the sequence writer.
@@ -15,26 +17,6 @@ pub fn register(registry: &mut Registry) {
     registry.add(LoadImage::node());
     registry.add(WriteSequence::node());
     registry.add(WriteImage::node());
-}
-
-pyrograph_core::choice! {
-    /// Bits per channel of PNG files.
-    pub enum BitDepth {
-        /// 8-bit samples.
-        Eight = "8",
-        /// 16-bit samples.
-        Sixteen = "16",
-    }
-}
-
-pyrograph_core::choice! {
-    /// Sample type of EXR files.
-    pub enum ExrType {
-        /// 16-bit half floats.
-        Half = "half",
-        /// 32-bit floats.
-        Float = "float",
-    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -68,6 +50,22 @@ impl Cook for LoadSequence {
     }
 }
 
+impl LoadSequence {
+    /// The node error for `e`: loading fails only over the file, folder or pattern, its `path`.
+    pub fn node_error(e: IoError) -> NodeError {
+        match e {
+            IoError::Other(e) => e,
+            e => NodeError::port(port!(LoadSequence, path), e.to_string()),
+        }
+    }
+}
+
+/// Loads `path` (folder, pattern, image or video) as `imaging.load_sequence` does, `fps` 0 meaning
+/// automatic; errors name its ports.
+pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
+    open_sequence(path, fps, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
+}
+
 pyrograph_core::node! {
     /// Loads one image file (.png, .jpg, .jpeg or .exr).
     ///
@@ -87,6 +85,21 @@ impl Cook for LoadImage {
     fn cook(self, _: &CookCtx) -> Result<LoadImageOut, NodeError> {
         Ok(LoadImageOut { image: Arc::new(load_image(&self.path)?) })
     }
+}
+
+impl LoadImage {
+    /// The node error for `e`: loading fails only over the file, its `path`.
+    pub fn node_error(e: IoError) -> NodeError {
+        match e {
+            IoError::Other(e) => e,
+            e => NodeError::port(port!(LoadImage, path), e.to_string()),
+        }
+    }
+}
+
+/// Loads one image file as `imaging.load_image` does; errors name its ports.
+pub fn load_image(path: &Path) -> Result<Image, NodeError> {
+    read_image_file(path).map_err(LoadImage::node_error)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -131,7 +144,7 @@ pyrograph_core::node! {
 impl Cook for WriteSequence {
     fn cook(self, ctx: &CookCtx) -> Result<WriteSequenceOut, NodeError> {
         let options = WriteOptions {
-            format: output_format(&self.pattern, self.bit_depth, self.exr_type)?,
+            format: output_format(&self.pattern, self.bit_depth, self.exr_type).map_err(WriteSequence::node_error)?,
             start: self.start,
             overwrite: self.overwrite || ctx.settings().overwrite,
             frames: ctx.settings().frames.clone(),
@@ -139,12 +152,25 @@ impl Cook for WriteSequence {
             alpha: self.alpha,
             pattern: self.pattern.0,
         };
-        let written = write_sequence(&self.clip, &options, ctx)?;
+        let written = write_sequence(&self.clip, &options, ctx).map_err(WriteSequence::node_error)?;
         Ok(WriteSequenceOut {
             frames: written.len(),
             first: OutputPath(written.first().cloned().unwrap_or_default()),
             alpha: options.alpha.name().to_string(),
         })
+    }
+}
+
+impl WriteSequence {
+    /// The node error for `e`: a problem with the files is one with the `pattern`, an existing
+    /// file one for `overwrite`, an empty clip one with the `clip`.
+    pub fn node_error(e: IoError) -> NodeError {
+        match e {
+            IoError::Path(message) => NodeError::port(port!(WriteSequence, pattern), message),
+            IoError::Exists(message) => NodeError::port(port!(WriteSequence, overwrite), message),
+            e @ IoError::EmptyClip => NodeError::port(port!(WriteSequence, clip), e.to_string()),
+            IoError::Other(e) => e,
+        }
     }
 }
 
@@ -171,13 +197,27 @@ pyrograph_core::node! {
 
 impl Cook for WriteImage {
     fn cook(self, ctx: &CookCtx) -> Result<WriteImageOut, NodeError> {
-        // The format error names the sequence writer's `pattern`; here the file is `path`.
-        let format = output_format(&self.path, self.bit_depth, self.exr_type).map_err(|e| match e {
-            NodeError::Port { message, .. } => NodeError::port(pyrograph_core::port!(WriteImage, path), message),
-            e => e,
-        })?;
+        let format = output_format(&self.path, self.bit_depth, self.exr_type).map_err(WriteImage::node_error)?;
         write_image(&self.image, &self.path, format, self.overwrite || ctx.settings().overwrite)?;
         ctx.record_written(&self.path);
         Ok(WriteImageOut { path: self.path })
     }
+}
+
+impl WriteImage {
+    /// The node error for `e`: an existing file is one for `overwrite`, any other problem with the
+    /// file one with its `path`.
+    pub fn node_error(e: IoError) -> NodeError {
+        match e {
+            IoError::Exists(message) => NodeError::port(port!(WriteImage, overwrite), message),
+            IoError::Other(e) => e,
+            e => NodeError::port(port!(WriteImage, path), e.to_string()),
+        }
+    }
+}
+
+/// Writes one image atomically as `imaging.write_image` does (an existing file is an error unless
+/// `overwrite`); errors name its ports.
+pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), NodeError> {
+    write_image_file(img, path, format, overwrite).map_err(WriteImage::node_error)
 }

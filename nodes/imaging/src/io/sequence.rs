@@ -2,19 +2,16 @@
 //! a loader's files, the lazy clip that decodes them on demand, and the parallel sequence writer.
 
 use std::cmp::Ordering;
-use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::fingerprint::{Fingerprinter, hash_metadata};
-use pyrograph_core::{Clip, CookCtx, FrameSet, FrameSource, NodeError, PortType, Value, port};
+use pyrograph_core::{Clip, CookCtx, FrameSet, FrameSource, NodeError, PortType, Value};
 use rayon::prelude::*;
 
 use super::files::{OutputFormat, decode_image, encode_image, image_dimensions};
-use super::nodes::{LoadSequence, WriteSequence};
-use super::{DEFAULT_FPS, IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, has_extension, no_such};
+use super::{DEFAULT_FPS, IMAGE_EXTENSIONS, IoError, ReportError, VIDEO_EXTENSIONS, fingerprint_files, has_extension, no_such};
 use crate::color::{AlphaMode, premultiply};
 
 // ---------------------------------------------------------------------------------------------
@@ -123,16 +120,16 @@ pub enum InputFiles {
 }
 
 /// Resolves a loader path: a directory, a `####` / `%04d` pattern, a video or a single image.
-pub fn find_input_files(path: &Path) -> Result<InputFiles, NodeError> {
+pub fn find_input_files(path: &Path) -> Result<InputFiles, IoError> {
     if path.is_dir() {
         return list_directory(path).map(InputFiles::Images);
     }
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-    if let Some(pattern) = FramePattern::parse(name).map_err(|e| NodeError::port(port!(LoadSequence, path), e))? {
+    if let Some(pattern) = FramePattern::parse(name).map_err(IoError::Path)? {
         return list_pattern(path, &pattern).map(InputFiles::Images);
     }
     if !path.is_file() {
-        return Err(no_such(port!(LoadSequence, path), path));
+        return Err(no_such(path));
     }
     if has_extension(path, VIDEO_EXTENSIONS) {
         Ok(InputFiles::Video(path.to_path_buf()))
@@ -142,32 +139,31 @@ pub fn find_input_files(path: &Path) -> Result<InputFiles, NodeError> {
 }
 
 /// The image files of a directory, in natural name order.
-pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, NodeError> {
-    let entries =
-        std::fs::read_dir(dir).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", dir.display())))?;
+pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| IoError::Path(format!("{}: {e}", dir.display())))?;
     let mut files: Vec<PathBuf> =
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && has_extension(p, IMAGE_EXTENSIONS)).collect();
     files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     if files.is_empty() {
-        return Err(NodeError::port(
-            port!(LoadSequence, path),
-            format!("{} holds no image files (looked for {})", dir.display(), IMAGE_EXTENSIONS.join(", ")),
-        ));
+        return Err(IoError::Path(format!(
+            "{} holds no image files (looked for {})",
+            dir.display(),
+            IMAGE_EXTENSIONS.join(", ")
+        )));
     }
     Ok(files)
 }
 
 /// The existing files matching `pattern` in the folder of `path`, by frame number.
-pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>, NodeError> {
+pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>, IoError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        return Err(no_such(port!(LoadSequence, path), dir));
+        return Err(no_such(dir));
     }
-    let entries =
-        std::fs::read_dir(dir).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", dir.display())))?;
+    let entries = std::fs::read_dir(dir).map_err(|e| IoError::Path(format!("{}: {e}", dir.display())))?;
     let mut numbered: Vec<(u64, PathBuf)> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file())
@@ -178,49 +174,34 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
         .collect();
     numbered.sort();
     if numbered.is_empty() {
-        return Err(NodeError::port(port!(LoadSequence, path), format!("no files match {}", path.display())));
+        return Err(IoError::Path(format!("no files match {}", path.display())));
     }
     Ok(numbered.into_iter().map(|(_, p)| p).collect())
 }
 
-/// Hash of file names, sizes and modification times: changes whenever a file is replaced.
-pub fn fingerprint_files(files: &[PathBuf]) -> Result<u64, NodeError> {
-    let mut h = Fingerprinter::new();
-    for f in files {
-        let meta =
-            std::fs::metadata(f).map_err(|e| NodeError::port(port!(LoadSequence, path), format!("{}: {e}", f.display())))?;
-        f.hash(&mut h);
-        hash_metadata(&mut h, &meta);
-    }
-    Ok(h.finish())
-}
-
 /// Reads every file's header (in parallel) and checks that all frames share one size.
-pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), NodeError> {
+pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), IoError> {
     let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f)).collect();
     let mut first: Option<((u32, u32), &PathBuf)> = None;
     for (size, file) in sizes.into_iter().zip(files) {
-        let size = size.map_err(|e| NodeError::port(port!(LoadSequence, path), e.to_string()))?;
+        let size = size.map_err(|e| IoError::Path(e.to_string()))?;
         match first {
             None => first = Some((size, file)),
             Some((want, first_file)) if want != size => {
-                return Err(NodeError::port(
-                    port!(LoadSequence, path),
-                    format!(
-                        "{} is {}x{} but {} is {}x{}; all frames of a sequence must have the same size",
-                        file.display(),
-                        size.0,
-                        size.1,
-                        first_file.display(),
-                        want.0,
-                        want.1
-                    ),
-                ));
+                return Err(IoError::Path(format!(
+                    "{} is {}x{} but {} is {}x{}; all frames of a sequence must have the same size",
+                    file.display(),
+                    size.0,
+                    size.1,
+                    first_file.display(),
+                    want.0,
+                    want.1
+                )));
             }
             Some(_) => {}
         }
     }
-    first.map(|(s, _)| s).ok_or_else(|| NodeError::port(port!(LoadSequence, path), "no image files"))
+    first.map(|(s, _)| s).ok_or_else(|| IoError::Path("no image files".to_string()))
 }
 
 /// Frames decoded lazily from a list of image files.
@@ -252,16 +233,17 @@ impl FrameSource for FileFrames {
 }
 
 /// A lazy clip of image files after checking every header; frames decode on access.
-pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, NodeError> {
+pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, IoError> {
     let size = check_same_size(&files)?;
     let fingerprint = fingerprint_files(&files)?;
     Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(FileFrames { files, size })))
 }
 
-/// Loads `path` (folder, pattern, image or video) as a clip; `fps` 0 means automatic.
-pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
+/// Opens `path` (folder, pattern, image or video) as a clip; `fps` 0 means automatic. A video's
+/// frames decode after this returns: their errors reach the user through `report`.
+pub fn open_sequence(path: &Path, fps: f64, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
     match find_input_files(path)? {
-        InputFiles::Video(video) => crate::video::video_clip(&video, fps, ctx),
+        InputFiles::Video(video) => crate::video::video_clip(&video, fps, ctx, report),
         InputFiles::Images(files) => image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS }),
     }
 }
@@ -290,34 +272,34 @@ pub struct WriteOptions {
 }
 
 /// The parsed pattern of a writer path, with the folder it writes into.
-pub fn output_pattern(pattern: &Path) -> Result<(PathBuf, FramePattern), NodeError> {
-    let port = port!(WriteSequence, pattern);
-    let name = pattern.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
-        NodeError::port(port, format!("'{}' does not end in a file name like frame_####.png", pattern.display()))
-    })?;
-    let parsed = FramePattern::parse(name).map_err(|e| NodeError::port(port, e))?.ok_or_else(|| {
-        NodeError::port(port, format!("'{name}' has no frame-number placeholder; add #### or %04d (frame_####.png)"))
-    })?;
+pub fn output_pattern(pattern: &Path) -> Result<(PathBuf, FramePattern), IoError> {
+    let name = pattern
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| IoError::Path(format!("'{}' does not end in a file name like frame_####.png", pattern.display())))?;
+    let parsed = FramePattern::parse(name)
+        .map_err(IoError::Path)?
+        .ok_or_else(|| IoError::Path(format!("'{name}' has no frame-number placeholder; add #### or %04d (frame_####.png)")))?;
     let dir = pattern.parent().map(Path::to_path_buf).unwrap_or_default();
     Ok((dir, parsed))
 }
 
 /// The clip frames to write, ascending: the requested set (checked against the clip) or all.
-pub fn frames_to_write(len: usize, frames: Option<&FrameSet>) -> Result<Vec<usize>, NodeError> {
+pub fn frames_to_write(len: usize, frames: Option<&FrameSet>) -> Result<Vec<usize>, IoError> {
     if len == 0 {
-        return Err(NodeError::port(port!(WriteSequence, clip), "the clip has no frames"));
+        return Err(IoError::EmptyClip);
     }
     match frames {
         None => Ok((0..len).collect()),
         Some(set) if set.last() < len => Ok(set.frames()),
-        Some(set) => Err(NodeError::msg(format!("frames {set} reach past the clip's frames 0-{}", len - 1))),
+        Some(set) => Err(NodeError::msg(format!("frames {set} reach past the clip's frames 0-{}", len - 1)).into()),
     }
 }
 
 /// Writes the frames of `clip` as files; returns the paths written, in frame order.
 ///
 /// Nothing is written when any target exists and `overwrite` is off.
-pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, NodeError> {
+pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, IoError> {
     let (dir, pattern) = output_pattern(&options.pattern)?;
     let frames = frames_to_write(clip.len(), options.frames.as_ref())?;
     let mut targets: Vec<(usize, PathBuf)> =
@@ -335,8 +317,7 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
         refuse_existing(&targets)?;
     }
     if !dir.as_os_str().is_empty() {
-        std::fs::create_dir_all(&dir)
-            .map_err(|e| NodeError::port(port!(WriteSequence, pattern), format!("cannot create {}: {e}", dir.display())))?;
+        std::fs::create_dir_all(&dir).map_err(|e| IoError::Path(format!("cannot create {}: {e}", dir.display())))?;
     }
     let done = AtomicUsize::new(0);
     targets.par_iter().try_for_each(|(i, path)| {
@@ -349,24 +330,21 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
         write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
         ctx.record_written(path);
         ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
-        Ok::<(), NodeError>(())
+        Ok::<(), IoError>(())
     })?;
     Ok(targets.into_iter().map(|(_, p)| p).collect())
 }
 
-fn refuse_existing(targets: &[(usize, PathBuf)]) -> Result<(), NodeError> {
+fn refuse_existing(targets: &[(usize, PathBuf)]) -> Result<(), IoError> {
     let existing: Vec<&PathBuf> = targets.iter().map(|(_, p)| p).filter(|p| p.exists()).collect();
     match existing.first() {
         None => Ok(()),
-        Some(first) => Err(NodeError::port(
-            port!(WriteSequence, overwrite),
-            format!(
-                "{} already exists ({} of the {} target files do); nothing was written. Set overwrite to true or \
-                 render with --overwrite to replace them",
-                first.display(),
-                existing.len(),
-                targets.len()
-            ),
-        )),
+        Some(first) => Err(IoError::Exists(format!(
+            "{} already exists ({} of the {} target files do); nothing was written. Set overwrite to true or \
+             render with --overwrite to replace them",
+            first.display(),
+            existing.len(),
+            targets.len()
+        ))),
     }
 }

@@ -70,7 +70,7 @@ fn printf_pattern_parses_and_formats() {
 fn missing_or_double_placeholder_is_reported() {
     assert_eq!(FramePattern::parse("frame.png").unwrap(), None);
     assert!(FramePattern::parse("a_##_b_##.png").is_err());
-    let err = output_pattern(Path::new("/tmp/out/frame.png")).unwrap_err();
+    let err = output_pattern(Path::new("/tmp/out/frame.png")).map_err(WriteSequence::node_error).unwrap_err();
     assert!(err.to_string().contains("no frame-number placeholder"), "{err}");
     assert!(err.to_string().contains("pattern"), "{err}");
 }
@@ -244,7 +244,7 @@ fn output_format_follows_the_extension() {
     assert_eq!(png, OutputFormat::Png { sixteen_bit: true });
     let exr = output_format(Path::new("a_#.exr"), BitDepth::Eight, ExrType::Float).unwrap();
     assert_eq!(exr, OutputFormat::Exr { half: false });
-    let err = output_format(Path::new("a_#.tif"), BitDepth::Eight, ExrType::Half).unwrap_err();
+    let err = output_format(Path::new("a_#.tif"), BitDepth::Eight, ExrType::Half).map_err(WriteSequence::node_error).unwrap_err();
     assert!(err.to_string().contains("pattern"));
 }
 

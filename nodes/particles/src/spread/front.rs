@@ -5,10 +5,10 @@
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
-use pyrograph_core::{NodeError, port};
+use pyrograph_core::port;
 use rayon::prelude::*;
 
-use super::node::{FireSpread, SpreadParams};
+use super::spread_params::SpreadParams;
 use super::surface::{Chord, Surface, segment_distance};
 use crate::flame::unit_random;
 use crate::types::{CharMark, FlameRoot, SpreadState, WindField};
@@ -32,6 +32,10 @@ pub fn spread_wind(field: &WindField) -> impl Fn(Vec3) -> Vec3 + Sync + Send + u
     let convection = -Vec3::from_array(field.gravity) * field.k_g;
     move |p| convection + sampler.large(p)
 }
+
+/// A point's proposed move: where it would be, whether it hit a boundary edge, and how far it
+/// moved; `None` for an extinguished point.
+type Move = Option<(ControlPoint, bool, f32)>;
 
 /// One spread control point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,10 +70,31 @@ pub struct Spread {
     dropped: u64,
 }
 
+/// Why a spread cannot start. The node maps each to the port it is about.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SpreadError {
+    /// A parameter of [`SpreadParams`] outside what the spread can run with.
+    #[error("{param}: {message}")]
+    Param {
+        /// The parameter's name (its port).
+        param: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// An ignition that is not a point of the surface.
+    #[error("{0}")]
+    Ignition(String),
+}
+
+/// A [`SpreadError::Param`] about `param`.
+fn param_error(param: &'static str, message: impl Into<String>) -> SpreadError {
+    SpreadError::Param { param, message: message.into() }
+}
+
 /// Checks spread parameters no port range can (`fps` converts the lifetime from frames to
-/// seconds); errors name the port. Gives the curvature distance in use (0 with `curvature` off)
-/// and the lifetime in seconds.
-pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), NodeError> {
+/// seconds); errors name the parameter. Gives the curvature distance in use (0 with `curvature`
+/// off) and the lifetime in seconds.
+pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), SpreadError> {
     let d_t = if p.curvature { p.d_t } else { 0.0 };
     let lifetime = p.lifetime as f32 / fps;
     let port_k = port!(SpreadParams, K);
@@ -84,19 +109,19 @@ pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), NodeErr
         (port!(SpreadParams, lifetime), lifetime),
     ] {
         if !v.is_finite() || v < 0.0 {
-            return Err(NodeError::port(name, format!("must be a finite number ≥ 0, got {v}")));
+            return Err(param_error(name, format!("must be a finite number ≥ 0, got {v}")));
         }
     }
     if p.K <= 0.0 {
-        return Err(NodeError::port(port_k, "the global time scale K must be positive"));
+        return Err(param_error(port_k, "the global time scale K must be positive"));
     }
     for (name, v) in [(port_s, p.d_s), (port_d, p.d_d)] {
         if v <= 0.0 {
-            return Err(NodeError::port(name, "must be positive"));
+            return Err(param_error(name, "must be positive"));
         }
     }
     if p.points < 3 {
-        return Err(NodeError::port(
+        return Err(param_error(
             port!(SpreadParams, points),
             format!("an ignition ring needs at least 3 points (Perry used ≥ 8), got {}", p.points),
         ));
@@ -107,25 +132,23 @@ pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), NodeErr
 impl Spread {
     /// A spread over `surface` that will ignite at each of `ignitions` (at its time); `fps`
     /// converts the flame lifetime l_f from frames to seconds.
-    pub fn new(surface: Arc<Surface>, ignitions: Vec<Ignition>, params: SpreadParams, fps: f32) -> Result<Spread, NodeError> {
+    pub fn new(surface: Arc<Surface>, ignitions: Vec<Ignition>, params: SpreadParams, fps: f32) -> Result<Spread, SpreadError> {
         let (d_t, lifetime) = validate(&params, fps)?;
-        let ignite = port!(FireSpread, ignite);
         for (k, ig) in ignitions.iter().enumerate() {
             if ig.face as usize >= surface.len() {
-                return Err(NodeError::port(
-                    ignite,
-                    format!("ignition {}: face {} is past the mesh's {} faces", k + 1, ig.face, surface.len()),
-                ));
+                return Err(SpreadError::Ignition(format!(
+                    "ignition {}: face {} is past the mesh's {} faces",
+                    k + 1,
+                    ig.face,
+                    surface.len()
+                )));
             }
             if ig.bary.iter().any(|b| !b.is_finite() || *b < 0.0) || ig.bary.iter().sum::<f32>() <= 0.0 {
-                return Err(NodeError::port(
-                    ignite,
-                    format!(
-                        "ignition {}: barycentric coordinates {:?} are not a point of the face (need ≥ 0, not all 0)",
-                        k + 1,
-                        ig.bary
-                    ),
-                ));
+                return Err(SpreadError::Ignition(format!(
+                    "ignition {}: barycentric coordinates {:?} are not a point of the face (need ≥ 0, not all 0)",
+                    k + 1,
+                    ig.bary
+                )));
             }
         }
         let mut pending = ignitions;
@@ -211,7 +234,18 @@ impl Spread {
     /// Advances the spread by `dt` seconds in the wind `wind(p)` (the external wind u∞).
     pub fn step(&mut self, dt: f32, wind: &(dyn Fn(Vec3) -> Vec3 + Sync)) {
         let dt = dt.max(0.0);
-        // Flame roots age; the dead leave char (§3.4.1).
+        self.age_roots(dt);
+        let moves = self.propose_moves(dt, wind);
+        let blocked = if self.params.double_burn { self.blocked_moves(&moves) } else { Vec::new() };
+        self.apply_moves(&moves, &blocked);
+        self.thin_dead_runs();
+        self.insert_points();
+        self.time += dt;
+        self.ignite_due();
+    }
+
+    /// Flame roots age; the dead leave char (§3.4.1).
+    fn age_roots(&mut self, dt: f32) {
         for c in &mut self.chars {
             c.age += dt;
         }
@@ -225,10 +259,12 @@ impl Spread {
             }
         }
         self.roots = live;
+    }
 
-        // Proposed moves, in parallel (each point moves without knowledge of the others, §3.4.2).
-        let moves: Vec<Vec<Option<(ControlPoint, bool, f32)>>> = self
-            .loops
+    /// Proposed moves, in parallel (each point moves without knowledge of the others, §3.4.2):
+    /// per loop and point, `None` for an extinguished point.
+    fn propose_moves(&self, dt: f32, wind: &(dyn Fn(Vec3) -> Vec3 + Sync)) -> Vec<Vec<Move>> {
+        self.loops
             .par_iter()
             .map(|ring| {
                 ring.par_iter()
@@ -246,49 +282,52 @@ impl Spread {
                     })
                     .collect()
             })
+            .collect()
+    }
+
+    /// Double-burn prevention against the boundary at t − 1 (Figure 3-9): per loop and point,
+    /// whether its move is blocked.
+    fn blocked_moves(&self, moves: &[Vec<Move>]) -> Vec<Vec<bool>> {
+        // Points move at once, so the test also runs against the proposed boundary at t:
+        // two fronts closing in by less than two steps would otherwise pass through each other.
+        let proposed: Vec<Vec<ControlPoint>> = self
+            .loops
+            .iter()
+            .zip(moves)
+            .map(|(ring, m)| ring.iter().zip(m).map(|(cp, mv)| mv.map_or(*cp, |(np, _, _)| np)).collect())
             .collect();
+        let cell = self.params.d_s.max(1e-6) * 2.0;
+        let surface = &*self.surface;
+        let (old_grid, new_grid) =
+            rayon::join(|| SegmentGrid::new(surface, &self.loops, cell), || SegmentGrid::new(surface, &proposed, cell));
+        let tol = 0.02 * self.params.d_s;
+        self.loops
+            .par_iter()
+            .enumerate()
+            .map(|(li, ring)| {
+                (0..ring.len())
+                    .into_par_iter()
+                    .map(|j| match &moves[li][j] {
+                        Some((np, _, moved)) if *moved > 0.0 => {
+                            let n = ring.len();
+                            let path = surface.chord(ring[j].face, ring[j].position, np.face, np.position);
+                            // The segment test skips the point's own two segments: check them here.
+                            [(j + n - 1) % n, (j + 1) % n]
+                                .into_iter()
+                                .any(|k| met_neighbour(surface, (&ring[j], np), (&ring[k], &proposed[li][k]), tol))
+                                || old_grid.crosses(li, j, &path, tol)
+                                || new_grid.crosses(li, j, &path, tol)
+                        }
+                        _ => false,
+                    })
+                    .collect()
+            })
+            .collect()
+    }
 
-        // Double-burn prevention against the boundary at t − 1 (Figure 3-9).
-        let blocked: Vec<Vec<bool>> = if self.params.double_burn {
-            // Points move at once, so the test also runs against the proposed boundary at t:
-            // two fronts closing in by less than two steps would otherwise pass through each other.
-            let proposed: Vec<Vec<ControlPoint>> = self
-                .loops
-                .iter()
-                .zip(&moves)
-                .map(|(ring, m)| ring.iter().zip(m).map(|(cp, mv)| mv.map_or(*cp, |(np, _, _)| np)).collect())
-                .collect();
-            let cell = self.params.d_s.max(1e-6) * 2.0;
-            let surface = &*self.surface;
-            let (old_grid, new_grid) =
-                rayon::join(|| SegmentGrid::new(surface, &self.loops, cell), || SegmentGrid::new(surface, &proposed, cell));
-            let tol = 0.02 * self.params.d_s;
-            self.loops
-                .par_iter()
-                .enumerate()
-                .map(|(li, ring)| {
-                    (0..ring.len())
-                        .into_par_iter()
-                        .map(|j| match &moves[li][j] {
-                            Some((np, _, moved)) if *moved > 0.0 => {
-                                let n = ring.len();
-                                let path = surface.chord(ring[j].face, ring[j].position, np.face, np.position);
-                                // The segment test skips the point's own two segments: check them here.
-                                [(j + n - 1) % n, (j + 1) % n]
-                                    .into_iter()
-                                    .any(|k| met_neighbour(surface, (&ring[j], np), (&ring[k], &proposed[li][k]), tol))
-                                    || old_grid.crosses(li, j, &path, tol)
-                                    || new_grid.crosses(li, j, &path, tol)
-                            }
-                            _ => false,
-                        })
-                        .collect()
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-
+    /// Moves every point as proposed unless `blocked` (then it goes out), dropping flame roots
+    /// along the way; a point that hit a boundary edge goes out where it stopped.
+    fn apply_moves(&mut self, moves: &[Vec<Move>], blocked: &[Vec<bool>]) {
         let dd = self.params.d_d;
         for (li, ring) in self.loops.iter_mut().enumerate() {
             for (j, cp) in ring.iter_mut().enumerate() {
@@ -329,10 +368,6 @@ impl Spread {
                 }
             }
         }
-        self.thin_dead_runs();
-        self.insert_points();
-        self.time += dt;
-        self.ignite_due();
     }
 
     /// Drops an extinguished point between extinguished neighbours when the boundary hardly

@@ -1,6 +1,7 @@
 //! Perry's fire spread over polygon meshes (Perry 1994 §3.3–3.4) and the `particles.fire_spread`
-//! node: the surface a front moves over ([`surface`]), the front itself ([`front`]), the stepping
-//! cache behind the node's clip ([`cache`]) and the node ([`node`]).
+//! node: the spread's parameters ([`spread_params`]), the surface a front moves over
+//! ([`surface`]), the front itself ([`front`]), the stepping cache behind the node's clip
+//! ([`cache`]) and the node ([`node`]).
 //!
 //! The inception boundary is a counter-clockwise ring of spread control points per ignition
 //! (burnt region on the left, seen from outside). Each point moves along its heading, in the
@@ -30,11 +31,13 @@
 pub mod cache;
 pub mod front;
 pub mod node;
+pub mod spread_params;
 pub mod surface;
 
 pub use cache::SpreadSource;
-pub use front::{ControlPoint, Ignition, Spread, spread_wind};
-pub use node::{FireSpread, SpreadParams, parse_ignitions};
+pub use front::{ControlPoint, Ignition, Spread, SpreadError, spread_wind};
+pub use node::{FireSpread, parse_ignitions};
+pub use spread_params::SpreadParams;
 pub use surface::Surface;
 
 use pyrograph_core::Registry;

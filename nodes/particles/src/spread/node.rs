@@ -1,8 +1,5 @@
 //! The `particles.fire_spread` node: its ports (the [`SpreadParams`] group is the spread's
-//! parameters) and the `ignite` text.
-
-// The port `K` is Perry's global time scale K; the field carries its name.
-#![allow(non_snake_case)]
+//! parameters), the `ignite` text, and the spread's errors mapped to the ports they are about.
 
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
@@ -13,61 +10,11 @@ use pyrograph_core::params::Cook;
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::SpreadSource;
-use super::front::{Ignition, Spread, validate};
+use super::front::{Ignition, Spread, SpreadError, validate};
+use super::spread_params::SpreadParams;
 use super::surface::Surface;
 use crate::types::{Mesh, SpreadState, WindField};
 use crate::wind::validate_wind;
-
-pyrograph_core::ports! {
-    /// Parameters of the spread (Perry 1994 §3.3–3.4, Table 3.1): the ports of
-    /// `particles.fire_spread` after its inputs, frames, fps and substeps.
-    #[derive(PartialEq)]
-    pub struct SpreadParams {
-        /// Opposed-flow heat flux q_o (footnote 10: 0.09).
-        #[range(0.0, 10.0)]
-        q_o: f32 = 0.09,
-        /// Concurrent-flow heat flux q_c (footnote 10: 0.13).
-        #[range(0.0, 10.0)]
-        q_c: f32 = 0.13,
-        /// Global time scale K of eq. 3.4 (Table 3.1).
-        #[range(0.004, 0.4)]
-        K: f32 = 0.4,
-        /// Curvature distance d_t (Table 3.1).
-        #[range(0.01, 0.5)]
-        d_t: f32 = 0.05,
-        /// Use the curvature ramp of eq. 3.4 (off: flat speed everywhere).
-        curvature: bool = true,
-        /// Control point separation d_s (Table 3.1).
-        #[range(0.01, 0.2)]
-        d_s: f32 = 0.05,
-        /// Flame drop distance d_d (Table 3.1).
-        #[range(0.01, 1.0)]
-        d_d: f32 = 0.05,
-        /// Flame lifetime l_f in frames (Table 3.1).
-        #[range(1, 1000)]
-        lifetime: u32 = 48,
-        /// Random per-flame lifetime variation.
-        #[range(0.0, 1.0)]
-        lifetime_jitter: f32 = 0.3,
-        /// Control points of each ignition ring (footnote 13: eight or more).
-        #[range(8, 4096)]
-        points: usize = 16,
-        /// No points are inserted beyond this many.
-        #[range(8, 10_000_000)]
-        max_points: usize = 200_000,
-        /// Prevent double burning by the segment test of Figure 3-9 (off for planar cases).
-        double_burn: bool = true,
-        /// Seed of the per-flame lifetime variation.
-        #[range(0, u32::MAX)]
-        seed: u32 = 0,
-    }
-}
-
-impl Default for SpreadParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
-    }
-}
 
 pyrograph_core::node! {
     /// Perry's fire spread over a polygon mesh (Perry 1994 §3.3–3.4): each ignition starts a
@@ -112,7 +59,7 @@ impl Cook for FireSpread {
     fn cook(self, _: &CookCtx) -> Result<FireSpreadOut, NodeError> {
         let surface = Arc::new(Surface::new(&self.mesh).map_err(|m| NodeError::port(port!(FireSpread, mesh), m))?);
         validate_wind(&self.wind, port!(FireSpread, wind))?;
-        validate(&self.params, self.fps as f32)?;
+        validate(&self.params, self.fps as f32).map_err(port_error)?;
         let ignitions = parse_ignitions(&self.ignite, &surface, self.snap)?;
         let (frames, fps, substeps) = (self.frames, self.fps, self.substeps);
         let mut h = Fingerprinter::new();
@@ -121,9 +68,18 @@ impl Cook for FireSpread {
         Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}{ignitions:?}", self.params).hash(&mut h);
         (frames, fps.to_bits(), substeps).hash(&mut h);
-        let spread = Spread::new(surface, ignitions, self.params, fps as f32)?;
+        let spread = Spread::new(surface, ignitions, self.params, fps as f32).map_err(port_error)?;
         let source = SpreadSource::new(spread, (*self.wind).clone(), frames, fps as f32, substeps);
         Ok(FireSpreadOut { spread: ClipOf::new(Clip::new(PortType::of::<SpreadState>(), fps, h.finish(), Arc::new(source))) })
+    }
+}
+
+/// The node error for a spread that cannot start: a parameter's error names its port, an
+/// ignition's names `ignite`.
+fn port_error(e: SpreadError) -> NodeError {
+    match e {
+        SpreadError::Param { param, message } => NodeError::port(param, message),
+        SpreadError::Ignition(message) => NodeError::port(port!(FireSpread, ignite), message),
     }
 }
 

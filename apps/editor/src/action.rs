@@ -1,0 +1,46 @@
+//! What a gesture on the canvas asks of the app: the canvas and its viewer collect [`Action`]s
+//! during the frame's canvas pass, and the app applies them through the editor afterwards.
+
+use eframe::egui::Pos2;
+
+use crate::annotate::Annotation;
+use crate::state::PaletteItem;
+
+/// A gesture on the canvas, applied after the frame's canvas pass.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Connect `(node, output)` to `(node, input)` (port names).
+    Connect {
+        /// Source node and output.
+        from: (String, String),
+        /// Target node and input.
+        to: (String, String),
+    },
+    /// Remove the edge between two ports (`node.port`).
+    Disconnect {
+        /// `node.output`.
+        from: String,
+        /// `node.input`.
+        to: String,
+    },
+    /// Remove every edge into an input.
+    DropInput(String, String),
+    /// Remove every edge out of an output.
+    DropOutput(String, String),
+    /// Add a palette item at a canvas position.
+    Add(PaletteItem, Pos2),
+    /// Delete nodes.
+    Remove(Vec<String>),
+    /// Duplicate nodes.
+    Duplicate(Vec<String>),
+    /// Toggle showing every parameter as a pin.
+    ToggleParamPins(String),
+    /// Preview a node.
+    Preview(String),
+    /// Replace the node selection (the last id is the node the inspector shows).
+    Select(Vec<String>),
+    /// Select a group or a comment (or neither).
+    SelectAnnotation(Option<Annotation>),
+    /// A comment was dragged to a canvas position.
+    MoveComment(usize, Pos2),
+}

@@ -1,0 +1,315 @@
+//! The side panels: the inspector (parameters of the current node, or the selected group or
+//! comment) and the preview with its frame scrubber.
+
+use std::time::Instant;
+
+use eframe::egui::{self, Color32, RichText};
+
+use crate::annotate::{Annotation, COMMENT_COLOR, GROUP_COLOR, hex_rgb, rgb_hex};
+use crate::app::EditorApp;
+use crate::param_widgets::{buffered_text, param_widget, raw_widget};
+
+impl EditorApp {
+    pub(crate) fn inspector(&mut self, ui: &mut egui::Ui) {
+        if self.editor.selection().is_empty()
+            && let Some(which) = self.canvas.annotation
+        {
+            self.annotation_inspector(ui, which);
+            return;
+        }
+        let Some(id) = self.editor.current().map(str::to_string) else {
+            ui.weak("Click a node to edit its parameters.");
+            return;
+        };
+        let Some(nd) = self.editor.doc().node(&id).cloned() else { return };
+        ui.horizontal(|ui| {
+            ui.heading(&id);
+            ui.weak(&nd.type_name);
+        });
+        for p in self.editor.node_problems(&id) {
+            ui.colored_label(Color32::from_rgb(255, 120, 120), format!("⚠ {p}"));
+        }
+        for w in self.editor.node_warnings(&id) {
+            ui.colored_label(Color32::from_rgb(255, 190, 70), format!("⚠ warning: {w}"));
+        }
+        let Some(desc) = self.editor.desc(&id).cloned() else {
+            ui.colored_label(Color32::from_rgb(255, 120, 120), "unknown node type: no parameters to show");
+            return;
+        };
+        ui.collapsing("About", |ui| {
+            ui.label(format!("{} · {}", desc.category, desc.time.name()));
+            ui.label(&desc.doc);
+        });
+        let mut pins = self.canvas.param_pins.contains(&id);
+        if ui.checkbox(&mut pins, "Show parameters as pins").changed() {
+            self.canvas.toggle_param_pins(&id);
+        }
+        ui.separator();
+        let mut change = None;
+        let mut reset = None;
+        egui::Grid::new(("params", &id)).num_columns(3).striped(true).spacing([8.0, 4.0]).show(ui, |ui| {
+            for port in &desc.inputs {
+                let label = ui.label(&port.name).on_hover_text(format!("{}: {}\n{}", port.name, port.ty, port.doc));
+                let _ = label;
+                if let Some(src) = self.editor.incoming(&id, &port.name) {
+                    ui.label(RichText::new(format!("from {src}")).italics().color(Color32::from_rgb(140, 190, 250)))
+                        .on_hover_text("driven by a connection");
+                    ui.label("");
+                    ui.end_row();
+                    continue;
+                }
+                if !port.ty.is_parameter() {
+                    let (t, c) = if port.is_required() {
+                        ("not connected (required)", Color32::from_rgb(255, 130, 130))
+                    } else {
+                        ("default", Color32::GRAY)
+                    };
+                    ui.label(RichText::new(t).color(c));
+                    ui.label("");
+                    ui.end_row();
+                    continue;
+                }
+                let set = nd.params.get(&port.name).cloned();
+                let widget_id = egui::Id::new(("param", &id, &port.name));
+                match self.editor.param_value(&id, port) {
+                    Some(value) => {
+                        let r = ui
+                            .scope(|ui| {
+                                let r = param_widget(ui, widget_id, port, &value);
+                                match r {
+                                    Some(v) => Some(v),
+                                    None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
+                                    None => None,
+                                }
+                            })
+                            .inner;
+                        if let Some(v) = r {
+                            change = Some((port.name.clone(), v));
+                        }
+                    }
+                    None => {
+                        let mut s = String::new();
+                        if ui.add(egui::TextEdit::singleline(&mut s).hint_text("required")).changed() {
+                            change = Some((port.name.clone(), pyrograph_frontend::core::ParamValue::parse_cli(&s)));
+                        }
+                    }
+                }
+                if set.is_some() {
+                    if ui.small_button("⟲").on_hover_text("reset to default").clicked() {
+                        reset = Some(port.name.clone());
+                    }
+                } else {
+                    ui.label("");
+                }
+                ui.end_row();
+            }
+        });
+        if let Some((name, v)) = change
+            && let Err(e) = self.editor.set_param(&id, &name, v)
+        {
+            self.editor.set_status(e, true);
+        }
+        if let Some(name) = reset {
+            self.editor.reset_param(&id, &name);
+            self.editor.seal();
+        }
+    }
+
+    pub(crate) fn advance_playback(&mut self, ctx: &egui::Context) {
+        if !self.playing {
+            return;
+        }
+        let (len, fps) = match self.editor.preview() {
+            Some(p) => (p.clip_len.unwrap_or(0), if p.fps > 0.0 { p.fps } else { 24.0 }),
+            None => (0, 24.0),
+        };
+        if len == 0 {
+            self.playing = false;
+            return;
+        }
+        let period = 1.0 / fps;
+        if !self.editor.is_cooking() && self.last_advance.elapsed().as_secs_f64() >= period {
+            let frame = self.editor.preview_request().map_or(0, |p| p.frame);
+            self.editor.set_frame((frame + 1) % len);
+            self.last_advance = Instant::now();
+        }
+        ctx.request_repaint_after(std::time::Duration::from_secs_f64(period / 2.0));
+    }
+
+    pub(crate) fn preview_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(req) = self.editor.preview_request().cloned() else {
+            ui.weak("Select a node to preview its output.");
+            return;
+        };
+        let desc = self.editor.desc(&req.node).cloned();
+        ui.horizontal(|ui| {
+            ui.label(RichText::new(format!("Preview: {}", req.node)).strong());
+            if let Some(desc) = &desc
+                && desc.outputs.len() > 1
+            {
+                let mut out = req.output;
+                egui::ComboBox::from_id_salt("preview-output")
+                    .selected_text(desc.outputs.get(out).map_or("?", |p| p.name.as_str()))
+                    .show_ui(ui, |ui| {
+                        for (i, p) in desc.outputs.iter().enumerate() {
+                            ui.selectable_value(&mut out, i, &p.name);
+                        }
+                    });
+                if out != req.output {
+                    self.editor.set_preview_output(out);
+                }
+            }
+        });
+        if self.editor.is_cooking() {
+            let st = self.editor.cook_status();
+            ui.horizontal(|ui| {
+                let (frac, text) = match (st.frames, &st.node) {
+                    (Some((d, t)), Some(n)) if t > 0 => (d as f32 / t as f32, format!("{n}: frame {d}/{t}")),
+                    (_, Some(n)) => ((st.nodes_done as f32 / st.nodes_total.max(1) as f32).min(1.0), format!("cooking {n}")),
+                    _ => (0.0, "cooking…".to_string()),
+                };
+                ui.add(egui::ProgressBar::new(frac).text(text).desired_width(ui.available_width() - 80.0).animate(true));
+                if ui.button("Cancel").clicked() {
+                    self.editor.cancel();
+                }
+            });
+        }
+        let Some(p) = self.editor.preview().cloned() else {
+            ui.weak("waiting for the cook…");
+            return;
+        };
+        if let Some(e) = &p.error {
+            ui.colored_label(Color32::from_rgb(255, 120, 120), e);
+        }
+        if !p.summary.is_empty() {
+            ui.label(RichText::new(&p.summary).monospace());
+        }
+        if let Some(len) = p.clip_len
+            && len > 0
+        {
+            ui.horizontal(|ui| {
+                if ui.button(if self.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
+                    self.playing = !self.playing;
+                    self.last_advance = Instant::now();
+                }
+                let mut frame = req.frame.min(len - 1);
+                let r = ui.add(egui::Slider::new(&mut frame, 0..=len - 1).show_value(false));
+                if r.changed() {
+                    self.playing = false;
+                    self.editor.set_frame(frame);
+                }
+                ui.label(format!("frame {} / {}", frame, len - 1));
+            });
+        }
+        let serial = self.editor.preview_serial();
+        if let Some(img) = &p.image {
+            let stale = self.texture.as_ref().is_none_or(|(s, _)| *s != serial);
+            if stale {
+                let ci = egui::ColorImage::from_rgba_unmultiplied(img.size, &img.rgba);
+                match &mut self.texture {
+                    Some((s, t)) => {
+                        t.set(ci, egui::TextureOptions::LINEAR);
+                        *s = serial;
+                    }
+                    None => self.texture = Some((serial, ui.ctx().load_texture("preview", ci, egui::TextureOptions::LINEAR))),
+                }
+            }
+        }
+        let size = p
+            .image
+            .as_ref()
+            .map(|i| egui::vec2(i.size[0] as f32, i.size[1] as f32))
+            .or_else(|| p.contour_size.map(|s| egui::vec2(s[0] as f32, s[1] as f32)));
+        let Some(size) = size.filter(|s| s.x > 0.0 && s.y > 0.0) else { return };
+        let avail = ui.available_size();
+        let scale = (avail.x / size.x).min(avail.y / size.y).max(0.01);
+        let (rect, resp) = ui.allocate_exact_size(size * scale, egui::Sense::hover());
+        let painter = ui.painter_at(rect);
+        match (&p.image, &self.texture) {
+            (Some(_), Some((_, tex))) => {
+                painter.image(
+                    tex.id(),
+                    rect,
+                    egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                    Color32::WHITE,
+                );
+            }
+            _ => {
+                painter.rect_filled(rect, 0.0, Color32::from_gray(20));
+            }
+        }
+        if !p.contours.is_empty() {
+            let cs = p.contour_size.map_or(size, |s| egui::vec2(s[0] as f32, s[1] as f32));
+            let k = egui::vec2(rect.width() / cs.x.max(1.0), rect.height() / cs.y.max(1.0));
+            for c in &p.contours {
+                let pts: Vec<egui::Pos2> = c.iter().map(|q| rect.min + egui::vec2(q[0] * k.x, q[1] * k.y)).collect();
+                if pts.len() > 1 {
+                    painter.add(egui::Shape::closed_line(pts, egui::Stroke::new(1.5, Color32::from_rgb(80, 230, 255))));
+                }
+            }
+        }
+        let _ = resp.on_hover_text(format!("{}×{}", size.x, size.y));
+    }
+}
+
+/// Whether a stored value has the kind the port expects (else the raw editor is offered).
+fn kind_ok(port: &pyrograph_frontend::core::PortDesc, v: &pyrograph_frontend::core::ParamValue) -> bool {
+    use pyrograph_frontend::core::{ParamValue as P, PortType as T};
+    match (&port.ty, v) {
+        (T::Float, P::Float(_) | P::Int(_)) | (T::Int, P::Int(_)) | (T::Bool, P::Bool(_)) => true,
+        (T::String | T::Path | T::Enum, P::String(_)) => true,
+        (T::Color, _) => crate::param_widgets::as_color(v).is_some(),
+        (T::Vec2 | T::Vec3, P::List(_)) => true,
+        _ => false,
+    }
+}
+
+impl EditorApp {
+    /// The inspector of a group (title, colour, its nodes) or a comment (text, colour).
+    fn annotation_inspector(&mut self, ui: &mut egui::Ui, which: Annotation) {
+        let doc = self.editor.doc();
+        let (kind, text, color, members) = match which {
+            Annotation::Group(i) => match doc.groups.get(i) {
+                Some(g) => ("Group", g.title.clone(), g.color.clone(), g.nodes.clone()),
+                None => return,
+            },
+            Annotation::Comment(i) => match doc.comments.get(i) {
+                Some(c) => ("Comment", c.text.clone(), c.color.clone(), Vec::new()),
+                None => return,
+            },
+        };
+        ui.heading(kind);
+        let multiline = matches!(which, Annotation::Comment(_));
+        ui.label(if multiline {
+            "Text (click elsewhere or Tab to commit, Escape reverts)"
+        } else {
+            "Title (Enter commits, Escape reverts)"
+        });
+        if let Some(t) = buffered_text(ui, egui::Id::new(("annotation-text", format!("{which:?}"))), &text, multiline) {
+            match which {
+                Annotation::Group(i) => self.editor.set_group_title(i, &t),
+                Annotation::Comment(i) => self.editor.set_comment_text(i, &t),
+            }
+            self.editor.seal();
+        }
+        ui.horizontal(|ui| {
+            ui.label("Colour");
+            let fallback = if multiline { COMMENT_COLOR } else { GROUP_COLOR };
+            let mut rgb = color.as_deref().and_then(hex_rgb).or_else(|| hex_rgb(fallback)).unwrap_or([128, 128, 128]);
+            if ui.color_edit_button_srgb(&mut rgb).changed() {
+                self.editor.set_annotation_color(which, &rgb_hex(rgb));
+            }
+        });
+        if !members.is_empty() {
+            ui.label(format!("{} node(s): {}", members.len(), members.join(", ")));
+            if ui.button("Select its nodes").clicked() {
+                self.editor.set_selection(members);
+                self.canvas.annotation = None;
+            }
+        }
+        if ui.button(if multiline { "Delete comment" } else { "Ungroup (keeps the nodes)" }).clicked() {
+            self.editor.remove_annotation(which);
+            self.canvas.annotation = None;
+        }
+    }
+}

@@ -1,0 +1,772 @@
+//! The editor's logic without any UI: the document and its edits, undo/redo, validation
+//! mapped to nodes, the node palette, file handling and cook requests.
+//!
+//! Everything the UI does goes through [`Editor`] methods, so tests drive the editor directly.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use pyrograph_frontend::core::document::split_endpoint;
+use pyrograph_frontend::core::graph::{expand_vars, value_to_param};
+use pyrograph_frontend::core::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
+use pyrograph_frontend::core::graph::preset_desc;
+use pyrograph_frontend::core::{
+    BuildOptions, CookSettings, Diagnostic, DiagnosticKind, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc,
+    Registry, TimeDep,
+};
+
+use crate::cook::{CookOutcome, CookRequest, CookStatus, Cooker, Notify, Preview, PreviewRequest};
+use crate::history::History;
+pub use crate::layout::auto_layout;
+use crate::layout::relative_path;
+
+mod files;
+mod preset_lib;
+
+pub use preset_lib::{SelectionPreset, filter_presets};
+
+/// A message for the status bar.
+#[derive(Clone, Debug)]
+pub struct Status {
+    /// The text.
+    pub text: String,
+    /// Whether it reports a problem (shown in red, and as a toast).
+    pub error: bool,
+    /// When it was set.
+    pub at: Instant,
+}
+
+/// Validation state of the current document.
+#[derive(Clone, Default)]
+pub struct Validation {
+    /// The built graph, when the document is valid.
+    pub graph: Option<Arc<Graph>>,
+    /// Every problem found, in the loader's order.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Problems by node id (node, port and edge locations map to their node).
+    pub by_node: BTreeMap<String, Vec<String>>,
+}
+
+/// One entry of the node palette.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaletteItem {
+    /// The node type, or `graph.include` for presets.
+    pub type_name: String,
+    /// Palette category (`Imaging`, `Preset`, …).
+    pub category: String,
+    /// One-line summary.
+    pub summary: String,
+    /// The preset file, for presets.
+    pub preset: Option<PathBuf>,
+}
+
+fn same_folder(a: &Path, b: &Path) -> bool {
+    a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+}
+
+/// The editor session.
+pub struct Editor {
+    doc: GraphDoc,
+    path: Option<PathBuf>,
+    saved: GraphDoc,
+    registry: Arc<Registry>,
+    history: History,
+    validation: Validation,
+    descs: HashMap<String, Arc<NodeDesc>>,
+    revision: u64,
+    cooker: Cooker,
+    /// Cook errors per node from the latest finished cook.
+    cook_errors: BTreeMap<String, String>,
+    cook_warnings: BTreeMap<String, Vec<String>>,
+    last_outcome: Option<CookOutcome>,
+    preview: Option<Preview>,
+    preview_req: Option<PreviewRequest>,
+    preview_serial: u64,
+    selection: Vec<String>,
+    status: Option<Status>,
+    recent: Vec<PathBuf>,
+    recent_file: Option<PathBuf>,
+    preset_dirs: Vec<PathBuf>,
+    /// Outcomes received since the last call to [`Editor::take_outcomes`] (tests read logs here).
+    received: Vec<CookOutcome>,
+    /// Whether preview cooks are requested automatically after edits.
+    pub auto_cook: bool,
+}
+
+impl Editor {
+    /// A session with an empty document and the given node registry.
+    pub fn new(registry: Arc<Registry>) -> Self {
+        // The CLI's search path (a studio's PYROGRAPH_PRESET_PATH, then pyrograph's own), after
+        // the working folder's graphs/presets; the open graph's presets/ goes first on open.
+        let mut preset_dirs = Vec::new();
+        if let Ok(cwd) = std::env::current_dir() {
+            preset_dirs.push(cwd.join("graphs").join("presets"));
+        }
+        let env = std::env::var_os(pyrograph_frontend::presets::PRESET_PATH_VAR);
+        let builtin = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../graphs/presets");
+        for d in pyrograph_frontend::presets::search_path(None, env.as_deref(), &builtin) {
+            if !preset_dirs.iter().any(|x| same_folder(x, &d)) {
+                preset_dirs.push(d);
+            }
+        }
+        let mut ed = Editor {
+            doc: GraphDoc::new(),
+            path: None,
+            saved: GraphDoc::new(),
+            registry,
+            history: History::new(),
+            validation: Validation::default(),
+            descs: HashMap::new(),
+            revision: 1,
+            cooker: Cooker::new(),
+            cook_errors: BTreeMap::new(),
+            cook_warnings: BTreeMap::new(),
+            last_outcome: None,
+            preview: None,
+            preview_req: None,
+            preview_serial: 0,
+            selection: Vec::new(),
+            status: None,
+            recent: Vec::new(),
+            recent_file: None,
+            preset_dirs,
+            received: Vec::new(),
+            auto_cook: true,
+        };
+        ed.revalidate();
+        ed
+    }
+
+    /// A session with every node type pyrograph ships.
+    pub fn with_default_registry() -> Self {
+        Editor::new(Arc::new(pyrograph_frontend::registry()))
+    }
+
+    // ----- accessors -----
+
+    /// The current document.
+    pub fn doc(&self) -> &GraphDoc {
+        &self.doc
+    }
+
+    /// The file the document was opened from or saved to.
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_deref()
+    }
+
+    /// Whether the document differs from the file.
+    pub fn is_dirty(&self) -> bool {
+        self.doc != self.saved
+    }
+
+    /// The window title: file name, a `*` when dirty.
+    pub fn title(&self) -> String {
+        let name = self.path.as_ref().and_then(|p| p.file_name()).map_or("untitled".into(), |n| n.to_string_lossy().into_owned());
+        format!("{}{name} — pyrograph editor", if self.is_dirty() { "* " } else { "" })
+    }
+
+    /// The node registry.
+    pub fn registry(&self) -> &Registry {
+        &self.registry
+    }
+
+    /// Changes whenever the document changes (views resync on it).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Validation results.
+    pub fn validation(&self) -> &Validation {
+        &self.validation
+    }
+
+    /// The description of node `id` (for includes: the included file's interface).
+    pub fn desc(&self, id: &str) -> Option<&Arc<NodeDesc>> {
+        self.descs.get(id)
+    }
+
+    /// Every problem attached to node `id`: validation first, then its cook error.
+    pub fn node_problems(&self, id: &str) -> Vec<String> {
+        let mut v = self.validation.by_node.get(id).cloned().unwrap_or_default();
+        if let Some(e) = self.cook_errors.get(id) {
+            v.push(e.clone());
+        }
+        v
+    }
+
+    /// Warnings node `id` reported when it last cooked (kept while the cache serves it); for a
+    /// preset, those of the nodes inside it too, each named.
+    pub fn node_warnings(&self, id: &str) -> Vec<String> {
+        let inner = format!("{id}/");
+        self.cook_warnings
+            .iter()
+            .filter(|(k, _)| *k == id || k.starts_with(&inner))
+            .flat_map(|(k, ws)| ws.iter().map(move |w| if k == id { w.clone() } else { format!("{k}: {w}") }))
+            .collect()
+    }
+
+    /// Cook errors of the latest cook by node.
+    pub fn cook_errors(&self) -> &BTreeMap<String, String> {
+        &self.cook_errors
+    }
+
+    /// The latest status message.
+    pub fn status(&self) -> Option<&Status> {
+        self.status.as_ref()
+    }
+
+    /// Sets the status message.
+    pub fn set_status(&mut self, text: impl Into<String>, error: bool) {
+        self.status = Some(Status { text: text.into(), error, at: Instant::now() });
+    }
+
+    /// The selected node ids.
+    pub fn selection(&self) -> &[String] {
+        &self.selection
+    }
+
+    /// The latest preview.
+    pub fn preview(&self) -> Option<&Preview> {
+        self.preview.as_ref()
+    }
+
+    /// Changes whenever a new preview arrives (views re-upload textures on it).
+    pub fn preview_serial(&self) -> u64 {
+        self.preview_serial
+    }
+
+    /// What the preview shows (node, output, frame).
+    pub fn preview_request(&self) -> Option<&PreviewRequest> {
+        self.preview_req.as_ref()
+    }
+
+    /// The latest finished cook.
+    pub fn last_outcome(&self) -> Option<&CookOutcome> {
+        self.last_outcome.as_ref()
+    }
+
+    /// Cook outcomes received since the last call (oldest first).
+    pub fn take_outcomes(&mut self) -> Vec<CookOutcome> {
+        std::mem::take(&mut self.received)
+    }
+
+    /// Whether a cook is queued or running.
+    pub fn is_cooking(&self) -> bool {
+        self.cooker.is_busy()
+    }
+
+    /// Progress of the running cook.
+    pub fn cook_status(&self) -> CookStatus {
+        self.cooker.status()
+    }
+
+    /// Sets the callback the cook worker calls when it has news.
+    pub fn set_notify(&self, notify: Notify) {
+        self.cooker.set_notify(notify);
+    }
+
+    /// Whether undo / redo are possible.
+    pub fn can_undo(&self) -> bool {
+        self.history.can_undo()
+    }
+
+    /// Whether redo is possible.
+    pub fn can_redo(&self) -> bool {
+        self.history.can_redo()
+    }
+
+    /// Folders searched for presets.
+    pub fn preset_dirs(&self) -> &[PathBuf] {
+        &self.preset_dirs
+    }
+
+    /// Adds a folder searched for presets (first).
+    pub fn add_preset_dir(&mut self, dir: PathBuf) {
+        self.preset_dirs.insert(0, dir);
+    }
+
+    /// The folder relative paths resolve against: the file's folder, else the working folder.
+    pub fn base_dir(&self) -> PathBuf {
+        match self.path.as_ref().and_then(|p| p.parent()) {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => std::env::current_dir().unwrap_or_default(),
+        }
+    }
+
+    // ----- edits -----
+
+    /// Applies `f` to the document as one undoable edit. Edits with the same `key` coalesce
+    /// until [`Editor::seal`]. Returns `f`'s result; an edit that changes nothing records nothing.
+    pub fn edit<R>(&mut self, key: Option<&str>, f: impl FnOnce(&mut GraphDoc) -> R) -> R {
+        let before = self.doc.clone();
+        let r = f(&mut self.doc);
+        if self.doc != before {
+            self.history.record(&before, key);
+            self.after_change(&before);
+        }
+        r
+    }
+
+    /// Ends a coalescing run (a slider drag or typing): the next edit is its own undo step.
+    pub fn seal(&mut self) {
+        self.history.seal();
+    }
+
+    /// Undoes the last edit.
+    pub fn undo(&mut self) -> bool {
+        let Some(doc) = self.history.undo(&self.doc) else { return false };
+        let before = std::mem::replace(&mut self.doc, doc);
+        self.after_change(&before);
+        self.set_status("undo", false);
+        true
+    }
+
+    /// Redoes the last undone edit.
+    pub fn redo(&mut self) -> bool {
+        let Some(doc) = self.history.redo(&self.doc) else { return false };
+        let before = std::mem::replace(&mut self.doc, doc);
+        self.after_change(&before);
+        self.set_status("redo", false);
+        true
+    }
+
+    fn after_change(&mut self, before: &GraphDoc) {
+        self.revision += 1;
+        self.selection.retain(|id| self.doc.node(id).is_some());
+        if self.preview_req.as_ref().is_some_and(|p| self.doc.node(&p.node).is_none()) {
+            self.preview_req = None;
+            self.preview = None;
+        }
+        if !same_structure(before, &self.doc) {
+            self.revalidate();
+            if self.auto_cook {
+                self.request_preview();
+            }
+        }
+    }
+
+    /// A fresh node id derived from `base` (`blur`, `blur2`, …).
+    pub fn unique_id(&self, base: &str) -> String {
+        let base: String = base.chars().map(|c| if c.is_alphanumeric() || c == '_' || c == '-' { c } else { '_' }).collect();
+        let base = if base.is_empty() { "node".to_string() } else { base };
+        if self.doc.node(&base).is_none() {
+            return base;
+        }
+        (2..).map(|i| format!("{base}{i}")).find(|id| self.doc.node(id).is_none()).unwrap_or(base)
+    }
+
+    /// Adds a node of `type_name` at `pos`; returns its id.
+    pub fn add_node(&mut self, type_name: &str, pos: (f32, f32)) -> Result<String, String> {
+        if type_name == INCLUDE_TYPE {
+            return Err("add presets with add_preset".into());
+        }
+        if self.registry.get(type_name).is_none() {
+            return Err(format!("unknown node type '{type_name}'"));
+        }
+        let base = type_name.rsplit('.').next().unwrap_or(type_name);
+        let id = self.unique_id(base);
+        let mut nd = NodeDoc::new(type_name);
+        nd.pos = Some(round_pos(pos));
+        self.edit(None, |d| {
+            d.add_node(&id, nd);
+        });
+        self.set_status(format!("added {id} ({type_name})"), false);
+        Ok(id)
+    }
+
+    /// Adds a `graph.include` node for the preset file `file` at `pos`; returns its id.
+    pub fn add_preset(&mut self, file: &Path, pos: (f32, f32)) -> Result<String, String> {
+        preset_desc(file, &self.registry).map_err(|d| d.to_string())?;
+        let base = self.base_dir();
+        let rel = relative_path(file, &base);
+        let stem = file.file_stem().map_or("preset".into(), |s| s.to_string_lossy().replace('-', "_"));
+        let id = self.unique_id(&stem);
+        let mut nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(rel));
+        nd.pos = Some(round_pos(pos));
+        self.edit(None, |d| {
+            d.add_node(&id, nd);
+        });
+        self.set_status(format!("inserted preset {id}"), false);
+        Ok(id)
+    }
+
+    /// Removes nodes and every edge touching them.
+    pub fn remove_nodes(&mut self, ids: &[String]) {
+        let set: HashSet<&str> = ids.iter().map(String::as_str).collect();
+        self.edit(None, |d| {
+            for id in &set {
+                d.ungroup_node(id);
+            }
+            d.nodes.0.retain(|(id, _)| !set.contains(id.as_str()));
+            d.edges.retain(|(a, b)| {
+                let na = split_endpoint(a).map(|x| x.0);
+                let nb = split_endpoint(b).map(|x| x.0);
+                !na.is_some_and(|n| set.contains(n)) && !nb.is_some_and(|n| set.contains(n))
+            });
+        });
+    }
+
+    /// Copies nodes (with the edges among them), offset a little; returns the new ids.
+    pub fn duplicate(&mut self, ids: &[String]) -> Vec<String> {
+        let mut mapping: Vec<(String, String)> = Vec::new();
+        let mut new_nodes = Vec::new();
+        for id in ids {
+            let Some(nd) = self.doc.node(id) else { continue };
+            let mut copy = nd.clone();
+            let taken: HashSet<&str> = mapping.iter().map(|(_, n)| n.as_str()).collect();
+            let mut new_id = self.unique_id(&format!("{id}_copy"));
+            let mut k = 2;
+            while taken.contains(new_id.as_str()) {
+                new_id = self.unique_id(&format!("{id}_copy{k}"));
+                k += 1;
+            }
+            copy.pos = copy.pos.map(|(x, y)| (x + 40.0, y + 40.0)).or(Some((40.0, 40.0)));
+            mapping.push((id.clone(), new_id.clone()));
+            new_nodes.push((new_id, copy));
+        }
+        let map: HashMap<&str, &str> = mapping.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+        let mut new_edges = Vec::new();
+        for (a, b) in &self.doc.edges {
+            if let (Some((na, pa)), Some((nb, pb))) = (split_endpoint(a), split_endpoint(b))
+                && let (Some(ma), Some(mb)) = (map.get(na), map.get(nb))
+            {
+                new_edges.push((format!("{ma}.{pa}"), format!("{mb}.{pb}")));
+            }
+        }
+        let out: Vec<String> = new_nodes.iter().map(|(id, _)| id.clone()).collect();
+        self.edit(None, |d| {
+            for (id, nd) in new_nodes {
+                d.add_node(&id, nd);
+            }
+            d.edges.extend(new_edges);
+        });
+        out
+    }
+
+    /// Moves a node (coalesces with other moves of the same drag).
+    pub fn move_node(&mut self, id: &str, pos: (f32, f32)) {
+        let pos = round_pos(pos);
+        self.edit(Some("move"), |d| {
+            if let Some(n) = d.node_mut(id) {
+                n.pos = Some(pos);
+            }
+        });
+    }
+
+    /// Sets a parameter (coalesces with further changes of the same parameter until sealed).
+    pub fn set_param(&mut self, node: &str, param: &str, value: ParamValue) -> Result<(), String> {
+        let key = format!("param:{node}.{param}");
+        self.edit(Some(&key), |d| d.set_param(node, param, value))
+    }
+
+    /// Removes a parameter from the document so the port's default applies.
+    pub fn reset_param(&mut self, node: &str, param: &str) {
+        self.edit(None, |d| {
+            if let Some(n) = d.node_mut(node) {
+                n.params.remove(param);
+            }
+        });
+    }
+
+    /// The edge feeding input `port` of `node`, as `"from.port"`.
+    pub fn incoming(&self, node: &str, port: &str) -> Option<&str> {
+        let target = format!("{node}.{port}");
+        self.doc.edges.iter().find(|(_, b)| *b == target).map(|(a, _)| a.as_str())
+    }
+
+    /// Checks whether `from_node.from_port -> to_node.to_port` may be made, with the type checker
+    /// of the core; returns the document that would result, or the reason it is refused.
+    pub fn check_connect(&self, from_node: &str, from_port: &str, to_node: &str, to_port: &str) -> Result<GraphDoc, String> {
+        if from_node == to_node {
+            return Err(format!("cannot connect '{from_node}' to itself"));
+        }
+        let from_desc = self.descs.get(from_node).ok_or_else(|| format!("node '{from_node}' has no known ports"))?;
+        let to_desc = self.descs.get(to_node).ok_or_else(|| format!("node '{to_node}' has no known ports"))?;
+        if from_desc.output_index(from_port).is_none() {
+            return Err(format!("'{from_node}' has no output '{from_port}'"));
+        }
+        if to_desc.input_index(to_port).is_none() {
+            return Err(format!("'{to_node}' has no input '{to_port}'"));
+        }
+        let from = format!("{from_node}.{from_port}");
+        let to = format!("{to_node}.{to_port}");
+        let mut cand = self.doc.clone();
+        cand.edges.retain(|(_, b)| *b != to);
+        cand.edges.push((from.clone(), to.clone()));
+        let before: HashSet<(String, String)> =
+            self.validation.diagnostics.iter().map(|d| (d.location.to_string(), d.message.clone())).collect();
+        let after = match Graph::build(&cand, &self.registry, &self.base_dir(), &BuildOptions::default()) {
+            Ok(_) => return Ok(cand),
+            Err(d) => d.0,
+        };
+        let refusing = [DiagnosticKind::TypeMismatch, DiagnosticKind::Cycle, DiagnosticKind::DuplicateEdge];
+        let new: Vec<&Diagnostic> = after
+            .iter()
+            .filter(|d| refusing.contains(&d.kind))
+            .filter(|d| !before.contains(&(d.location.to_string(), d.message.clone())))
+            .collect();
+        match new.first() {
+            Some(d) => Err(format!("cannot connect {from} -> {to}: {}", d.message)),
+            None => Ok(cand),
+        }
+    }
+
+    /// Connects two ports if the type checker accepts it (replacing the input's current edge);
+    /// otherwise leaves the document alone, puts the reason in the status bar and returns it.
+    pub fn connect(&mut self, from_node: &str, from_port: &str, to_node: &str, to_port: &str) -> Result<(), String> {
+        match self.check_connect(from_node, from_port, to_node, to_port) {
+            Ok(cand) => {
+                self.edit(None, |d| *d = cand);
+                self.set_status(format!("connected {from_node}.{from_port} -> {to_node}.{to_port}"), false);
+                Ok(())
+            }
+            Err(reason) => {
+                self.set_status(reason.clone(), true);
+                Err(reason)
+            }
+        }
+    }
+
+    /// Removes the edge `from -> to` (both `node.port`).
+    pub fn disconnect(&mut self, from: &str, to: &str) {
+        self.edit(None, |d| d.edges.retain(|(a, b)| !(a == from && b == to)));
+    }
+
+    /// Removes every edge into input `node.port`.
+    pub fn disconnect_input(&mut self, node: &str, port: &str) {
+        let to = format!("{node}.{port}");
+        self.edit(None, |d| d.edges.retain(|(_, b)| *b != to));
+    }
+
+    /// Removes every edge out of output `node.port`.
+    pub fn disconnect_output(&mut self, node: &str, port: &str) {
+        let from = format!("{node}.{port}");
+        self.edit(None, |d| d.edges.retain(|(a, _)| *a != from));
+    }
+
+    /// The current value of a parameter: the document's, else the port's default.
+    pub fn param_value(&self, node: &str, port: &PortDesc) -> Option<ParamValue> {
+        if let Some(v) = self.doc.node(node).and_then(|n| n.params.get(&port.name)) {
+            return Some(v.clone());
+        }
+        port.default.as_ref().and_then(value_to_param)
+    }
+
+    // ----- selection and preview -----
+
+    /// Sets the selection; the inspector and preview follow the current node, the last one.
+    pub fn set_selection(&mut self, ids: Vec<String>) {
+        if ids == self.selection {
+            return;
+        }
+        self.selection = ids;
+        if let Some(current) = self.current().map(str::to_string)
+            && self.preview_req.as_ref().is_none_or(|p| p.node != current)
+        {
+            self.preview_req = Some(PreviewRequest { node: current, output: 0, frame: self.current_frame() });
+            if self.auto_cook {
+                self.request_preview();
+            }
+        }
+    }
+
+    /// The current node: the one clicked last, whose parameters the inspector shows.
+    pub fn current(&self) -> Option<&str> {
+        self.selection.last().map(String::as_str)
+    }
+
+    /// Selects one node.
+    pub fn select(&mut self, id: &str) {
+        self.set_selection(vec![id.to_string()]);
+    }
+
+    fn current_frame(&self) -> usize {
+        self.preview_req.as_ref().map_or(0, |p| p.frame)
+    }
+
+    /// Shows output `output` of the previewed node.
+    pub fn set_preview_output(&mut self, output: usize) {
+        if let Some(p) = &mut self.preview_req
+            && p.output != output
+        {
+            p.output = output;
+            self.request_preview();
+        }
+    }
+
+    /// Shows frame `frame` of a clip preview.
+    pub fn set_frame(&mut self, frame: usize) {
+        if let Some(p) = &mut self.preview_req
+            && p.frame != frame
+        {
+            p.frame = frame;
+            self.request_preview();
+        }
+    }
+
+    /// Queues a cook of the previewed node's cone (never of sinks: they write files).
+    pub fn request_preview(&mut self) -> Option<u64> {
+        let graph = self.validation.graph.clone()?;
+        let req = self.preview_req.clone()?;
+        let desc = self.descs.get(&req.node)?;
+        if desc.time == TimeDep::Sink {
+            self.preview = Some(Preview {
+                request: Some(req),
+                error: Some("a writer: it runs only when you press Render".into()),
+                ..Preview::default()
+            });
+            return None;
+        }
+        let output = req.output.min(desc.outputs.len().saturating_sub(1));
+        let req = PreviewRequest { output, ..req };
+        Some(self.cooker.submit(CookRequest { graph, targets: vec![req.node.clone()], preview: Some(req), render: None }))
+    }
+
+    /// Cooks the writers (sinks): the render button.
+    pub fn render(&mut self) -> Result<u64, String> {
+        let graph = self.validation.graph.clone().ok_or("the graph has errors; fix them before rendering")?;
+        let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
+        if sinks.is_empty() {
+            return Err("the graph has no writer nodes to render".into());
+        }
+        self.set_status(format!("rendering {}", sinks.join(", ")), false);
+        Ok(self.cooker.submit(CookRequest { graph, targets: sinks, preview: None, render: Some(CookSettings::default()) }))
+    }
+
+    /// Cancels the running cook.
+    pub fn cancel(&mut self) {
+        self.cooker.cancel();
+        self.set_status("cancelling…", false);
+    }
+
+    /// Takes finished cooks from the worker; returns whether anything arrived.
+    pub fn poll(&mut self) -> bool {
+        let mut any = false;
+        while let Some(outcome) = self.cooker.poll() {
+            any = true;
+            self.cook_errors = outcome.node_errors.clone();
+            // A node that cooked again says its warnings afresh; one the cache served keeps its own.
+            for id in &outcome.log {
+                self.cook_warnings.remove(id);
+            }
+            for (id, w) in &outcome.node_warnings {
+                self.cook_warnings.insert(id.clone(), w.clone());
+            }
+            if let Some(p) = &outcome.preview
+                && !(outcome.cancelled && p.image.is_none() && p.contours.is_empty())
+            {
+                self.preview = Some(p.clone());
+                self.preview_serial += 1;
+            }
+            if outcome.cancelled {
+                self.set_status("cook cancelled", false);
+            } else if outcome.render {
+                match outcome.node_errors.is_empty() {
+                    true => self.set_status(format!("render finished in {:.2} s", outcome.elapsed.as_secs_f64()), false),
+                    false => self.set_status("render failed: see the node badges", true),
+                }
+            }
+            self.received.push(outcome.clone());
+            self.last_outcome = Some(outcome);
+        }
+        any
+    }
+
+    /// Waits (polling) until no cook is queued or running, or `timeout` passes; for tests and
+    /// scripts. Returns whether the worker went idle.
+    pub fn wait_idle(&mut self, timeout: Duration) -> bool {
+        let start = Instant::now();
+        loop {
+            self.poll();
+            if !self.is_cooking() {
+                return true;
+            }
+            if start.elapsed() > timeout {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    // ----- validation -----
+
+    /// Rebuilds the graph from the document and maps every problem to its node.
+    pub fn revalidate(&mut self) {
+        let dir = self.base_dir();
+        let result = Graph::build(&self.doc, &self.registry, &dir, &BuildOptions::default());
+        let (graph, diagnostics) = match result {
+            Ok(g) => (Some(Arc::new(g)), Vec::new()),
+            Err(d) => (None, d.0),
+        };
+        let mut by_node: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for d in &diagnostics {
+            for node in diagnostic_nodes(d) {
+                let text = match &d.location {
+                    Location::Port { port, .. } => format!("{port}: {}", d.message),
+                    _ => d.message.clone(),
+                };
+                by_node.entry(node).or_default().push(text);
+            }
+        }
+        self.descs = self.resolve_descs(graph.as_deref());
+        self.validation = Validation { graph, diagnostics, by_node };
+        self.cook_errors.retain(|k, _| self.doc.node(k).is_some());
+        let doc = &self.doc;
+        self.cook_warnings.retain(|k, _| doc.node(k.split('/').next().unwrap_or(k)).is_some());
+    }
+
+    fn resolve_descs(&self, graph: Option<&Graph>) -> HashMap<String, Arc<NodeDesc>> {
+        let mut out = HashMap::new();
+        let dir = self.base_dir();
+        for (id, nd) in &self.doc.nodes.0 {
+            let desc = if nd.type_name == INCLUDE_TYPE {
+                match graph.and_then(|g| g.desc(id).cloned()) {
+                    Some(d) => Some(d),
+                    None => match nd.params.get(INCLUDE_PATH) {
+                        Some(ParamValue::String(p)) => {
+                            expand_vars(p).ok().and_then(|p| preset_desc(&dir.join(p), &self.registry).ok())
+                        }
+                        _ => None,
+                    },
+                }
+            } else {
+                self.registry.get(&nd.type_name).map(|n| n.desc().clone())
+            };
+            if let Some(d) = desc {
+                out.insert(id.clone(), Arc::new(d));
+            }
+        }
+        out
+    }
+}
+
+/// Positions rounded to whole units, so files diff well.
+fn round_pos(p: (f32, f32)) -> (f32, f32) {
+    (p.0.round(), p.1.round())
+}
+
+/// Whether two documents differ only in node positions (which do not affect cooking).
+pub fn same_structure(a: &GraphDoc, b: &GraphDoc) -> bool {
+    a.edges == b.edges
+        && a.interface == b.interface
+        && a.nodes.0.len() == b.nodes.0.len()
+        && a.nodes
+            .0
+            .iter()
+            .zip(&b.nodes.0)
+            .all(|((ia, na), (ib, nb))| ia == ib && na.type_name == nb.type_name && na.params == nb.params)
+}
+
+/// The node ids a diagnostic is about.
+pub fn diagnostic_nodes(d: &Diagnostic) -> Vec<String> {
+    match &d.location {
+        Location::Node(n) => vec![n.clone()],
+        Location::Port { node, .. } => vec![node.clone()],
+        Location::Edge { text, .. } => {
+            text.split(" -> ").filter_map(|e| split_endpoint(e.trim()).map(|(n, _)| n.to_string())).collect()
+        }
+        Location::File | Location::Text { .. } | Location::Group { .. } => Vec::new(),
+    }
+}

@@ -1,0 +1,315 @@
+//! The canvas's egui-snarl viewer: node titles and pins (coloured by port type), menus, the
+//! selection outline, groups and comments under the nodes, and framing of the view.
+
+use std::collections::{HashMap, HashSet};
+
+use eframe::egui::{self, Color32, Pos2, Rect, Ui, emath::TSTransform};
+use egui_snarl::ui::{BackgroundPattern, PinInfo, PinShape, SnarlStyle, SnarlViewer};
+use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
+use pyrograph_frontend::core::PortType;
+
+use crate::action::Action;
+use crate::annotate::Annotation;
+use crate::overlay::{AnnotationRects, paint_annotations};
+use crate::palette::{category_color, palette_ui};
+use crate::state::Editor;
+
+/// Badge and text colour of warnings (amber: the node cooked, but look at this).
+const WARNING: Color32 = Color32::from_rgb(255, 190, 70);
+
+/// The smallest zoom (the view can show 10 times more canvas than at 1:1).
+pub const MIN_SCALE: f32 = 0.1;
+/// The largest zoom.
+pub const MAX_SCALE: f32 = 2.0;
+
+/// The outline of selected nodes (Houdini's yellow).
+pub const SELECTED: Color32 = Color32::from_rgb(255, 200, 80);
+
+/// A colour per port type, shared by pins and wires.
+pub fn type_color(ty: &PortType) -> Color32 {
+    match ty {
+        PortType::Float => Color32::from_rgb(120, 200, 120),
+        PortType::Int => Color32::from_rgb(80, 170, 170),
+        PortType::Bool => Color32::from_rgb(220, 110, 110),
+        PortType::Color => Color32::from_rgb(235, 200, 80),
+        PortType::Vec2 | PortType::Vec3 => Color32::from_rgb(170, 130, 220),
+        PortType::String | PortType::Path | PortType::Enum => Color32::from_rgb(160, 160, 160),
+        PortType::Image => Color32::from_rgb(240, 140, 60),
+        PortType::Mask => Color32::from_rgb(235, 235, 235),
+        PortType::Contours => Color32::from_rgb(80, 210, 240),
+        PortType::Custom(info) => Color32::from_rgb(info.color[0], info.color[1], info.color[2]),
+        PortType::Clip(inner) => type_color(inner),
+    }
+}
+
+/// Which description ports a node shows as pins, in pin order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodePins {
+    /// Input indices in the node description.
+    pub inputs: Vec<usize>,
+    /// Output indices in the node description.
+    pub outputs: Vec<usize>,
+}
+
+/// Where "frame" moves the view.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FrameTarget {
+    /// Every node, group and comment.
+    All,
+    /// A canvas rectangle.
+    Rect(Rect),
+    /// Centre on a canvas point, keeping the zoom.
+    Center(Pos2),
+}
+
+fn pin_info(ty: &PortType) -> PinInfo {
+    let shape = if ty.clip_element().is_some() { PinShape::Square } else { PinShape::Circle };
+    PinInfo::default().with_shape(shape).with_fill(type_color(ty)).with_wire_color(type_color(ty))
+}
+
+/// The canvas's answers to egui-snarl: titles, pins, menus, frames, and the view transform.
+pub(crate) struct Viewer<'a> {
+    pub editor: &'a Editor,
+    pub pins: &'a HashMap<String, NodePins>,
+    pub actions: &'a mut Vec<Action>,
+    pub query: &'a mut String,
+    pub pending: &'a mut Option<FrameTarget>,
+    pub to_global: &'a mut TSTransform,
+    pub node_rects: &'a mut HashMap<String, Rect>,
+    pub rect: Rect,
+    /// Nodes drawn as selected.
+    pub selected: &'a HashSet<String>,
+    /// While a gesture holds the view (a selection rectangle), the transform stays this one.
+    pub hold: Option<TSTransform>,
+    /// Group frames and comments drawn under the nodes, and where they landed.
+    pub annotation: Option<Annotation>,
+    pub comment_at: Option<(usize, Pos2)>,
+    pub annotation_rects: &'a mut AnnotationRects,
+}
+
+impl Viewer<'_> {
+    fn in_port(&self, snarl: &Snarl<String>, pin: InPinId) -> Option<(String, String, PortType, String)> {
+        let id = snarl.get_node(pin.node)?;
+        let desc = self.editor.desc(id)?;
+        let idx = *self.pins.get(id)?.inputs.get(pin.input)?;
+        let port = desc.inputs.get(idx)?;
+        Some((id.clone(), port.name.clone(), port.ty.clone(), port.doc.clone()))
+    }
+
+    fn out_port(&self, snarl: &Snarl<String>, pin: OutPinId) -> Option<(String, String, PortType, String)> {
+        let id = snarl.get_node(pin.node)?;
+        let desc = self.editor.desc(id)?;
+        let idx = *self.pins.get(id)?.outputs.get(pin.output)?;
+        let port = desc.outputs.get(idx)?;
+        // After lifting, an output may be a clip: show the type the graph really carries.
+        let ty = self
+            .editor
+            .validation()
+            .graph
+            .as_ref()
+            .and_then(|g| g.output_type(id, idx).cloned())
+            .unwrap_or_else(|| port.ty.clone());
+        Some((id.clone(), port.name.clone(), ty, port.doc.clone()))
+    }
+}
+
+impl SnarlViewer<String> for Viewer<'_> {
+    fn title(&mut self, node: &String) -> String {
+        node.clone()
+    }
+
+    fn draw_background(
+        &mut self,
+        background: Option<&BackgroundPattern>,
+        viewport: &Rect,
+        snarl_style: &SnarlStyle,
+        style: &egui::Style,
+        painter: &egui::Painter,
+        _snarl: &Snarl<String>,
+    ) {
+        if let Some(bg) = background {
+            bg.draw(viewport, snarl_style, style, painter);
+        }
+        *self.annotation_rects = paint_annotations(painter, self.editor.doc(), self.node_rects, self.annotation, self.comment_at);
+    }
+
+    fn header_frame(
+        &mut self,
+        default: egui::Frame,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        snarl: &Snarl<String>,
+    ) -> egui::Frame {
+        let cat = snarl.get_node(node).and_then(|id| self.editor.desc(id)).map(|d| d.category.clone()).unwrap_or_default();
+        default.fill(category_color(&cat))
+    }
+
+    fn show_header(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
+        let Some(id) = snarl.get_node(node).cloned() else { return };
+        let type_name = self.editor.doc().node(&id).map(|n| n.type_name.clone()).unwrap_or_default();
+        let problems = self.editor.node_problems(&id);
+        let warnings = self.editor.node_warnings(&id);
+        ui.horizontal(|ui| {
+            if !problems.is_empty() {
+                ui.label(egui::RichText::new("⚠").color(Color32::from_rgb(255, 80, 80)).strong())
+                    .on_hover_text(problems.join("\n"));
+            } else if !warnings.is_empty() {
+                ui.label(egui::RichText::new("⚠").color(WARNING).strong()).on_hover_text(warnings.join("\n"));
+            }
+            ui.label(egui::RichText::new(&id).strong().color(Color32::WHITE)).on_hover_text(
+                self.editor.desc(&id).map(|d| format!("{type_name}\n{}", d.doc)).unwrap_or_else(|| type_name.clone()),
+            );
+            ui.label(egui::RichText::new(type_name.rsplit('.').next().unwrap_or("")).small().color(Color32::from_gray(200)));
+        });
+    }
+
+    fn inputs(&mut self, node: &String) -> usize {
+        self.pins.get(node).map_or(0, |p| p.inputs.len())
+    }
+
+    fn outputs(&mut self, node: &String) -> usize {
+        self.pins.get(node).map_or(0, |p| p.outputs.len())
+    }
+
+    #[allow(refining_impl_trait)]
+    fn show_input(&mut self, pin: &InPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
+        let Some((_, name, ty, doc)) = self.in_port(snarl, pin.id) else { return PinInfo::default() };
+        let text = egui::RichText::new(&name).small();
+        let text = if ty.is_parameter() { text.italics() } else { text };
+        ui.label(text).on_hover_text(format!("{name}: {ty}\n{doc}"));
+        pin_info(&ty)
+    }
+
+    #[allow(refining_impl_trait)]
+    fn show_output(&mut self, pin: &OutPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
+        let Some((_, name, ty, doc)) = self.out_port(snarl, pin.id) else { return PinInfo::default() };
+        ui.label(egui::RichText::new(&name).small()).on_hover_text(format!("{name}: {ty}\n{doc}"));
+        pin_info(&ty)
+    }
+
+    fn connect(&mut self, from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
+        if let (Some(a), Some(b)) = (self.out_port(snarl, from.id), self.in_port(snarl, to.id)) {
+            self.actions.push(Action::Connect { from: (a.0, a.1), to: (b.0, b.1) });
+        }
+    }
+
+    fn disconnect(&mut self, from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
+        if let (Some(a), Some(b)) = (self.out_port(snarl, from.id), self.in_port(snarl, to.id)) {
+            self.actions.push(Action::Disconnect { from: format!("{}.{}", a.0, a.1), to: format!("{}.{}", b.0, b.1) });
+        }
+    }
+
+    fn drop_outputs(&mut self, pin: &OutPin, snarl: &mut Snarl<String>) {
+        if let Some(a) = self.out_port(snarl, pin.id) {
+            self.actions.push(Action::DropOutput(a.0, a.1));
+        }
+    }
+
+    fn drop_inputs(&mut self, pin: &InPin, snarl: &mut Snarl<String>) {
+        if let Some(b) = self.in_port(snarl, pin.id) {
+            self.actions.push(Action::DropInput(b.0, b.1));
+        }
+    }
+
+    fn has_graph_menu(&mut self, _pos: Pos2, _snarl: &mut Snarl<String>) -> bool {
+        true
+    }
+
+    fn show_graph_menu(&mut self, pos: Pos2, ui: &mut Ui, _snarl: &mut Snarl<String>) {
+        ui.set_min_width(320.0);
+        ui.label(egui::RichText::new("Add node").strong());
+        if let Some(item) = palette_ui(ui, self.editor, self.query, true) {
+            self.actions.push(Action::Add(item, pos));
+            self.query.clear();
+            ui.close();
+        }
+    }
+
+    fn has_node_menu(&mut self, _node: &String) -> bool {
+        true
+    }
+
+    fn show_node_menu(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
+        let Some(id) = snarl.get_node(node).cloned() else { return };
+        ui.label(egui::RichText::new(&id).strong());
+        if ui.button("Preview").clicked() {
+            self.actions.push(Action::Preview(id.clone()));
+            ui.close();
+        }
+        if ui.button("Duplicate").clicked() {
+            self.actions.push(Action::Duplicate(vec![id.clone()]));
+            ui.close();
+        }
+        if ui.button("Show/hide parameter pins").clicked() {
+            self.actions.push(Action::ToggleParamPins(id.clone()));
+            ui.close();
+        }
+        if ui.button("Delete").clicked() {
+            self.actions.push(Action::Remove(vec![id]));
+            ui.close();
+        }
+    }
+
+    fn has_on_hover_popup(&mut self, node: &String) -> bool {
+        !self.editor.node_problems(node).is_empty() || !self.editor.node_warnings(node).is_empty()
+    }
+
+    fn show_on_hover_popup(&mut self, node: NodeId, _i: &[InPin], _o: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
+        if let Some(id) = snarl.get_node(node) {
+            for p in self.editor.node_problems(id) {
+                ui.colored_label(Color32::from_rgb(255, 120, 120), p);
+            }
+            for w in self.editor.node_warnings(id) {
+                ui.colored_label(WARNING, w);
+            }
+        }
+    }
+
+    fn final_node_rect(&mut self, node: NodeId, rect: Rect, ui: &mut Ui, snarl: &mut Snarl<String>) {
+        if let Some(id) = snarl.get_node(node) {
+            self.node_rects.insert(id.clone(), rect);
+            // The selection outline is painted around the frame, not part of it, so selecting
+            // a node does not change its size.
+            if self.selected.contains(id) {
+                ui.painter().rect_stroke(rect, 6.0, egui::Stroke::new(2.5, SELECTED), egui::StrokeKind::Outside);
+            }
+        }
+    }
+
+    fn current_transform(&mut self, to_global: &mut TSTransform, snarl: &mut Snarl<String>) {
+        if let Some(hold) = self.hold {
+            *to_global = hold;
+        }
+        if let Some(FrameTarget::Center(p)) = *self.pending {
+            *self.pending = None;
+            if self.rect.is_finite() {
+                to_global.translation = self.rect.center().to_vec2() - p.to_vec2() * to_global.scaling;
+            }
+        }
+        if let Some(target) = self.pending.take() {
+            let bb = match target {
+                FrameTarget::Center(_) => Rect::NOTHING,
+                FrameTarget::Rect(r) => r,
+                FrameTarget::All => {
+                    let mut bb = Rect::NOTHING;
+                    for (nid, info) in snarl.nodes_ids_data() {
+                        let _ = nid;
+                        let r = self
+                            .node_rects
+                            .get(&info.value)
+                            .copied()
+                            .unwrap_or_else(|| Rect::from_min_size(info.pos, egui::vec2(200.0, 120.0)));
+                        bb = bb.union(r);
+                    }
+                    bb.union(self.annotation_rects.bounds()).expand(60.0)
+                }
+            };
+            if bb.is_finite() && bb.width() > 0.0 && bb.height() > 0.0 && self.rect.is_finite() {
+                let s = (self.rect.width() / bb.width()).min(self.rect.height() / bb.height()).clamp(MIN_SCALE, 1.5);
+                *to_global = TSTransform::new(self.rect.center().to_vec2() - bb.center().to_vec2() * s, s);
+            }
+        }
+        *self.to_global = *to_global;
+    }
+}

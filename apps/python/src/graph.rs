@@ -1,0 +1,448 @@
+//! `pyrograph.Graph`: a graph document with a persistent evaluator. Loading, saving and editing
+//! work on the same RON document the CLI and the editor use; cooking re-uses every result whose
+//! inputs did not change since the last cook, so a `set` followed by a cook re-cooks only what
+//! is downstream of the edit (`graph.last_cooked` lists what actually ran).
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use pyrograph_frontend::core::document::split_endpoint;
+use pyrograph_frontend::core::{
+    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, Value,
+};
+
+use crate::clip::{Clip, frame_selection, frames_to_py, pull_frames};
+use crate::errors::{from_diagnostics, from_node_error, graph_error};
+use crate::registry;
+
+/// A pyrograph graph: load or build it, edit it, cook outputs into numpy, render its writers.
+#[pyclass(module = "pyrograph")]
+pub struct Graph {
+    doc: GraphDoc,
+    /// The file the document belongs to (relative paths resolve against its folder).
+    file: Option<PathBuf>,
+    /// The folder relative paths resolve against.
+    dir: PathBuf,
+    /// The graph built from `doc` for cooking, until the next edit.
+    built: Mutex<Option<Arc<RustGraph>>>,
+    eval: Mutex<Evaluator>,
+    last_cooked: Mutex<Vec<String>>,
+    /// `(node, message)` of every warning of the last cook or render.
+    last_warnings: Mutex<Vec<(String, String)>>,
+}
+
+/// What a cook produced before it is handed to Python.
+enum Cooked {
+    One(Value),
+    Frames(Vec<Value>),
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panic inside a cook is reported as an error; the evaluator's cache stays usable.
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+fn endpoint<'a>(py: Python<'_>, text: &'a str) -> PyResult<(&'a str, &'a str)> {
+    split_endpoint(text).ok_or_else(|| graph_error(py, None, None, &format!("'{text}' is not of the form node.port")))
+}
+
+impl Graph {
+    fn with_doc(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Graph {
+        Graph {
+            doc,
+            file,
+            dir,
+            built: Mutex::new(None),
+            eval: Mutex::new(Evaluator::new()),
+            last_cooked: Mutex::new(Vec::new()),
+            last_warnings: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn build_with(&self, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
+        match &self.file {
+            Some(f) => RustGraph::build_file(&self.doc, f, registry(), options),
+            None => RustGraph::build(&self.doc, registry(), &self.dir, options),
+        }
+    }
+
+    /// The graph for cooking outputs, built once per edit.
+    fn cooking_graph(&self, py: Python<'_>) -> PyResult<Arc<RustGraph>> {
+        let mut slot = lock(&self.built);
+        if let Some(g) = &*slot {
+            return Ok(g.clone());
+        }
+        let g = Arc::new(self.build_with(&BuildOptions::default()).map_err(|d| from_diagnostics(py, &d))?);
+        *slot = Some(g.clone());
+        Ok(g)
+    }
+
+    fn edited(&mut self) {
+        *lock(&self.built) = None;
+    }
+
+    fn node_doc(&mut self, py: Python<'_>, id: &str) -> PyResult<&mut NodeDoc> {
+        self.doc.node_mut(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))
+    }
+}
+
+#[pymethods]
+impl Graph {
+    /// An empty graph; relative paths resolve against the current folder until it is saved.
+    #[new]
+    #[pyo3(signature = (description=None))]
+    fn py_new(description: Option<String>) -> PyResult<Graph> {
+        let mut doc = GraphDoc::new();
+        doc.description = description;
+        Ok(Graph::with_doc(doc, None, std::env::current_dir()?))
+    }
+
+    /// Reads a graph file (RON, any version; older versions are migrated).
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Graph> {
+        let doc = GraphDoc::load(&path).map_err(|d| from_diagnostics(py, &d))?;
+        // Absolute, so a later os.chdir() (DCC hosts change folders) does not move the graph.
+        let path = std::path::absolute(&path)?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Ok(Graph::with_doc(doc, Some(path), dir))
+    }
+
+    /// Parses a graph from RON text; relative paths resolve against `base_dir` (default: the
+    /// current folder).
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=None))]
+    fn from_ron(py: Python<'_>, text: &str, base_dir: Option<PathBuf>) -> PyResult<Graph> {
+        let doc = GraphDoc::from_ron(text).map_err(|d| from_diagnostics(py, &d))?;
+        let dir = match base_dir {
+            Some(d) => std::path::absolute(d)?,
+            None => std::env::current_dir()?,
+        };
+        Ok(Graph::with_doc(doc, None, dir))
+    }
+
+    /// The document as RON text, exactly what `save` writes.
+    fn to_ron(&self) -> String {
+        self.doc.to_ron()
+    }
+
+    /// Writes the graph atomically (the same bytes as `pyrograph save` and the editor). An
+    /// existing file is replaced only with `overwrite=True` (else `FileExistsError`). The graph
+    /// then belongs to `path`: its relative paths resolve against that folder.
+    #[pyo3(signature = (path, overwrite=false))]
+    fn save(&mut self, path: PathBuf, overwrite: bool) -> PyResult<()> {
+        self.doc.save(&path, overwrite)?;
+        let path = std::path::absolute(&path)?;
+        self.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        self.file = Some(path);
+        self.edited();
+        Ok(())
+    }
+
+    /// Validates the graph and probes its sources (input files exist and decode), like
+    /// `pyrograph check`: a list of `Problem`s, empty when the graph is fine.
+    #[pyo3(signature = (out=None, allow_outside_out=false))]
+    fn check(&self, py: Python<'_>, out: Option<PathBuf>, allow_outside_out: bool) -> Vec<crate::errors::Problem> {
+        let options = BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() };
+        let built = self.build_with(&options);
+        let problems = py.detach(|| pyrograph_frontend::check::problems(built.as_ref()));
+        problems.into_iter().map(Into::into).collect()
+    }
+
+    /// The file the graph was loaded from or last saved to.
+    #[getter]
+    fn file(&self) -> Option<PathBuf> {
+        self.file.clone()
+    }
+
+    /// The one-line description.
+    #[getter]
+    fn get_description(&self) -> Option<String> {
+        self.doc.description.clone()
+    }
+
+    #[setter]
+    fn set_description(&mut self, text: Option<String>) {
+        self.doc.description = text;
+    }
+
+    /// A snapshot of the nodes: id → {"type", "params", "pos"}. Edit with `set`, `add_node`
+    /// and `remove_node`.
+    #[getter]
+    fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for (id, n) in &self.doc.nodes.0 {
+            let d = PyDict::new(py);
+            d.set_item("type", &n.type_name)?;
+            let params = PyDict::new(py);
+            for (k, v) in &n.params {
+                params.set_item(k, crate::param_values::to_py(py, v)?)?;
+            }
+            d.set_item("params", params)?;
+            d.set_item("pos", n.pos)?;
+            out.set_item(id, d)?;
+        }
+        Ok(out)
+    }
+
+    /// The edges as `("from.output", "to.input")` tuples.
+    #[getter]
+    fn edges(&self) -> Vec<(String, String)> {
+        self.doc.edges.clone()
+    }
+
+    /// What the graph exposes as a preset: {"inputs", "outputs", "params"} (name → inner
+    /// port), or None.
+    #[getter]
+    fn interface<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(i) = &self.doc.interface else { return Ok(None) };
+        let d = PyDict::new(py);
+        d.set_item("inputs", i.inputs.clone())?;
+        d.set_item("outputs", i.outputs.clone())?;
+        d.set_item("params", i.params.clone())?;
+        Ok(Some(d))
+    }
+
+    /// Node ids that actually cooked (were not served from the cache) in the last `cook` or
+    /// `render`, in cook order.
+    #[getter]
+    fn last_cooked(&self) -> Vec<String> {
+        lock(&self.last_cooked).clone()
+    }
+
+    /// `(node, message)` of every warning nodes reported in the last `cook` or `render` — what
+    /// a node noticed that did not stop it ("the flame touches the bottom edge in 90 % of
+    /// frames: …"). Nodes served from the cache do not report theirs again.
+    #[getter]
+    fn last_warnings(&self) -> Vec<(String, String)> {
+        lock(&self.last_warnings).clone()
+    }
+
+    /// Adds node `id` of type `type` (see `pyrograph.nodes()`; `graph.include` for a preset)
+    /// with parameters given as keywords.
+    #[pyo3(signature = (id, r#type, **params))]
+    fn add_node(&mut self, py: Python<'_>, id: &str, r#type: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        if self.doc.node(id).is_some() {
+            return Err(graph_error(py, Some(id), None, &format!("a node '{id}' already exists")));
+        }
+        if id.is_empty() || id.contains(['.', '/']) {
+            return Err(graph_error(py, Some(id), None, &format!("node id '{id}' must be non-empty, without '.' or '/'")));
+        }
+        let reg = registry();
+        if reg.desc(r#type).is_none() {
+            let hint = reg.suggest(r#type).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
+            return Err(graph_error(py, Some(id), None, &format!("unknown node type '{}'{hint}", r#type)));
+        }
+        let mut node = NodeDoc::new(r#type);
+        if let Some(params) = params {
+            for (k, v) in params.iter() {
+                let name: String = k.extract()?;
+                check_param(py, id, r#type, &name)?;
+                node.params.insert(name, crate::param_values::from_py(&v)?);
+            }
+        }
+        self.doc.add_node(id, node);
+        self.edited();
+        Ok(())
+    }
+
+    /// Removes node `id` and every edge touching it.
+    fn remove_node(&mut self, py: Python<'_>, id: &str) -> PyResult<()> {
+        let before = self.doc.nodes.0.len();
+        self.doc.nodes.0.retain(|(k, _)| k != id);
+        if self.doc.nodes.0.len() == before {
+            return Err(graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")));
+        }
+        let touches = |e: &str| split_endpoint(e).is_some_and(|(n, _)| n == id);
+        self.doc.edges.retain(|(a, b)| !touches(a) && !touches(b));
+        self.doc.ungroup_node(id);
+        self.edited();
+        Ok(())
+    }
+
+    /// Connects output `src` ("node.output") to input `dst` ("node.input"). Types are checked
+    /// when the graph is checked or cooked.
+    fn connect(&mut self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
+        for e in [src, dst] {
+            let (n, _) = endpoint(py, e)?;
+            self.node_doc(py, n)?;
+        }
+        self.doc.connect(src, dst);
+        self.edited();
+        Ok(())
+    }
+
+    /// Removes the edge `src` → `dst`.
+    fn disconnect(&mut self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
+        let before = self.doc.edges.len();
+        self.doc.edges.retain(|(a, b)| !(a == src && b == dst));
+        if self.doc.edges.len() == before {
+            return Err(graph_error(py, None, None, &format!("no edge {src} -> {dst}")));
+        }
+        self.edited();
+        Ok(())
+    }
+
+    /// Sets parameter `endpoint` ("node.param") to `value` (bool, int, float, str, path or a
+    /// tuple for colours and vectors); the next cook re-cooks only what depends on it.
+    fn set(&mut self, py: Python<'_>, endpoint: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let (id, param) = self::endpoint(py, endpoint)?;
+        let ty = self.node_doc(py, id)?.type_name.clone();
+        check_param(py, id, &ty, param)?;
+        let v = crate::param_values::from_py(value)?;
+        self.node_doc(py, id)?.params.insert(param.to_string(), v);
+        self.edited();
+        Ok(())
+    }
+
+    /// Parameter `endpoint` ("node.param") as written in the graph, else its default (None for
+    /// a preset's parameter that is not written).
+    fn get<'py>(&self, py: Python<'py>, endpoint: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let (id, param) = self::endpoint(py, endpoint)?;
+        let node = self.doc.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
+        if let Some(v) = node.params.get(param) {
+            return crate::param_values::to_py(py, v).map(Some);
+        }
+        let ty = node.type_name.clone();
+        check_param(py, id, &ty, param)?;
+        let default =
+            registry().desc(&ty).and_then(|d| d.inputs.iter().find(|p| p.name == param)).and_then(|p| p.default.clone());
+        default.map(|v| crate::values::to_py(py, &v)).transpose()
+    }
+
+    /// Cooks output `endpoint` ("node.port") and returns it: an image as an H×W×C float32
+    /// array, a mask as H×W uint8, a number, a string, `Contours`, a `pyrograph.Value` for
+    /// crate-declared types, or for a clip a lazy `Clip`, or with `frames` (range, list or
+    /// "0-99:2") a list of those frames. `progress` receives a dict per event. Ctrl-C cancels.
+    #[pyo3(signature = (endpoint, frames=None, progress=None))]
+    fn cook<'py>(
+        &self,
+        py: Python<'py>,
+        endpoint: &str,
+        frames: Option<&Bound<'py, PyAny>>,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (id, port) = self::endpoint(py, endpoint)?;
+        let graph = self.cooking_graph(py)?;
+        let desc = graph.desc(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
+        if desc.output_index(port).is_none() {
+            let names: Vec<&str> = desc.outputs.iter().map(|p| p.name.as_str()).collect();
+            let msg = format!("node '{id}' has no output '{port}' (outputs: {})", names.join(", "));
+            return Err(graph_error(py, Some(id), Some(port), &msg));
+        }
+        let wanted = frames.map(frame_selection).transpose()?;
+        let (eval, last_cooked, last_warnings) = (&self.eval, &self.last_cooked, &self.last_warnings);
+        let cooked = crate::run::run(py, CookSettings::default(), progress, |ctx| {
+            let mut ev = lock(eval);
+            let result = ev.cook(&graph, &[id], ctx);
+            // Kept even when the caller raises (Ctrl-C): what did cook is cached from now on.
+            *lock(last_cooked) = ev.take_log();
+            *lock(last_warnings) = warning_pairs(ctx);
+            drop(ev);
+            let value = result.and_then(|r| r.output(&graph, id, port));
+            value.and_then(|v| match (&wanted, v) {
+                (None, v) => Ok(Cooked::One(v)),
+                (Some(sel), Value::Clip(clip)) => {
+                    let list = sel.resolve(clip.len())?;
+                    pull_frames(&clip, &list, &ctx.for_node(&Arc::from(id))).map(Cooked::Frames)
+                }
+                (Some(_), other) => {
+                    Err(NodeError::port(port, format!("is a {}, not a clip: frames= applies to clip outputs", other.type_name())))
+                }
+            })
+        })?;
+        match cooked.map_err(|e| from_node_error(py, id, &e))? {
+            Cooked::One(Value::Clip(clip)) => Ok(Bound::new(py, Clip::new(clip, id, port))?.into_any()),
+            Cooked::One(v) => crate::values::to_py(py, &v),
+            Cooked::Frames(list) => frames_to_py(py, &list),
+        }
+    }
+
+    /// Runs the graph's writers (or `nodes`) as `pyrograph render` does and returns the files
+    /// of the render (written, or kept by `skip_existing`), as the CLI's manifest lists them. `out` is the folder relative output paths resolve against (default: the graph's
+    /// folder); writers may not leave it unless `allow_outside_out`. `frames` limits the frames
+    /// written; existing files are kept unless `overwrite`, or skipped with `skip_existing`.
+    #[pyo3(signature = (out=None, frames=None, overwrite=false, skip_existing=false, nodes=None, allow_outside_out=false, progress=None))]
+    #[allow(clippy::too_many_arguments)] // Python keywords, each optional.
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        out: Option<PathBuf>,
+        frames: Option<&Bound<'py, PyAny>>,
+        overwrite: bool,
+        skip_existing: bool,
+        nodes: Option<Vec<String>>,
+        allow_outside_out: bool,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Vec<PathBuf>> {
+        let options = BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() };
+        let graph = self.build_with(&options).map_err(|d| from_diagnostics(py, &d))?;
+        let frames = match frames {
+            Some(sel) => Some(
+                frame_selection(sel)?
+                    .to_frame_set()
+                    .ok_or_else(|| pyo3::exceptions::PyValueError::new_err("frames= selects no frame"))?,
+            ),
+            None => None,
+        };
+        let targets: Vec<String> = match nodes {
+            Some(n) => n,
+            None => {
+                let sinks = graph.sinks();
+                if sinks.is_empty() { graph.leaves() } else { sinks }.iter().map(|s| s.to_string()).collect()
+            }
+        };
+        let settings = CookSettings { frames, skip_existing, overwrite, cache_dir: None };
+        let (eval, last_cooked, last_warnings) = (&self.eval, &self.last_cooked, &self.last_warnings);
+        let (result, written) = crate::run::run(py, settings, progress, |ctx| {
+            let refs: Vec<&str> = targets.iter().map(String::as_str).collect();
+            let mut ev = lock(eval);
+            let result = ev.cook(&graph, &refs, ctx);
+            *lock(last_cooked) = ev.take_log();
+            *lock(last_warnings) = warning_pairs(ctx);
+            (result, ctx.written())
+        })?;
+        let result = result.map_err(|e| graph_error(py, None, None, &e.to_string()))?;
+        let errors = result.root_errors();
+        if let Some((node, e)) = errors.first() {
+            let all: Vec<String> = errors.iter().map(|(n, e)| pyrograph_frontend::check::explain(n, e)).collect();
+            return Err(graph_error(py, Some(node), pyrograph_frontend::check::error_port(e), &all.join("\n")));
+        }
+        Ok(written)
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Graph>) -> bool {
+        self.doc == other.doc
+    }
+
+    fn __repr__(&self) -> String {
+        let from = self.file.as_ref().map(|f| format!(" from {}", f.display())).unwrap_or_default();
+        format!("<pyrograph.Graph{from}: {} nodes, {} edges>", self.doc.nodes.0.len(), self.doc.edges.len())
+    }
+
+    /// Pickles as its RON text and folder (for multiprocessing); the cache is not carried.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let from_ron = py.get_type::<Graph>().getattr("from_ron")?;
+        let args =
+            PyTuple::new(py, [self.doc.to_ron().into_pyobject(py)?.into_any(), self.dir.clone().into_pyobject(py)?.into_any()])?;
+        PyTuple::new(py, [from_ron, args.into_any()])
+    }
+}
+
+/// Refuses a parameter the node type does not have (includes are checked when built).
+fn check_param(py: Python<'_>, id: &str, ty: &str, name: &str) -> PyResult<()> {
+    let Some(desc) = registry().desc(ty) else { return Ok(()) };
+    if ty == pyrograph_frontend::core::builtin::INCLUDE_TYPE || desc.input_index(name).is_some() {
+        return Ok(());
+    }
+    let names: Vec<&str> = desc.inputs.iter().map(|p| p.name.as_str()).collect();
+    let msg = format!("node '{id}' ({ty}) has no parameter '{name}' (it has: {})", names.join(", "));
+    Err(graph_error(py, Some(id), Some(name), &msg))
+}
+
+/// `(node, message)` of the warnings reported so far in the cook with `ctx`.
+fn warning_pairs(ctx: &pyrograph_frontend::core::CookCtx) -> Vec<(String, String)> {
+    ctx.warnings().into_iter().map(|w| (w.node.as_deref().unwrap_or("").to_string(), w.message)).collect()
+}

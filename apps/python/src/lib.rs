@@ -1,0 +1,65 @@
+//! The `pyrograph` Python module (built with maturin as `pyrograph._native`): load, edit and
+//! cook pyrograph graphs from Python, with frames handed over as numpy arrays.
+//!
+//! Everything goes through the same documents, registry and evaluator as the CLI and the
+//! editor; this crate only converts between Python and Rust and keeps the GIL released while
+//! a cook runs (see `run`).
+
+use std::sync::OnceLock;
+
+use pyo3::prelude::*;
+
+mod clip;
+mod errors;
+mod graph;
+mod param_values;
+mod run;
+mod values;
+
+/// The registry of every node type pyrograph ships, built once per process.
+fn registry() -> &'static pyrograph_frontend::core::Registry {
+    static REGISTRY: OnceLock<pyrograph_frontend::core::Registry> = OnceLock::new();
+    REGISTRY.get_or_init(pyrograph_frontend::registry)
+}
+
+/// Every node type with its category, doc (citing its paper section) and ports (name, type,
+/// default, range, options, doc): the same list as `pyrograph nodes --json`.
+#[pyfunction]
+fn nodes(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    let text = pyrograph_frontend::reference::json(registry()).to_string();
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// The reference of node type `type` as Markdown (its doc citing the paper section, then
+/// its inputs and outputs with types, defaults and ranges): its section of docs/nodes.md.
+#[pyfunction]
+fn describe(py: Python<'_>, r#type: &str) -> PyResult<String> {
+    let type_name = r#type;
+    let reg = registry();
+    match reg.desc(type_name) {
+        Some(d) => Ok(pyrograph_frontend::reference::node_markdown(d)),
+        None => {
+            let hint = reg.suggest(type_name).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
+            Err(errors::graph_error(py, None, None, &format!("unknown node type '{type_name}'{hint}")))
+        }
+    }
+}
+
+/// The Python module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // Load numpy's C API now: loaded lazily, it would run Python code at the first frame handed
+    // over, where a Ctrl-C arriving at that moment cannot be reported as a KeyboardInterrupt.
+    numpy::PyArray1::<f32>::zeros(m.py(), [0], false);
+    m.add("GraphError", m.py().get_type::<errors::GraphError>())?;
+    m.add_class::<graph::Graph>()?;
+    m.add_class::<clip::Clip>()?;
+    m.add_class::<errors::Problem>()?;
+    m.add_class::<values::Contours>()?;
+    m.add_class::<values::Opaque>()?;
+    m.add_class::<values::FrameMemory>()?;
+    m.add_function(wrap_pyfunction!(nodes, m)?)?;
+    m.add_function(wrap_pyfunction!(describe, m)?)?;
+    Ok(())
+}

@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
-use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
 use pyrograph::wedge::{Variant, Wedges, cell_image};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
 use rayon::prelude::*;
 
 use crate::{Failure, RenderOpts, apply_sets, explain, load, memory_kib};
@@ -237,5 +237,6 @@ fn write_sheet(runs: &[VariantRun], wedges: &Wedges, path: &Path, overwrite: boo
     let columns = wedges.shape().last().copied().unwrap_or(1);
     let sheet = pyrograph::wedge::sheet(&cells, columns, 320).map_err(|e| Failure(format!("error: --sheet: {e}")))?;
     let format = pyrograph_frontend::imaging::io::OutputFormat::Png { sixteen_bit: false };
-    pyrograph_frontend::imaging::io::write_image(&sheet, path, format, overwrite).map_err(|e| Failure(format!("error: --sheet: {e}")))
+    pyrograph_frontend::imaging::io::write_image(&sheet, path, format, overwrite)
+        .map_err(|e| Failure(format!("error: --sheet: {e}")))
 }

@@ -220,7 +220,8 @@ pub fn render_preset(
     }
     let err = |m: String| Failure(format!("error: preset {}: {m}", file.display()));
     let mut wrapped = wrap(registry, &file, &[], &sources).map_err(err)?;
-    let names_the_file = |l: &str| l == INCLUDE_PATH || l.strip_prefix(PRESET_NODE).and_then(|r| r.strip_prefix('.')) == Some(INCLUDE_PATH);
+    let names_the_file =
+        |l: &str| l == INCLUDE_PATH || l.strip_prefix(PRESET_NODE).and_then(|r| r.strip_prefix('.')) == Some(INCLUDE_PATH);
     if o.set.iter().any(|s| s.split_once('=').is_some_and(|(l, _)| names_the_file(l))) {
         return Err(err("`path` names the preset file itself; set the preset's exposed parameters".into()));
     }

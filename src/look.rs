@@ -239,7 +239,8 @@ pub fn graph_look(graph: &Path, endpoint: &str, sets: &[&str], threshold: f32, s
         let (node, param) = split_endpoint(lhs).ok_or_else(|| format!("{s}: expected node.param=value"))?;
         doc.set_param(node, param, ParamValue::parse_cli(value)).map_err(|e| format!("{s}: {e}"))?;
     }
-    let graph = Graph::build_file(&doc, graph, &pyrograph_frontend::registry(), &BuildOptions::default()).map_err(|d| d.to_string())?;
+    let graph =
+        Graph::build_file(&doc, graph, &pyrograph_frontend::registry(), &BuildOptions::default()).map_err(|d| d.to_string())?;
     let ctx = CookCtx::new();
     let Value::Clip(clip) = Evaluator::new().output(&graph, endpoint, &ctx).map_err(|e| e.to_string())? else {
         return Err(format!("{endpoint} is not a clip"));

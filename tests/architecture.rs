@@ -15,6 +15,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use pyrograph_testing::workspace;
+
 /// The documented exception: these files of `crates/core` may form one cycle between them.
 const ALLOWED_CYCLE: &[&str] = &["crates/core/src/graph/build.rs", "crates/core/src/graph/include.rs"];
 
@@ -182,7 +184,7 @@ fn expand(body: &str) -> Vec<String> {
     parts
         .into_iter()
         .filter(|p| !p.is_empty())
-        .flat_map(|p| expand(p))
+        .flat_map(expand)
         .map(|p| if p == "self" { prefix.trim_end_matches("::").to_string() } else { format!("{prefix}{p}") })
         .collect()
 }
@@ -315,8 +317,7 @@ fn edges(tree: &Tree) -> Edges {
         if at.is_empty() {
             continue;
         }
-        let mut paths: Vec<Vec<String>> =
-            use_paths(&m.text).into_iter().filter(|(public, _)| !public).map(|(_, p)| p).collect();
+        let mut paths: Vec<Vec<String>> = use_paths(&m.text).into_iter().filter(|(public, _)| !public).map(|(_, p)| p).collect();
         paths.extend(inline_paths(&m.text));
         let set = out.entry(m.path.clone()).or_default();
         for p in paths {
@@ -441,10 +442,6 @@ fn problems(root: &Path, base: &Path) -> Vec<String> {
     out
 }
 
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 /// Every crate root of the workspace: the CLI's library and binary, and each member's.
 fn crate_roots(ws: &Path) -> Vec<PathBuf> {
     let mut roots = vec![ws.join("src/lib.rs"), ws.join("src/main.rs")];
@@ -491,7 +488,10 @@ fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
         std::fs::write(src.join(name), text).unwrap();
     }
     let found = problems(&src.join("lib.rs"), dir.path());
-    assert!(found.contains(&"algorithm module src/io/files.rs imports node LoadSequence of src/io/nodes.rs".to_string()), "{found:?}");
+    assert!(
+        found.contains(&"algorithm module src/io/files.rs imports node LoadSequence of src/io/nodes.rs".to_string()),
+        "{found:?}"
+    );
     assert!(found.contains(&"import cycle between src/a.rs, src/b.rs".to_string()), "{found:?}");
     // blur.rs reaches files.rs (an algorithm) only; its test code is not counted.
     assert_eq!(found.len(), 2, "{found:?}");

@@ -12,16 +12,11 @@ use std::process::Command;
 use image::{GrayImage, Luma};
 use imageproc::geometric_transformations::{Border, Interpolation, Projection, warp_into};
 use pyrograph::look::{ClipLook, graph_look};
+use pyrograph_testing::{footage, workspace};
 
 /// Frames of each hard case (the first of the clip): enough for per-clip thresholds and the
 /// smoothing window, few enough for the 4K case in a debug build.
 const FRAMES: usize = 12;
-
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
-}
 
 /// The transform of a case, from its source's untouched frame (the candle's 854×480, the
 /// tea-light's 480×480) to the case's frame (pixels).
@@ -134,7 +129,7 @@ fn make_clip(case: &Case, dir: &Path, count: usize) -> PathBuf {
 }
 
 fn render(frames: &Path, out: &Path) -> Run {
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/preprocess-auto.ron");
+    let graph = workspace().join("graphs/preprocess-auto.ron");
     let o = Command::new(env!("CARGO_BIN_EXE_pyrograph"))
         .args(["render", graph.to_str().unwrap(), "--json", "--out", out.to_str().unwrap()])
         .arg("--set")
@@ -243,7 +238,7 @@ fn learned_flames_from_hard_cases_move_like_the_untouched_clips_and_a_cut_base_i
     const ALL: usize = 150;
     // Luminance above which a rendered pixel is flame (as the look tests).
     const THRESHOLD: f32 = 0.25;
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
+    let graph = workspace().join("graphs/learning-flames-candle.ron");
     let look = |frames: &Path| -> Result<ClipLook, String> {
         let path = format!("frames.path={:?}", frames.display().to_string());
         graph_look(&graph, "render.color", &[&path, "sample.frames=1200"], THRESHOLD, 25)

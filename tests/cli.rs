@@ -4,16 +4,14 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use pyrograph_testing::workspace;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_pyrograph"))
 }
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn fixture(name: &str) -> PathBuf {
-    root().join("tests/fixtures/bad").join(name)
+    workspace().join("tests/fixtures/bad").join(name)
 }
 
 fn run(args: &[&str]) -> Output {
@@ -85,7 +83,7 @@ fn check_json_lists_every_problem_with_its_location() {
 fn no_bad_fixture_is_left_untested() {
     let mut listed: Vec<&str> = BAD.iter().map(|(f, _)| *f).collect();
     listed.sort_unstable();
-    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("tests/fixtures/bad"))
+    let mut on_disk: Vec<String> = std::fs::read_dir(workspace().join("tests/fixtures/bad"))
         .unwrap()
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
         .filter(|n| n.ends_with(".ron"))
@@ -96,7 +94,7 @@ fn no_bad_fixture_is_left_untested() {
 
 #[test]
 fn check_accepts_every_shipped_graph_that_needs_no_footage() {
-    for entry in std::fs::read_dir(root().join("graphs")).unwrap() {
+    for entry in std::fs::read_dir(workspace().join("graphs")).unwrap() {
         let path = entry.unwrap().path();
         let text = std::fs::read_to_string(&path).unwrap_or_default();
         if path.extension().is_none_or(|e| e != "ron") || text.contains("${PYROGRAPH_FOOTAGE}") {
@@ -111,7 +109,7 @@ fn check_accepts_every_shipped_graph_that_needs_no_footage() {
 fn render_writes_with_set_and_frames_and_refuses_to_overwrite() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let graph = root().join("graphs/flame-cards.ron");
+    let graph = workspace().join("graphs/flame-cards.ron");
     let graph = graph.to_str().unwrap();
     let o = run(&["render", graph, "--out", out, "--frames", "2-4", "--set", "calm.width=32"]);
     assert!(o.status.success(), "{}", text(&o));
@@ -130,7 +128,7 @@ fn render_writes_with_set_and_frames_and_refuses_to_overwrite() {
 #[test]
 fn a_cache_dir_that_is_not_a_folder_is_an_error_before_anything_cooks() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/flame-cards.ron");
+    let graph = workspace().join("graphs/flame-cards.ron");
     let file = dir.path().join("a-file");
     std::fs::write(&file, "x").unwrap();
     for cache in [dir.path().join("missing"), file] {
@@ -150,7 +148,7 @@ fn a_cache_dir_that_is_not_a_folder_is_an_error_before_anything_cooks() {
 
 #[test]
 fn bad_set_arguments_are_errors_not_panics() {
-    let graph = root().join("graphs/demo.ron");
+    let graph = workspace().join("graphs/demo.ron");
     let graph = graph.to_str().unwrap();
     for set in ["nobody.width=3", "render.width=huge", "no-equals-sign"] {
         let o = run(&["check", graph]);
@@ -168,7 +166,7 @@ fn nodes_json_and_presets_list_what_is_there() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v.as_array().unwrap().iter().any(|n| n["type"] == "imaging.load_sequence"));
 
-    let o = bin().args(["presets", "--json"]).current_dir(root()).output().unwrap();
+    let o = bin().args(["presets", "--json"]).current_dir(workspace()).output().unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let card = v
@@ -196,7 +194,7 @@ fn demo_writes_frames_and_says_where() {
 
 #[test]
 fn info_describes_a_graph() {
-    let o = run(&["info", root().join("graphs/demo.ron").to_str().unwrap()]);
+    let o = run(&["info", workspace().join("graphs/demo.ron").to_str().unwrap()]);
     assert!(o.status.success());
     let t = text(&o);
     assert!(t.contains("particles.render_fire") && t.contains("Clip<Image>") && t.contains("per frame over a clip"), "{t}");
@@ -207,7 +205,7 @@ fn save_migrates_applies_set_and_refuses_to_overwrite() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cards.ron");
     let out_s = out.to_str().unwrap();
-    let graph = root().join("graphs/flame-cards.ron");
+    let graph = workspace().join("graphs/flame-cards.ron");
     let graph = graph.to_str().unwrap();
     let o = run(&["save", graph, "-o", out_s, "--set", "calm.turbulence=0.8"]);
     assert!(o.status.success(), "{}", text(&o));
@@ -225,7 +223,7 @@ fn save_migrates_applies_set_and_refuses_to_overwrite() {
     assert!(run(&["save", graph, "-o", out_s, "--overwrite"]).status.success());
 
     // A pre-release (unversioned) file comes out in the current format.
-    let old = root().join("tests/fixtures/migrate/v0.ron");
+    let old = workspace().join("tests/fixtures/migrate/v0.ron");
     let migrated = dir.path().join("migrated.ron");
     assert!(run(&["save", old.to_str().unwrap(), "-o", migrated.to_str().unwrap()]).status.success());
     let text = std::fs::read_to_string(&migrated).unwrap();
@@ -308,7 +306,7 @@ fn check_warns_about_a_flame_model_fit_of_whole_frames() {
     assert_eq!(v["ok"], true, "{v}");
     let warnings = v["warnings"].as_array().unwrap();
     assert!(warnings.iter().any(|w| w["node"] == "fit" && w["kind"] == "Warning"), "{v}");
-    let learning = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
+    let learning = workspace().join("graphs/learning-flames-candle.ron");
     let o = bin().args(["check", "--json", learning.to_str().unwrap()]).env("PYROGRAPH_FOOTAGE", dir.path()).output().unwrap();
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["warnings"].as_array().unwrap().iter().all(|w| w["node"] != "fit"), "{v}");

@@ -2,15 +2,11 @@
 //! `graphs/tealight-color.ron`: inside the flame the coloured output keeps the original video's
 //! colours, and outside it (no bloom or smoke layers) it is black.
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use pyrograph_frontend::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, Image, Value};
 use pyrograph_frontend::imaging::color::{ColoringLayers, original_coloring};
-
-fn footage() -> Option<PathBuf> {
-    std::env::var_os("PYROGRAPH_FOOTAGE").map(PathBuf::from)
-}
+use pyrograph_testing::{footage, workspace};
 
 fn clip(eval: &mut Evaluator, graph: &Graph, output: &str) -> Clip {
     match eval.output(graph, output, &CookCtx::new()).unwrap_or_else(|e| panic!("{output}: {e}")) {
@@ -26,10 +22,13 @@ fn frame(c: &Clip, i: usize) -> Arc<Image> {
 #[test]
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn original_coloring_keeps_the_flame_colours_and_blacks_out_the_rest() {
-    let Some(dir) = footage() else { panic!("set PYROGRAPH_FOOTAGE to the shared footage folder") };
+    // The graph reads ${PYROGRAPH_FOOTAGE} itself, so the default folder will not do.
+    assert!(std::env::var_os("PYROGRAPH_FOOTAGE").is_some(), "set PYROGRAPH_FOOTAGE to the shared footage folder");
+    let dir = footage();
     assert!(dir.join("tealight-candle/candle.mp4").exists(), "no tealight-candle/candle.mp4 under {}", dir.display());
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/tealight-color.ron");
-    let (_, graph) = Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let path = workspace().join("graphs/tealight-color.ron");
+    let (_, graph) =
+        Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
     let mut eval = Evaluator::new();
     let (source, original, colored) =
         (clip(&mut eval, &graph, "source.image"), clip(&mut eval, &graph, "pre.crop"), clip(&mut eval, &graph, "color.image"));

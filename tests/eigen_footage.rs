@@ -5,23 +5,17 @@
 //! builds and stays within the clip's largest step.
 
 use std::ops::RangeInclusive;
-use std::path::PathBuf;
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue};
 use pyrograph_frontend::eigen::motion::{Method, transition};
 use pyrograph_frontend::eigen::transition::{distance, lowpass_kernel};
 use pyrograph_frontend::eigen::values::{FrameItem, Weights};
-
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
-}
+use pyrograph_testing::{footage, workspace};
 
 /// Eigenfires weights of footage `source` (a video or frame folder) after the gray-producing
 /// node `pre` (its input `pre_in`, output `pre_out`), at 150×150.
 fn pca_weights(source: &std::path::Path, pre: NodeDoc, (pre_in, pre_out): (&str, &str)) -> Weights {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = workspace();
     let mut doc = GraphDoc::new();
     doc.add_node("video", NodeDoc::new("imaging.load_sequence").param("path", ParamValue::String(source.display().to_string())));
     doc.add_node("pre", pre);

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, PortType, Registry};
+use pyrograph_testing::workspace;
 
 /// Frames of the shared test flame: the transition nodes' default motions reach frame 149.
 const FLAME_FRAMES: i64 = 150;
@@ -210,7 +211,7 @@ fn make_files(registry: &Registry) -> Files {
     for target in ["write", "save"] {
         cook(registry, &doc, dir.path(), target).unwrap_or_else(|e| panic!("making the test files: {target}: {e}"));
     }
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = workspace();
     Files {
         image: frames.join("f_0000.png"),
         sequence: frames,

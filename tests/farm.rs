@@ -7,12 +7,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use pyrograph_testing::workspace;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_pyrograph"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn text(o: &Output) -> String {
@@ -57,7 +55,7 @@ fn render(graph: &Path, out: &Path, frames: &str, extra: &[&str]) -> Output {
 #[ignore = "needs openjd: set PYROGRAPH_OPENJD or put openjd-cli on PATH (.ci/run installs it)"]
 fn a_chunked_openjd_job_renders_the_same_bytes_as_one_process() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/burning-cube.ron");
+    let graph = workspace().join("graphs/burning-cube.ron");
     let (single, farm, job) = (dir.path().join("single"), dir.path().join("farm"), dir.path().join("job"));
     ok(render(&graph, &single, "0-47", &[]), "single render");
     let o = ok(
@@ -92,7 +90,7 @@ fn a_chunked_openjd_job_renders_the_same_bytes_as_one_process() {
 #[ignore = "needs openjd: set PYROGRAPH_OPENJD or put openjd-cli on PATH (.ci/run installs it)"]
 fn a_job_without_task_chunking_lists_its_chunks_and_runs() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/burning-cube.ron");
+    let graph = workspace().join("graphs/burning-cube.ron");
     let (single, farm, job) = (dir.path().join("single"), dir.path().join("farm"), dir.path().join("job"));
     ok(render(&graph, &single, "0-30:3,31", &[]), "single render");
     let args = ["--frames", "0-30:3,31", "--chunk", "4", "--no-chunking", "-o"];
@@ -111,7 +109,7 @@ fn a_job_without_task_chunking_lists_its_chunks_and_runs() {
 #[test]
 fn skip_existing_completes_an_interrupted_chunk_identically() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/burning-cube.ron");
+    let graph = workspace().join("graphs/burning-cube.ron");
     let (clean, crashed) = (dir.path().join("clean"), dir.path().join("crashed"));
     ok(render(&graph, &clean, "8-15", &[]), "clean render");
     ok(render(&graph, &crashed, "8-15", &[]), "render that will be cut short");
@@ -136,7 +134,7 @@ fn skip_existing_completes_an_interrupted_chunk_identically() {
 #[test]
 fn job_refuses_bad_arguments_and_existing_bundles() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/burning-cube.ron");
+    let graph = workspace().join("graphs/burning-cube.ron");
     let job = dir.path().join("job");
     let run = |extra: &[&str]| {
         bin().arg("job").arg(&graph).arg("--out").arg(dir.path().join("o")).arg("-o").arg(&job).args(extra).output().unwrap()
@@ -166,7 +164,7 @@ fn run_tasks(graph: &Path, out: &Path, chunks: &[&str]) {
 #[test]
 fn job_collect_merges_manifests_and_reports_missing_frames_and_changed_files() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/burning-cube.ron");
+    let graph = workspace().join("graphs/burning-cube.ron");
     let (out, job) = (dir.path().join("out"), dir.path().join("job"));
     let args = ["--frames", "0-23", "--chunk", "8", "-o"];
     ok(bin().arg("job").arg(&graph).arg("--out").arg(&out).args(args).arg(&job).output().unwrap(), "pyrograph job");
@@ -199,7 +197,7 @@ fn job_collect_merges_manifests_and_reports_missing_frames_and_changed_files() {
 #[ignore = "needs openjd: set PYROGRAPH_OPENJD or put openjd-cli on PATH (.ci/run installs it)"]
 fn a_wedge_job_on_openjd_matches_a_local_wedge_render() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/candles.ron");
+    let graph = workspace().join("graphs/candles.ron");
     let (single, farm, job) = (dir.path().join("single"), dir.path().join("farm"), dir.path().join("job"));
     let wedge = ["--wedge", "wind.noise_c=0.01,0.04", "--wedge", "wind.seed=1,2,3"];
     let o = ok(
@@ -234,7 +232,7 @@ fn a_wedge_job_on_openjd_matches_a_local_wedge_render() {
 #[test]
 fn a_local_wedge_writes_variants_apart_and_a_labelled_sheet() {
     let dir = tempfile::tempdir().unwrap();
-    let graph = root().join("graphs/candles.ron");
+    let graph = workspace().join("graphs/candles.ron");
     let out = dir.path().join("out");
     let wedge = ["--wedge-zip", "wind.seed=1,2", "--wedge-zip", "flames.steps=10,30"];
     let o = ok(

@@ -1,15 +1,9 @@
 //! Tests on the real flame footage in ../shared/footage (never committed to this repository).
 //! Run with `PYROGRAPH_FOOTAGE=/abs/path cargo test --workspace -- --ignored`.
 
-use std::path::PathBuf;
 use std::process::Command;
 
-/// PYROGRAPH_FOOTAGE, else `<workspace>/../shared/footage`.
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
-}
+use pyrograph_testing::{footage, workspace};
 
 fn pyrograph(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_pyrograph")).args(args).env("PYROGRAPH_FOOTAGE", footage()).output().expect("binary runs")
@@ -19,7 +13,7 @@ fn pyrograph(args: &[&str]) -> std::process::Output {
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn candle_gray_graph_writes_150_gray_frames_of_the_cropped_flame() {
     let out = tempfile::tempdir().unwrap();
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/candle-gray.ron");
+    let graph = workspace().join("graphs/candle-gray.ron");
     let o = pyrograph(&["render", graph.to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
     assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     let dir = out.path().join("candle-gray");

@@ -4,10 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, CookSettings, Evaluator, FrameSet, Graph, GraphDoc, Value};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use pyrograph_testing::workspace;
 
 fn ron_files(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
@@ -25,7 +22,7 @@ fn ron_files(dir: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn every_graph_round_trips_load_save_load() {
-    let files = ron_files(&root().join("graphs"));
+    let files = ron_files(&workspace().join("graphs"));
     assert!(files.len() >= 3, "graphs/ holds the demo, candle-gray and presets");
     let dir = tempfile::tempdir().unwrap();
     for file in files {
@@ -39,8 +36,9 @@ fn every_graph_round_trips_load_save_load() {
 
 #[test]
 fn the_unversioned_shape_migrates_and_cooks() {
-    let path = root().join("tests/fixtures/migrate/v0.ron");
-    let (doc, graph) = Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let path = workspace().join("tests/fixtures/migrate/v0.ron");
+    let (doc, graph) =
+        Graph::load(&path, &pyrograph_frontend::registry(), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
     assert_eq!(doc.version, pyrograph_frontend::core::document::CURRENT_VERSION, "migrated to the newest version in memory");
     assert_eq!(doc.node("card").unwrap().pos, Some((10.0, 20.0)));
     let gray = Evaluator::new().output(&graph, "gray.image", &CookCtx::new()).unwrap();
@@ -74,7 +72,7 @@ fn only_regenerate_1_regenerates() {
 #[test]
 fn docs_nodes_md_is_current() {
     let expected = pyrograph_frontend::reference::markdown(&pyrograph_frontend::registry());
-    let path = root().join("docs/nodes.md");
+    let path = workspace().join("docs/nodes.md");
     if regenerate() {
         std::fs::write(&path, &expected).unwrap();
     }
@@ -95,7 +93,7 @@ fn every_registered_node_has_a_doc_and_documented_ports() {
 /// Renders `graph` into a temp folder and compares chosen frames with tests/golden/.
 fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
     let out = tempfile::tempdir().unwrap();
-    let path = root().join("graphs").join(graph);
+    let path = workspace().join("graphs").join(graph);
     let options = BuildOptions { output_dir: Some(out.path().to_path_buf()), ..BuildOptions::default() };
     let (_, g) = Graph::load(&path, &pyrograph_frontend::registry(), &options).unwrap_or_else(|d| panic!("{d}"));
     let sinks: Vec<String> = g.sinks().iter().map(|s| s.to_string()).collect();
@@ -104,7 +102,7 @@ fn golden(graph: &str, frames: (usize, usize), files: &[&str]) {
         .with_settings(CookSettings { frames: Some(FrameSet::range(frames.0, frames.1)), ..CookSettings::default() });
     let res = Evaluator::new().cook(&g, &targets, &ctx).unwrap();
     assert!(res.is_ok(), "{:?}", res.root_errors());
-    let golden_dir = root().join("tests/golden");
+    let golden_dir = workspace().join("tests/golden");
     for f in files {
         let made = out.path().join(f);
         let want = golden_dir.join(Path::new(f).file_name().unwrap());

@@ -5,13 +5,14 @@
 use std::path::PathBuf;
 
 use pyrograph::look::graph_look;
+use pyrograph_testing::workspace;
 
 /// Above this, a flame's vertical profile has visible bands (the discrete steps measure 0.015 at 25
 /// steps and 0.15 at 12; the candle footage 1e-4).
 const BANDING_BOUND: f64 = 5e-4;
 
 fn candles() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/candles.ron")
+    workspace().join("graphs/candles.ron")
 }
 
 /// The candle graph's first 12 frames, flames alone (no lit table), with `sets` applied.

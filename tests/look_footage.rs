@@ -3,9 +3,8 @@
 //! autocorrelation within 0.15), and show no more banding than the footage does, at the graph's
 //! step count and at half of it.
 
-use std::path::PathBuf;
-
 use pyrograph::look::{ClipLook, FlameLook, Series, footage_look, graph_look};
+use pyrograph_testing::{footage, workspace};
 
 /// Luminance above which a pixel is flame, in the footage and in the renders.
 const THRESHOLD: f32 = 0.25;
@@ -13,14 +12,8 @@ const THRESHOLD: f32 = 0.25;
 /// One measured quantity of a flame.
 type Quantity = fn(&FlameLook) -> Series;
 
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
-}
-
 fn candles(sets: &[&str], steps: usize) -> ClipLook {
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/candles.ron");
+    let graph = workspace().join("graphs/candles.ron");
     let mut all = vec!["render.ground=false"];
     all.extend(sets);
     graph_look(&graph, "render.image", &all, THRESHOLD, steps).expect("the candle graph cooks")
@@ -64,7 +57,7 @@ fn candle_graph_moves_like_the_candle_footage_and_shows_no_bands() {
 fn learned_candle_moves_like_its_training_clip_in_image_space() {
     let frames = footage().join("candle-black/frames");
     let real = footage_look(&frames, usize::MAX, THRESHOLD, 25).expect("footage frames");
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/learning-flames-candle.ron");
+    let graph = workspace().join("graphs/learning-flames-candle.ron");
     let path = format!("frames.path={:?}", frames.display().to_string());
     let learned =
         graph_look(&graph, "render.color", &[&path, "sample.frames=1200"], THRESHOLD, 25).expect("the learned candle cooks");

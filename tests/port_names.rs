@@ -5,6 +5,8 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use pyrograph_testing::workspace;
+
 /// Source files of the node crates and the core, without test modules and test files.
 fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap() {
@@ -74,7 +76,7 @@ fn no_port_name_is_a_string_literal_outside_its_declaration() {
     let registry = pyrograph_frontend::registry();
     let ports: BTreeSet<String> =
         registry.descs().flat_map(|d| d.inputs.iter().chain(&d.outputs).map(|p| p.name.clone())).collect();
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = workspace();
     let mut files = Vec::new();
     for dir in ["crates/core/src", "crates/render/src", "nodes"] {
         sources(&root.join(dir), &mut files);

@@ -7,15 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
-
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/footage"))
-}
+use pyrograph_testing::{footage, workspace};
 
 fn render(graph: &str, out: &Path, frames: &str) {
-    let graph = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs").join(graph);
+    let graph = workspace().join("graphs").join(graph);
     let o = Command::new(env!("CARGO_BIN_EXE_pyrograph"))
         .args(["render", graph.to_str().unwrap(), "--out", out.to_str().unwrap(), "--frames", frames])
         .args(["--node", "write_gray", "--node", "write_mask"])

@@ -2,15 +2,12 @@
 //! matches its committed thumbnail (footage presets in the footage run), carries its metadata,
 //! and `docs/presets.md` is current. `REGENERATE=1` rewrites the thumbnails and the catalogue.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use pyrograph_frontend::core::{BuildOptions, Graph};
 use pyrograph_frontend::preset_cook::{THUMB_SIZE, thumbnail, thumbnail_path};
 use pyrograph_frontend::presets::{Library, Preset, builtin_dir};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use pyrograph_testing::{footage, workspace};
 
 fn regenerate() -> bool {
     std::env::var("REGENERATE").is_ok_and(|v| v == "1")
@@ -105,7 +102,7 @@ fn every_footage_preset_checks_cooks_and_matches_its_thumbnail() {
         let me = std::env::current_exe().unwrap();
         let o = std::process::Command::new(me)
             .args(["--exact", "every_footage_preset_checks_cooks_and_matches_its_thumbnail", "--ignored", "--nocapture"])
-            .env("PYROGRAPH_FOOTAGE", root().join("../shared/footage"))
+            .env("PYROGRAPH_FOOTAGE", footage())
             .output()
             .unwrap();
         assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
@@ -148,8 +145,8 @@ fn thumbnails_are_the_catalogue_size() {
 
 #[test]
 fn docs_presets_md_is_current() {
-    let made = pyrograph_frontend::preset_docs::markdown(&pyrograph_frontend::registry(), &library(), &root()).unwrap();
-    let path = root().join("docs/presets.md");
+    let made = pyrograph_frontend::preset_docs::markdown(&pyrograph_frontend::registry(), &library(), &workspace()).unwrap();
+    let path = workspace().join("docs/presets.md");
     if regenerate() {
         std::fs::write(&path, &made).unwrap();
     }

@@ -4,9 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use pyrograph_testing::workspace;
 
 fn presets(args: &[&str], studio: &[&Path]) -> (Output, serde_json::Value) {
     let path = std::env::join_paths(studio).unwrap();
@@ -27,7 +25,7 @@ fn stderr(o: &Output) -> String {
 
 /// The shipped flame card, renamed and retagged as a studio's own "campfire".
 fn studio_campfire() -> String {
-    let card = std::fs::read_to_string(root().join("graphs/presets/flame-card.ron")).unwrap();
+    let card = std::fs::read_to_string(workspace().join("graphs/presets/flame-card.ron")).unwrap();
     card.replace("name: \"flame card\"", "name: \"campfire\"")
         .replace("tags: [\"fire\", \"card\", \"procedural\"]", "tags: [\"studio\", \"fire\"]")
 }
@@ -125,7 +123,7 @@ fn a_preset_renders_by_name_with_its_parameters_set() {
 #[test]
 fn thumbnails_are_cooked_into_a_folder_and_kept_unless_overwritten() {
     let dir = tempfile::tempdir().unwrap();
-    let library = root().join("graphs/presets");
+    let library = workspace().join("graphs/presets");
     let args =
         ["presets", "--dir", library.to_str().unwrap(), "--tag", "candle", "--tag", "perry", "--thumbnails", "--out", "thumbs"];
     let o = run(&args, dir.path());

@@ -9,8 +9,8 @@
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
+use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::{GraphDoc, ParamValue, PathRole, Registry};
 
 use crate::layout::relative_path;

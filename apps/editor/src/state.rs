@@ -8,10 +8,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use pyrograph_frontend::core::document::split_endpoint;
-use pyrograph_frontend::core::graph::{expand_vars, value_to_param};
 use pyrograph_frontend::core::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
+use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::graph::preset_desc;
+use pyrograph_frontend::core::graph::{expand_vars, value_to_param};
 use pyrograph_frontend::core::{
     BuildOptions, CookSettings, Diagnostic, DiagnosticKind, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc,
     Registry, TimeDep,

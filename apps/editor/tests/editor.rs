@@ -1,6 +1,5 @@
 //! Done-when tests of the editor: logic through `Editor`, UI through egui_kittest (headless).
 
-use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -10,6 +9,7 @@ use egui_kittest::kittest::Queryable;
 use pyrograph_editor::canvas::Action;
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{Cook, CookCtx, GraphDoc, NodeDoc, NodeError, ParamValue, Registry};
+use pyrograph_testing::workspace;
 
 const WAIT: Duration = Duration::from_secs(20);
 
@@ -28,10 +28,6 @@ fn settle(h: &mut Harness<'_, EditorApp>) {
         std::thread::sleep(Duration::from_millis(5));
     }
     h.step();
-}
-
-fn repo() -> &'static Path {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
 }
 
 #[test]
@@ -195,7 +191,7 @@ fn save_and_reload_give_an_identical_document() {
     let dir = tempfile::tempdir().unwrap();
     let mut ed = Editor::with_default_registry();
     ed.auto_cook = false;
-    ed.open(&repo().join("graphs/candles.ron")).unwrap();
+    ed.open(&workspace().join("graphs/candles.ron")).unwrap();
     assert!(ed.validation().diagnostics.is_empty(), "{:?}", ed.validation().diagnostics);
     assert!(!ed.is_dirty());
     ed.set_param("roots", "count", ParamValue::Int(7)).unwrap();
@@ -221,7 +217,7 @@ fn save_and_reload_give_an_identical_document() {
 fn presets_insert_as_include_nodes() {
     let mut ed = Editor::with_default_registry();
     ed.auto_cook = false;
-    let preset = repo().join("graphs/presets/flame-card.ron");
+    let preset = workspace().join("graphs/presets/flame-card.ron");
     let id = ed.add_preset(&preset, (0.0, 0.0)).unwrap();
     let nd = ed.doc().node(&id).unwrap();
     assert_eq!(nd.type_name, "graph.include");

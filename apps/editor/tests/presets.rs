@@ -2,20 +2,17 @@
 //! egui_kittest: search the browser, insert a preset, save selected nodes as a preset that loads
 //! and cooks to the same frames as the nodes it was made from.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
+use pyrograph_testing::workspace;
 
 fn harness(app: EditorApp) -> Harness<'static, EditorApp> {
     Harness::builder().with_size(egui::vec2(1400.0, 900.0)).build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app)
-}
-
-fn repo() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
 }
 
 fn menu(h: &mut Harness<'_, EditorApp>, top: &str, item: &str) {
@@ -98,7 +95,7 @@ fn the_browser_searches_and_inserts_a_preset() {
 fn a_selection_saved_as_a_preset_cooks_the_same_frames() {
     let dir = tempfile::tempdir().unwrap();
     let graph = dir.path().join("candles.ron");
-    let text = std::fs::read_to_string(repo().join("graphs/candles.ron")).unwrap();
+    let text = std::fs::read_to_string(workspace().join("graphs/candles.ron")).unwrap();
     std::fs::write(&graph, text.replace("\"frames\": 48", "\"frames\": 6")).unwrap();
     let mut ed = Editor::with_default_registry();
     ed.auto_cook = false;
@@ -159,9 +156,9 @@ fn a_selection_saved_as_a_preset_cooks_the_same_frames() {
 fn a_saved_preset_finds_its_files_and_keeps_the_include_path_free() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir_all(dir.path().join("footage")).unwrap();
-    std::fs::copy(repo().join("tests/golden/candles_0012.png"), dir.path().join("footage/frame.png")).unwrap();
+    std::fs::copy(workspace().join("tests/golden/candles_0012.png"), dir.path().join("footage/frame.png")).unwrap();
     let graph = dir.path().join("shot.ron");
-    let preset = repo().join("graphs/presets/flame-card.ron");
+    let preset = workspace().join("graphs/presets/flame-card.ron");
     std::fs::write(
         &graph,
         format!(

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use pyrograph_testing::workspace;
 use serde_json::Value;
 
 /// Kills the child processes however the test ends.
@@ -21,10 +22,6 @@ impl Drop for Kill {
             let _ = c.wait();
         }
     }
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn xdotool(display: &str, args: &[&str]) {
@@ -87,7 +84,7 @@ fn a_click_in_a_real_window_selects_the_node() {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_pyrograph-editor")));
     let editor = Command::new(&bin)
-        .arg(repo().join("graphs/burning-cube.ron"))
+        .arg(workspace().join("graphs/burning-cube.ron"))
         .arg("--state-dump")
         .arg(&dump)
         .env("DISPLAY", &display)

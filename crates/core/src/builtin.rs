@@ -2,9 +2,9 @@
 //! parameters from other nodes.
 
 use crate::ctx::CookCtx;
+use crate::declare::Cook;
 use crate::error::NodeError;
 use crate::node::{Node, NodeDesc, PathRole, PortDesc, TimeDep};
-use crate::params::Cook;
 
 /// The built-in node types, for [`crate::Registry::with_builtins`] (a list rather than a
 /// `register(&mut Registry)`, so this module does not depend on the registry that depends on it).

@@ -5,6 +5,7 @@
 
 pub mod builtin;
 pub mod ctx;
+pub mod declare;
 pub mod document;
 pub mod error;
 pub mod eval;
@@ -12,19 +13,20 @@ pub mod fingerprint;
 pub mod frames;
 pub mod graph;
 pub mod node;
-pub mod params;
 pub mod registry;
 pub mod stepping;
+pub mod timeline;
 pub mod value;
 
 pub use ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn, Warning};
+pub use declare::{ClipOf, Cook, InputPath, OutputPath};
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
 pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
 pub use eval::{CookResult, Evaluator};
 pub use frames::FrameSet;
 pub use graph::{BuildOptions, Graph};
 pub use node::{Inputs, Node, NodeDesc, PathRole, PortDesc, TimeDep};
-pub use params::{ClipOf, Cook, InputPath, OutputPath};
 pub use registry::Registry;
+pub use timeline::Timeline;
 pub use value::frame_cache::{CacheStats, FrameCache};
 pub use value::{Channels, Clip, Contour, Contours, FrameSource, Image, Mask, PortType, TypeInfo, Value, ValueType};

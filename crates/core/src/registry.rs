@@ -43,7 +43,7 @@ impl Registry {
     }
 
     /// Adds a node declared with [`crate::node!`]: `registry.declare::<levels::Levels>()`.
-    pub fn declare<T: crate::params::Cook>(&mut self) {
+    pub fn declare<T: crate::declare::Cook>(&mut self) {
         self.add(T::node());
     }
 

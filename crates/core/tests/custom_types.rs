@@ -4,8 +4,8 @@
 use std::hash::Hash;
 use std::sync::Arc;
 
+use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::{Fingerprinter, hash_f32s};
-use pyrograph_core::params::Cook;
 use pyrograph_core::{
     BuildOptions, CookCtx, DiagnosticKind, Evaluator, Graph, GraphDoc, NodeError, PortType, Registry, TypeInfo, Value, ValueType,
 };

@@ -314,20 +314,8 @@ fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
-const PRESET: &str = r#"(
-    version: 1,
-    description: Some("Scales a number and adds an offset."),
-    interface: Some((
-        inputs: {"x": "scale.a"},
-        outputs: {"y": "offset.value"},
-        params: {"factor": "scale.b", "offset": "offset.b"},
-    )),
-    nodes: {
-        "scale": (type: "math.multiply", params: {"b": 2.0}),
-        "offset": (type: "math.add", params: {"b": 0.0}),
-    },
-    edges: [("scale.value", "offset.a")],
-)"#;
+/// `y = factor · x + offset`, shared with includes.rs.
+const PRESET: &str = include_str!("fixtures/affine.ron");
 
 #[test]
 fn a_preset_included_twice_cooks_with_its_own_parameters() {

@@ -6,19 +6,8 @@ use pyrograph_core::{
     BuildOptions, ClipOf, Cook, CookCtx, DiagnosticKind, Evaluator, Graph, Location, NodeError, Registry, Value,
 };
 
-const PRESET: &str = r#"(
-    version: 1,
-    interface: Some((
-        inputs: {"x": "scale.a"},
-        outputs: {"y": "offset.value"},
-        params: {"factor": "scale.b", "offset": "offset.b"},
-    )),
-    nodes: {
-        "scale": (type: "math.multiply", params: {"b": 2.0}),
-        "offset": (type: "math.add", params: {"b": 0.0}),
-    },
-    edges: [("scale.value", "offset.a")],
-)"#;
+/// `y = factor · x + offset`, shared with evaluator.rs.
+const PRESET: &str = include_str!("fixtures/affine.ron");
 
 /// A preset that includes PRESET and adds one to its result.
 const NESTED: &str = r#"(

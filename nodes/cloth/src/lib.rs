@@ -25,8 +25,9 @@ use pyrograph_core::Registry;
 
 /// Adds every cloth node type.
 pub fn register(registry: &mut Registry) {
-    sim::register(registry);
-    render::register(registry);
+    registry.declare::<sim::MassSpringFlame>();
+    registry.declare::<render::ClothRender>();
+    registry.declare::<render::ClothRenderTextured>();
 }
 
 #[cfg(test)]

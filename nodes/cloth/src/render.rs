@@ -6,20 +6,14 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, Camera, DrawList, TextureId, Vertex, View, render_image};
 use rayon::prelude::*;
 
 use crate::state::ClothState;
 use crate::textures::builtin_textures;
-
-/// Adds `cloth.cloth_render` and `cloth.cloth_render_textured`.
-pub fn register(registry: &mut Registry) {
-    registry.add(ClothRender::node());
-    registry.add(ClothRenderTextured::node());
-}
 
 pyrograph_core::choice! {
     /// How the cloths are drawn.
@@ -77,12 +71,6 @@ pyrograph_core::ports! {
         line_width: f32 = 1.5,
         /// Background colour (straight RGBA).
         background: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
-    }
-}
-
-impl Default for RenderParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 

@@ -407,17 +407,17 @@ mod tests {
     const WIDTH: usize = 16;
     const MASSES: usize = 16 * 32;
 
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (*state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+    /// A value in `[-0.5, 0.5)`.
+    fn centred(state: &mut u64) -> f32 {
+        pyrograph_testing::lcg(state) - 0.5
     }
 
     /// A random axis state for `families` spring families: offsets, spring forces, p, v.
     fn random_axis(families: usize, seed: u64) -> (Vec<usize>, Vec<Vec<f32>>, Vec<f32>, Vec<f32>) {
         let mut s = seed;
         let offsets = [1, WIDTH, WIDTH + 1, WIDTH - 1, 2, 2 * WIDTH][..families].to_vec();
-        let g = offsets.iter().map(|o| (0..MASSES + o).map(|_| lcg(&mut s)).collect()).collect();
-        let (p, v) = (0..MASSES).map(|_| (lcg(&mut s), lcg(&mut s))).unzip();
+        let g = offsets.iter().map(|o| (0..MASSES + o).map(|_| centred(&mut s)).collect()).collect();
+        let (p, v) = (0..MASSES).map(|_| (centred(&mut s), centred(&mut s))).unzip();
         (offsets, g, p, v)
     }
 

@@ -11,22 +11,20 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use pyrograph_nodes_eigen::pca::{reconstruct, train};
 use pyrograph_nodes_eigen::transition::end_growing;
 use pyrograph_nodes_eigen::values::{Basis, FrameRef, Weights};
+use pyrograph_testing::{XorShift, lcg};
 
 /// Smooth moving blobs with a little noise: flame-like variation with a decaying spectrum.
 fn frames(w: u32, h: u32, m: usize) -> Vec<f32> {
     let n = w as usize * h as usize;
     let mut out = vec![0.0_f32; n * m];
-    let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+    let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
     for (f, frame) in out.chunks_mut(n).enumerate() {
         let t = f as f32 * 0.07;
         let (cx, cy) = (0.5 + 0.15 * (t * 1.3).sin(), 0.6 + 0.1 * (t * 0.7).cos());
         let s = 0.08 + 0.03 * (t * 2.1).sin();
         for (i, v) in frame.iter_mut().enumerate() {
             let (x, y) = ((i % w as usize) as f32 / w as f32, (i / w as usize) as f32 / h as f32);
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let noise = (seed >> 40) as f32 / (1u64 << 24) as f32;
+            let noise = rng.next_f32();
             *v = (-((x - cx).powi(2) + (y - cy).powi(2)) / s).exp() + 0.02 * noise;
         }
     }
@@ -60,8 +58,7 @@ fn walk_weights(m: usize, e: usize) -> Weights {
     let mut data = Vec::with_capacity(m * e);
     for _ in 0..m {
         for (k, v) in cur.iter_mut().enumerate() {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            let r = (seed >> 40) as f32 / (1u64 << 24) as f32 - 0.5;
+            let r = lcg(&mut seed) - 0.5;
             *v = 0.95 * *v + r / (1.0 + k as f32 * 0.05);
         }
         data.extend_from_slice(&cur);

@@ -12,19 +12,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use pyrograph_core::declare::{Cook, InputPath, OutputPath};
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::params::{Cook, InputPath, OutputPath};
-use pyrograph_core::{CookCtx, NodeError, Registry, port};
+use pyrograph_core::{CookCtx, NodeError, port};
 use serde::{Deserialize, Serialize};
 
 use crate::pca::Database;
 use crate::values::{Basis, FrameRef, Weights};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(SaveDatabase::node());
-    registry.add(LoadDatabase::node());
-}
 
 /// The `format` string of a header.
 pub const FORMAT: &str = "pyrograph-eigenfires";

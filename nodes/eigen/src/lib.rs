@@ -18,9 +18,20 @@ use pyrograph_core::Registry;
 
 /// Adds every Eigenfires node type.
 pub fn register(registry: &mut Registry) {
-    pca::register(registry);
-    database::register(registry);
-    transition::register(registry);
-    motion::register(registry);
-    view::register(registry);
+    registry.declare::<pca::Eigenfires>();
+    registry.declare::<pca::Project>();
+    registry.declare::<pca::Reconstruct>();
+    registry.declare::<database::SaveDatabase>();
+    registry.declare::<database::LoadDatabase>();
+    registry.declare::<transition::nodes::Recognize>();
+    registry.declare::<transition::nodes::LowpassTransition>();
+    registry.declare::<transition::nodes::DirectBridging>();
+    registry.declare::<transition::nodes::EndGrowingConnection>();
+    registry.declare::<motion::MotionList>();
+    registry.declare::<motion::FramesToClip>();
+    registry.declare::<motion::WeightsEdit>();
+    registry.declare::<view::EigenfireView>();
+    registry.declare::<view::EigenfireGrid>();
+    registry.declare::<view::PcaPlot>();
+    registry.declare::<view::WeightBars>();
 }

@@ -5,20 +5,13 @@
 use std::ops::RangeInclusive;
 use std::sync::Arc;
 
-use pyrograph_core::params::{ClipOf, Cook};
-use pyrograph_core::{Clip, CookCtx, Image, NodeError, PortType, Registry, port};
+use pyrograph_core::declare::{ClipOf, Cook};
+use pyrograph_core::{Clip, CookCtx, Image, NodeError, PortType, port};
 use rayon::prelude::*;
 
 use crate::pca::{components_to_use, empty_clip, reconstruct, samples_to_clip};
 use crate::transition::{Kernel, check_range, direct_bridging, end_exclusion, end_growing, exclusion_mask, lowpass_transition};
 use crate::values::{Basis, FrameItem, FrameList, Weights};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(MotionList::node());
-    registry.add(FramesToClip::node());
-    registry.add(WeightsEdit::node());
-}
 
 /// How two motions are joined (§5.1).
 #[derive(Clone, Debug, PartialEq)]

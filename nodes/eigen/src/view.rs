@@ -6,16 +6,8 @@
 use std::sync::Arc;
 
 use crate::values::{Basis, FrameItem, FrameList, Weights};
-use pyrograph_core::params::Cook;
-use pyrograph_core::{Channels, CookCtx, Image, NodeError, Registry, port};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(EigenfireView::node());
-    registry.add(EigenfireGrid::node());
-    registry.add(PcaPlot::node());
-    registry.add(WeightBars::node());
-}
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{Channels, CookCtx, Image, NodeError, port};
 
 /// Eq. 19–20: `samples` scaled by `255 / (max − min)` and shifted by `−255 min / (max − min)`,
 /// rounded to 8 bits (returned as 0..1 floats on the 1/255 grid). A constant vector maps to 0.

@@ -13,7 +13,9 @@ use pyrograph_core::Registry;
 
 /// Adds every flame-model node type.
 pub fn register(registry: &mut Registry) {
-    model::register(registry);
-    arp::register(registry);
-    plot::register(registry);
+    registry.declare::<model::FitModel>();
+    registry.declare::<model::RenderModel>();
+    registry.declare::<arp::ArpLearn>();
+    registry.declare::<arp::ArpSample>();
+    registry.declare::<plot::ParamPlot>();
 }

@@ -5,14 +5,9 @@
 use std::sync::Arc;
 
 use crate::values::ParamSeries;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, port};
 use pyrograph_nodes_eigen::view::Canvas;
-
-/// Adds `flame_model.param_plot`.
-pub fn register(registry: &mut Registry) {
-    registry.add(ParamPlot::node());
-}
 
 const BACKGROUND: [f32; 4] = [0.08, 0.08, 0.08, 1.0];
 const PANEL: [f32; 4] = [0.13, 0.13, 0.14, 1.0];

@@ -6,14 +6,8 @@ use std::path::PathBuf;
 use pyrograph_nodes_flame_model::model::{FitSettings, RenderSettings, fit_gray_frames, gray_plane, render_frame};
 use pyrograph_nodes_flame_model::values::ParamSeries;
 use pyrograph_nodes_imaging::io::load_image;
+use pyrograph_testing::footage;
 use rayon::prelude::*;
-
-/// PYROGRAPH_FOOTAGE, else `<workspace>/../shared/footage`.
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/footage"))
-}
 
 fn candle_frames() -> (Vec<Vec<f32>>, (u32, u32)) {
     let dir = footage().join("candle-black/frames");

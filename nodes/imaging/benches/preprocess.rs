@@ -9,17 +9,15 @@ use pyrograph_nodes_imaging::preprocess::contours::{remove_holes, simplify_close
 use pyrograph_nodes_imaging::preprocess::hsv::{Blend, HsvLayer, HsvRange, hsv_mask, rgb_to_hsv};
 use pyrograph_nodes_imaging::preprocess::morphology::{Element, KernelShape, MorphOp, morphology, structuring_element};
 use pyrograph_nodes_imaging::preprocess::pose::{Weighting, flame_axis, main_contour};
+use pyrograph_testing::XorShift;
 use std::hint::black_box;
 
-/// Deterministic xorshift so frames are reproducible without a random-number crate.
-struct Rng(u64);
+/// The shared xorshift, so frames are reproducible without a random-number crate.
+struct Rng(XorShift);
 
 impl Rng {
     fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        self.0.next_f32()
     }
     fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.next()
@@ -115,7 +113,7 @@ fn bench_chain(c: &mut Criterion) {
     let mut group = c.benchmark_group("hsv_contour_per_frame");
     group.sample_size(20);
     for (w, h) in [(1280, 720), (480, 480)] {
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ u64::from(w));
+        let mut rng = Rng(XorShift(0x9E37_79B9_7F4A_7C15 ^ u64::from(w)));
         let frames: Vec<Image> = (0..4).map(|_| flame_frame(&mut rng, w, h)).collect();
         for frame in &frames {
             check_against_reference(frame, &layers, &element);
@@ -141,13 +139,11 @@ fn bench_chain(c: &mut Criterion) {
     group.finish();
 }
 
-/// The first `count` frames of the real tealight clip (`$PYROGRAPH_FOOTAGE/tealight-candle/candle.mp4`,
-/// else `<workspace>/../shared/footage`), decoded through `imaging.load_sequence`'s loader; `None`
+/// The first `count` frames of the real tealight clip (`tealight-candle/candle.mp4` under
+/// [`pyrograph_testing::footage`]), decoded through `imaging.load_sequence`'s loader; `None`
 /// (the case is skipped, with a note) when the footage or ffmpeg is missing.
 fn tealight_frames(count: usize) -> Option<Vec<Image>> {
-    let root = std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/footage"));
+    let root = pyrograph_testing::footage();
     let ctx = pyrograph_core::CookCtx::new();
     let clip = match pyrograph_nodes_imaging::io::load_sequence(&root.join("tealight-candle/candle.mp4"), 0.0, &ctx) {
         Ok(clip) => clip,
@@ -167,7 +163,7 @@ fn bench_stages(c: &mut Criterion) {
     let mut group = c.benchmark_group("hsv_contour_stages");
     group.sample_size(20);
     for (w, h) in [(1280, 720), (480, 480)] {
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ u64::from(w));
+        let mut rng = Rng(XorShift(0x9E37_79B9_7F4A_7C15 ^ u64::from(w)));
         let frame = flame_frame(&mut rng, w, h);
         let raw = hsv_mask(&frame, &layers).expect("RGBA frame");
         let opened = morphology(&raw, MorphOp::Open, &element);

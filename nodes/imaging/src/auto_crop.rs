@@ -5,14 +5,9 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Registry, Value, port};
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Value, port};
 
 use crate::crop::crop;
-
-/// Adds `imaging.auto_crop`.
-pub fn register(registry: &mut Registry) {
-    registry.add(AutoCrop::node());
-}
 
 pyrograph_core::choice! {
     /// How `imaging.auto_crop` combines the per-frame boxes of the flame.

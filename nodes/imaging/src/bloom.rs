@@ -4,16 +4,11 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, Registry};
+use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError};
 use rayon::prelude::*;
 
 use crate::color::hls_transfer;
 use crate::filters::{Plane, gaussian_sum};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(BloomNode::node());
-}
 
 pyrograph_core::ports! {
     /// Bloom settings (§6.2): the ports of `imaging.bloom` after its image.
@@ -35,12 +30,6 @@ pyrograph_core::ports! {
         tint: bool = false,
         /// Tint colour (hue and saturation are used)
         tint_color: [f32; 4] = [1.0, 0.45, 0.1, 1.0],
-    }
-}
-
-impl Default for BloomParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 
@@ -206,8 +195,8 @@ mod tests {
             w in 1u32..40, h in 1u32..40, seed in 0u64..1000, passes in 1usize..5,
             sigma in 0.5f32..40.0, strength in 0.0f32..2.0, rgba in any::<bool>()
         ) {
-            let mut s = seed;
-            let mut rnd = move || { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); ((s >> 33) as f32) / (1u64 << 31) as f32 };
+            let mut rng = pyrograph_testing::Lcg::new(seed);
+            let mut rnd = move || (rng.next_u64() >> 33) as f32 / (1u64 << 31) as f32;
             let n = (w * h) as usize * if rgba { 4 } else { 1 };
             let data: Vec<f32> = (0..n).map(|_| rnd()).collect();
             let img = Image::from_vec(w, h, if rgba { Channels::Rgba } else { Channels::Gray }, data).unwrap();

@@ -50,7 +50,7 @@ mod tests {
     use super::*;
     use crate::testing::cook_node;
     use pyrograph_core::Value;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
 
     #[test]
     fn constant_color_fills_every_pixel() {

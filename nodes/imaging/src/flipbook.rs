@@ -8,19 +8,13 @@ use std::sync::Arc;
 
 use image::imageops::FilterType;
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, Registry, port};
+use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, port};
 use rayon::prelude::*;
 
 use crate::color::AlphaMode;
 use crate::filters::{Plane, convolve_separable, gaussian_kernel};
 use crate::io::{BitDepth, ExrType, IoError, OutputFormat, output_format, write_image_file};
 use crate::resize::resize;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(FlipbookNode::node());
-    registry.add(WriteFlipbook::node());
-}
 
 /// Largest number of rows or columns.
 pub const MAX_CELLS_PER_SIDE: i64 = 64;
@@ -45,12 +39,6 @@ pyrograph_core::ports! {
         /// Motion in frame pixels mapped to 0/1 in the motion sheet; 0 = automatic (99th percentile)
         #[range(0.0, 1024.0)]
         motion_range: f32 = 0.0,
-    }
-}
-
-impl Default for FlipbookOptions {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 
@@ -633,7 +621,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let reg = {
             let mut r = pyrograph_core::Registry::new();
-            register(&mut r);
+            crate::register(&mut r);
             r
         };
         let node = reg.get("imaging.write_flipbook").unwrap();

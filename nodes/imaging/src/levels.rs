@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::params::Cook;
+use pyrograph_core::declare::Cook;
 use pyrograph_core::{Channels, CookCtx, Image, NodeError, port};
 use rayon::prelude::*;
 
@@ -85,7 +85,7 @@ pub fn levels(img: &Image, p: &Levels) -> Image {
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
 
     fn params(black: f32, white: f32, gamma: f32) -> Levels {
         let image = Arc::new(Image::new(1, 1, Channels::Gray));

@@ -4,15 +4,9 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Cook, CookCtx, Image, Mask, NodeError, Registry, port};
+use pyrograph_core::{Cook, CookCtx, Image, Mask, NodeError, port};
 
 use crate::convert;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(MaskCombine::node());
-    registry.add(MaskToImage::node());
-}
 
 pyrograph_core::choice! {
     /// How two masks combine.

@@ -9,13 +9,8 @@ use std::sync::Arc;
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Value};
 use rayon::prelude::*;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(TurbulenceFlame::node());
-}
 
 pyrograph_core::node! {
     /// An animated procedural flame: a teardrop whose edge is displaced by upward-scrolling fractal noise (Perlin
@@ -29,12 +24,8 @@ pyrograph_core::node! {
         /// Image height in pixels.
         #[range(8, 8192)]
         height: u32 = 384,
-        /// Number of frames.
-        #[range(1, 100_000)]
-        frames: usize = 48,
-        /// Frames per second.
-        #[range(1.0, 240.0)]
-        fps: f64 = 24.0,
+        /// Length and rate of the clip (`frames`, `fps`).
+        timeline: pyrograph_core::Timeline,
         /// Noise seed.
         #[range(0, u32::MAX)]
         seed: u32 = 1,
@@ -81,7 +72,7 @@ pub fn flame_ramp(t: f32) -> [f32; 3] {
 /// Frame `frame` of the flame as straight-alpha RGBA (alpha = intensity).
 pub fn turbulence_flame_frame(p: &TurbulenceFlame, frame: usize) -> Image {
     let fbm: Fbm<Perlin> = Fbm::new(p.seed).set_octaves(p.octaves.clamp(1, 8)).set_frequency(1.0);
-    let t = frame as f64 / p.fps.max(1e-6);
+    let t = frame as f64 / p.timeline.fps.max(1e-6);
     let (w, h) = (p.width as usize, p.height as usize);
     let mut data = vec![0.0f32; w * h * 4];
     data.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
@@ -122,7 +113,7 @@ struct FlameSource(TurbulenceFlame);
 
 impl FrameSource for FlameSource {
     fn len(&self) -> usize {
-        self.0.frames
+        self.0.timeline.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
         Ok(Value::Image(Arc::new(turbulence_flame_frame(&self.0, index))))
@@ -135,7 +126,7 @@ impl Cook for TurbulenceFlame {
         let mut h = Fingerprinter::new();
         std::hash::Hash::hash(&format!("{self:?}"), &mut h);
         let fp = std::hash::Hasher::finish(&h);
-        let clip = Clip::new(PortType::Image, self.fps, fp, Arc::new(FlameSource(self)));
+        let clip = Clip::new(PortType::Image, self.timeline.fps, fp, Arc::new(FlameSource(self)));
         Ok(TurbulenceFlameOut { clip: ClipOf::new(clip) })
     }
 }
@@ -148,14 +139,13 @@ mod tests {
         TurbulenceFlame {
             width: 32,
             height: 48,
-            frames: 8,
+            timeline: pyrograph_core::Timeline { frames: 8, fps: 24.0 },
             seed: 3,
             base_width: 0.55,
             height_fraction: 0.8,
             turbulence: 0.9,
             speed: 1.2,
             octaves: 3,
-            fps: 24.0,
         }
     }
 

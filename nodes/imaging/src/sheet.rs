@@ -2,13 +2,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, Registry, port};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(ContactSheet::node());
-    registry.add(Stack::node());
-}
+use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, port};
 
 /// Puts `b` below (or right of) `a`, `gap` pixels apart, on `background`; narrower (shorter)
 /// images are left-aligned (top-aligned). Gray inputs are promoted to RGBA.

@@ -6,16 +6,11 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, FrameSource, Image, NodeError, PortType, Value, port};
 
 use crate::color::{check_size, check_threshold};
 use crate::gray::{GrayMode, to_gray};
 use crate::preprocess::morphology::gaussian_blur;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(Smoke::node());
-}
 
 pyrograph_core::choice! {
     /// Which difference of consecutive frames the smoke is made of.
@@ -41,12 +36,6 @@ pyrograph_core::ports! {
         blur: f32 = 1.5,
         /// Multiply colour (dark gray)
         color: [f32; 4] = [0.45, 0.45, 0.45, 1.0],
-    }
-}
-
-impl Default for SmokeParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::params::Declared;
+use pyrograph_core::declare::Declared;
 use pyrograph_core::{Channels, Cook, CookCtx, Image, Inputs, NodeError, Value};
 
 /// Cooks node `T` on `values` (one per input, in port order) as the graph would.

@@ -13,7 +13,6 @@
 //! boundary holds ≈ 10,000 control points.
 
 use std::hint::black_box;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -27,13 +26,9 @@ use pyrograph_nodes_particles::types::SpreadState;
 /// First frame of the timed window (the fire covers most of the near side) and its length.
 const WINDOW: (usize, usize) = (48, 48);
 
-fn graphs_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../graphs")
-}
-
 /// `graphs/burning-cube.ron` without its writer (an imaging node, not needed to time a frame).
 fn burning_cube() -> Graph {
-    let dir = graphs_dir();
+    let dir = pyrograph_testing::workspace().join("graphs");
     let mut doc = GraphDoc::load(&dir.join("burning-cube.ron")).unwrap_or_else(|d| panic!("{d}"));
     doc.nodes.0.retain(|(_, node)| node.type_name.starts_with("particles."));
     let kept: Vec<String> = doc.nodes.0.iter().map(|(id, _)| format!("{id}.")).collect();

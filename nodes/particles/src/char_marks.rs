@@ -5,17 +5,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, NodeError, Registry};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, NodeError};
 
 use crate::flame::unit_random;
 use crate::types::SpreadState;
 use pyrograph_render::{Particle, Particles};
-
-/// Adds `particles.char`.
-pub fn register(registry: &mut Registry) {
-    registry.add(Char::node());
-}
 
 pyrograph_core::ports! {
     /// Look of the char marks: the ports of `particles.char` after its input.
@@ -45,12 +40,6 @@ pyrograph_core::ports! {
         /// Seed of the size variation.
         #[range(0, u32::MAX)]
         seed: u32 = 0,
-    }
-}
-
-impl Default for CharParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 

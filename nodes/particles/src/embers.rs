@@ -7,19 +7,14 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::Vec3;
+use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Registry, Value, port};
+use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 
 use crate::flame::{Ramp, unit_random};
 use crate::types::WindField;
 use crate::wind::{WindSampler, validate_wind};
 use pyrograph_render::{Particle, Particles};
-
-/// Adds `particles.embers`.
-pub fn register(registry: &mut Registry) {
-    registry.add(Embers::node());
-}
 
 /// Cooling embers: white-yellow, orange, then dull red fading out.
 pub const EMBER_RAMP: &str = "0: 1 0.9 0.55 1; 0.3: 1 0.55 0.12 0.9; 0.75: 0.8 0.18 0.03 0.6; 1: 0.5 0.05 0.01 0";
@@ -63,12 +58,6 @@ pyrograph_core::ports! {
         /// Seed of births, roots, directions and lifetimes.
         #[range(0, u32::MAX)]
         seed: u32 = 0,
-    }
-}
-
-impl Default for EmberParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 
@@ -172,12 +161,8 @@ pyrograph_core::node! {
         roots: Arc<Particles>,
         /// Wind field (particles.wind_field); default: Perry's candle wind.
         wind: Arc<WindField> = Arc::new(WindField::default()),
-        /// Number of frames.
-        #[range(1, 100_000)]
-        frames: usize = 48,
-        /// Frames per second.
-        #[range(1.0, 240.0)]
-        fps: f64 = 24.0,
+        /// Length and rate of the clip (`frames`, `fps`).
+        timeline: pyrograph_core::Timeline,
         /// The sparks.
         params: EmberParams,
     }
@@ -217,9 +202,15 @@ impl Cook for Embers {
         Value::custom(self.roots.clone()).hash_into(&mut h);
         Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}", self.params).hash(&mut h);
-        (self.frames, self.fps.to_bits()).hash(&mut h);
-        let source = EmberSource { roots, wind: (*self.wind).clone(), params: self.params, fps: self.fps, frames: self.frames };
-        let clip = Clip::new(PortType::of::<Particles>(), self.fps, h.finish(), Arc::new(source));
+        (self.timeline.frames, self.timeline.fps.to_bits()).hash(&mut h);
+        let source = EmberSource {
+            roots,
+            wind: (*self.wind).clone(),
+            params: self.params,
+            fps: self.timeline.fps,
+            frames: self.timeline.frames,
+        };
+        let clip = Clip::new(PortType::of::<Particles>(), self.timeline.fps, h.finish(), Arc::new(source));
         Ok(EmbersOut { sparks: ClipOf::new(clip) })
     }
 }

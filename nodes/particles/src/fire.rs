@@ -5,8 +5,8 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, View, render_image};
 use rayon::prelude::*;
@@ -18,11 +18,6 @@ use crate::swept::Exposure;
 use crate::types::{Mesh, SpreadState, WindField};
 use crate::wind::{WindSampler, validate_wind};
 use pyrograph_render::{Particle, Particles};
-
-/// Adds `particles.render_fire`.
-pub fn register(registry: &mut Registry) {
-    registry.add(RenderFire::node());
-}
 
 const WIDTH_RAMP: &str = "0: 0.67; 0.5: 1.07; 1: 0.5";
 const HEIGHT_RAMP: &str = "0: 0.2; 1: 0.9";
@@ -71,7 +66,7 @@ pyrograph_core::ports! {
         /// Particle height scale over normalized age.
         height_ramp: Ramp<1> = Ramp::preset(HEIGHT_RAMP),
         /// The particles' colours.
-        colors: FlameColors,
+        colors: FlameColors = FlameColors::default(),
         /// Flames as one continuous swept shape each (the long exposure), or as their discrete steps.
         exposure: Exposure = Exposure::Continuous,
         /// Fraction of a root's life over which its flame grows in.
@@ -91,12 +86,6 @@ pyrograph_core::ports! {
         /// Seed of the flame size variation and light flicker.
         #[range(0, u32::MAX)]
         seed: u32 = 0,
-    }
-}
-
-impl Default for FireLook {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 

@@ -7,20 +7,14 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use noise::{NoiseFn, Perlin};
+use pyrograph_core::declare::{Cook, Port};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::params::{Cook, Port};
-use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Registry, Value, port};
+use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 use rayon::prelude::*;
 
 use crate::types::WindField;
 use crate::wind::{WindSampler, finite3, validate_wind};
 use pyrograph_render::{Particle, Particles};
-
-/// Adds `particles.roots` and `particles.particle_flame`.
-pub fn register(registry: &mut Registry) {
-    registry.add(Roots::node());
-    registry.add(ParticleFlame::node());
-}
 
 /// A piecewise-linear ramp over normalized age 0..1 with `N` components per key; a String port
 /// written `pos: v…; pos: v…` (a bad text is an error naming the port).
@@ -163,7 +157,7 @@ pyrograph_core::ports! {
         /// Height scale over normalized age (shape = ramp).
         height_ramp: Ramp<1> = Ramp::preset("0: 0; 1: 0.768"),
         /// The particles' colours.
-        colors: FlameColors,
+        colors: FlameColors = FlameColors::default(),
         /// Flame lifetime l_f in frames (Table 3.1).
         #[range(1, 1000)]
         lifetime: u32 = 1000,
@@ -185,12 +179,6 @@ pyrograph_core::ports! {
         /// Seed of the per-flame variations.
         #[range(0, u32::MAX)]
         seed: u32 = 0,
-    }
-}
-
-impl Default for FlameParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
     }
 }
 
@@ -504,12 +492,8 @@ pyrograph_core::node! {
         roots: Arc<Particles>,
         /// Wind field (particles.wind_field); default: Perry's candle wind.
         wind: Arc<WindField> = Arc::new(WindField::default()),
-        /// Number of frames.
-        #[range(1, 100_000)]
-        frames: usize = 48,
-        /// Frames per second.
-        #[range(1.0, 240.0)]
-        fps: f64 = 24.0,
+        /// Length and rate of the clip (`frames`, `fps`).
+        timeline: pyrograph_core::Timeline,
         /// The flames.
         params: FlameParams,
     }
@@ -548,9 +532,9 @@ impl Cook for ParticleFlame {
         Value::custom(self.roots.clone()).hash_into(&mut h);
         Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}", self.params).hash(&mut h);
-        self.frames.hash(&mut h);
-        let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames: self.frames };
-        let clip = Clip::new(PortType::of::<Particles>(), self.fps, h.finish(), Arc::new(source));
+        self.timeline.frames.hash(&mut h);
+        let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames: self.timeline.frames };
+        let clip = Clip::new(PortType::of::<Particles>(), self.timeline.fps, h.finish(), Arc::new(source));
         Ok(ParticleFlameOut { flames: ClipOf::new(clip) })
     }
 }
@@ -560,7 +544,7 @@ mod tests {
     use super::*;
     use crate::types::LargeWind;
     use pyrograph_core::Inputs;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
 
     fn up_root(x: f32, z: f32) -> Root {
         Root { position: Vec3::new(x, 0.0, z), direction: Vec3::Y }

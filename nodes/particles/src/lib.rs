@@ -22,15 +22,17 @@ use pyrograph_core::Registry;
 
 /// Adds every particle node type.
 pub fn register(registry: &mut Registry) {
-    wind::register(registry);
-    flame::register(registry);
-    render::register(registry);
-    mesh::register(registry);
-    spread::register(registry);
-    char_marks::register(registry);
-    fire::register(registry);
-    mesh_roots::register(registry);
-    embers::register(registry);
+    registry.declare::<wind::WindFieldNode>();
+    registry.declare::<flame::Roots>();
+    registry.declare::<flame::ParticleFlame>();
+    registry.declare::<render::RenderFlames>();
+    registry.declare::<render::FlameLights>();
+    registry.declare::<mesh::MeshLoad>();
+    registry.declare::<spread::FireSpread>();
+    registry.declare::<char_marks::Char>();
+    registry.declare::<fire::RenderFire>();
+    registry.declare::<mesh_roots::MeshRoots>();
+    registry.declare::<embers::Embers>();
 }
 
 #[cfg(test)]

@@ -14,13 +14,8 @@ use std::sync::Arc;
 
 use crate::types::{Mesh, NO_NEIGHBOR};
 use glam::{Quat, Vec3};
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, InputPath, NodeError, Registry, port};
-
-/// Adds `particles.mesh_load`.
-pub fn register(registry: &mut Registry) {
-    registry.add(MeshLoad::node());
-}
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, InputPath, NodeError, port};
 
 /// Polygons over shared vertex positions, before triangulation.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -4,17 +4,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, NodeError, port};
 use pyrograph_render::{Particle, Particles};
 
 use crate::flame::unit_random;
 use crate::types::Mesh;
-
-/// Adds `particles.mesh_roots`.
-pub fn register(registry: &mut Registry) {
-    registry.add(MeshRoots::node());
-}
 
 pyrograph_core::node! {
     /// Flame roots p(0) on a mesh (Perry 1994 §3.4: flames start on the burning surface, v_p along its

@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use noise::{NoiseFn, Perlin};
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, Image, NodeError, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use pyrograph_render::{Particle, Particles};
@@ -16,12 +16,6 @@ use rayon::prelude::*;
 use crate::lit_mesh::{MeshShading, draw_mesh};
 use crate::swept::{Exposure, SweptScratch, draw_steps, swept_flame, trails};
 use crate::types::Mesh;
-
-/// Adds `particles.render_flames` and `particles.flame_lights`.
-pub fn register(registry: &mut Registry) {
-    registry.add(RenderFlames::node());
-    registry.add(FlameLights::node());
-}
 
 pyrograph_core::ports! {
     /// A ground plane (a horizontal square) lit by point lights: ports of `particles.render_flames`.
@@ -337,7 +331,7 @@ mod tests {
     use super::*;
     use crate::flame::{FlameParams, Root, simulate_frame};
     use crate::types::WindField;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
     use pyrograph_core::{Inputs, Value};
     use pyrograph_render::Camera;
 

@@ -6,13 +6,8 @@ use std::sync::Arc;
 use crate::types::{LargeWind, WindField};
 use glam::{DVec3, Vec3};
 use noise::permutationtable::{NoiseHasher, PermutationTable};
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, NodeError, Registry, port};
-
-/// Adds `particles.wind_field`.
-pub fn register(registry: &mut Registry) {
-    registry.add(WindFieldNode::node());
-}
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, NodeError, port};
 
 /// The world's up axis `ĵ`, along which eq. 3.1 measures height and time scrolls the noise.
 pub const UP: Vec3 = Vec3::Y;
@@ -320,7 +315,7 @@ impl Cook for WindFieldNode {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
     use pyrograph_core::{Inputs, Value};
 
     #[test]
@@ -343,11 +338,8 @@ mod tests {
     #[test]
     fn the_noise_gradient_is_the_derivative_of_the_noise_crates_perlin_noise() {
         use noise::{NoiseFn, Perlin};
-        let mut state = 12_345u64;
-        let mut next = || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = pyrograph_testing::Lcg::new(12_345);
+        let mut next = || rng.next_f64();
         for seed in [0u32, 7, 90_210] {
             let (perlin, lattice) = (Perlin::new(seed), Lattice::new(seed));
             // Random points, negative ones and lattice planes (where the cell changes) included.

@@ -2,11 +2,12 @@
 
 use glam::{Vec2, Vec3};
 use pyrograph_core::{Channels, Image};
+use pyrograph_testing::lcg;
 
 use super::fan::envelope;
 use super::isa::{Avx2, Portable};
 use super::lanes::SMALL_LANES;
-use super::test_support::{lcg, screen_view};
+use super::test_support::screen_view;
 use super::tiles::raster_tri;
 use super::{BAND_ROWS, Band, Blend, DrawList, SUB, SVert, Vertex, ceil_sub, floor_sub, raster_band_generic, round_i64};
 

@@ -3,9 +3,10 @@
 use std::mem::MaybeUninit;
 
 use glam::{Vec2, Vec3};
+use pyrograph_testing::lcg;
 
 use super::framebuffer::{straight, write_straight, write_straight_uninit};
-use super::test_support::{lcg, screen_view, sv};
+use super::test_support::{screen_view, sv};
 use super::{Blend, DrawList, Vertex, render, render_image};
 
 #[test]

@@ -18,9 +18,3 @@ pub(super) fn sv(x: f32, y: f32, depth: f32, color: [f32; 4]) -> ScreenVertex {
 
 /// Opaque white.
 pub(super) const WHITE: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
-
-/// A small deterministic generator (no dependency for one test).
-pub(super) fn lcg(state: &mut u64) -> f32 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    (*state >> 40) as f32 / (1u64 << 24) as f32
-}

@@ -69,12 +69,6 @@ pyrograph_core::ports! {
     }
 }
 
-impl Default for ClothParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
-    }
-}
-
 /// Checks what no port range can; errors name the port.
 pub fn validate(p: &ClothParams) -> Result<(), NodeError> {
     if p.grid_width < 2 {

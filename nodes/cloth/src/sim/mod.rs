@@ -17,13 +17,5 @@ pub use model::{FlameState, Topology, unit_random, wind_active};
 pub use node::MassSpringFlame;
 pub use simulation::{Simulation, check_step, grid_roots};
 
-use pyrograph_core::Registry;
-use pyrograph_core::params::Cook;
-
-/// Adds `cloth.mass_spring_flame`.
-pub fn register(registry: &mut Registry) {
-    registry.add(MassSpringFlame::node());
-}
-
 #[cfg(test)]
 mod tests;

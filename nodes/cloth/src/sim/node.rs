@@ -5,8 +5,8 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::Vec3;
+use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::params::Cook;
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::ClothSource;

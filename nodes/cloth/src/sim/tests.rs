@@ -1,5 +1,5 @@
 use glam::Vec3;
-use pyrograph_core::params::Declared;
+use pyrograph_core::declare::{Cook, Declared};
 use pyrograph_core::{CookCtx, Inputs, NodeError, Value};
 
 use super::*;

@@ -22,15 +22,5 @@ pub use nodes::{Eigenfires, EigenfiresOut, Project, ProjectOut, Reconstruct, Rec
 pub use projection::{project, reconstruct};
 pub use training::{Database, RELATIVE_EIGENVALUE_FLOOR, train};
 
-use pyrograph_core::Registry;
-use pyrograph_core::params::Cook;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(Eigenfires::node());
-    registry.add(Project::node());
-    registry.add(Reconstruct::node());
-}
-
 #[cfg(test)]
 pub(crate) mod tests;

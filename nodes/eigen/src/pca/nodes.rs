@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::params::{ClipOf, Cook};
+use pyrograph_core::declare::{ClipOf, Cook};
 use pyrograph_core::{Clip, CookCtx, Image, NodeError, port};
 use rayon::prelude::*;
 

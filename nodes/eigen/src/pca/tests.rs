@@ -5,17 +5,12 @@ use std::sync::Arc;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
+use pyrograph_testing::lcg;
 
 use super::nodes::train_from_clips;
 use super::projection::{project, reconstruct};
 use super::training::{LIFT_BAND_ROWS, lift, train};
 use crate::values::FrameRef;
-
-/// A deterministic pseudo-random generator for test data.
-pub fn lcg(seed: &mut u64) -> f32 {
-    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    ((*seed >> 40) as f32) / (1u64 << 24) as f32
-}
 
 /// `m` random gray frames of `w × h` (one after another).
 pub fn random_frames(w: u32, h: u32, m: usize, seed: u64) -> Vec<f32> {

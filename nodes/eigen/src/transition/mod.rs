@@ -12,9 +12,6 @@ mod end_growing;
 mod lowpass;
 pub mod nodes;
 
-use pyrograph_core::Registry;
-use pyrograph_core::params::Cook;
-
 pub use bridging::direct_bridging;
 pub use distance::{check_range, distance, distances_to, exclusion_mask, frame_distance, recognize};
 pub use end_growing::{
@@ -22,14 +19,6 @@ pub use end_growing::{
     parse_thresholds,
 };
 pub use lowpass::{Kernel, lowpass_kernel, lowpass_transition};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(nodes::Recognize::node());
-    registry.add(nodes::LowpassTransition::node());
-    registry.add(nodes::DirectBridging::node());
-    registry.add(nodes::EndGrowingConnection::node());
-}
 
 #[cfg(test)]
 mod tests;

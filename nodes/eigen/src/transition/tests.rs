@@ -38,7 +38,7 @@ fn planted(chain: usize, seed: u64) -> (Weights, usize, usize, Vec<usize>) {
     let mut pts: Vec<Vec<f32>> = Vec::new();
     // Far-away clutter that should never be chosen.
     for _ in 0..200 {
-        let v: Vec<f32> = (0..dims).map(|_| 50.0 + 40.0 * crate::pca::tests::lcg(&mut s)).collect();
+        let v: Vec<f32> = (0..dims).map(|_| 50.0 + 40.0 * pyrograph_testing::lcg(&mut s)).collect();
         pts.push(v);
     }
     let alpha = pts.len();
@@ -204,8 +204,8 @@ fn end_growing_rejects_bad_arguments() {
 #[test]
 fn fast_distances_match_the_plain_sum() {
     let mut s = 3;
-    let a: Vec<f32> = (0..1100).map(|_| crate::pca::tests::lcg(&mut s)).collect();
-    let b: Vec<f32> = (0..1100).map(|_| crate::pca::tests::lcg(&mut s)).collect();
+    let a: Vec<f32> = (0..1100).map(|_| pyrograph_testing::lcg(&mut s)).collect();
+    let b: Vec<f32> = (0..1100).map(|_| pyrograph_testing::lcg(&mut s)).collect();
     for e in [1, 15, 16, 17, 1100] {
         let plain = a[..e].iter().zip(&b[..e]).map(|(x, y)| f64::from(x - y).powi(2)).sum::<f64>().sqrt();
         assert!((distance(&a, &b, e) - plain).abs() < 1e-5 * plain.max(1e-3), "e={e}");

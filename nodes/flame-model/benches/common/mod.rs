@@ -4,14 +4,8 @@ use std::path::PathBuf;
 
 use pyrograph_nodes_flame_model::model::gray_plane;
 use pyrograph_nodes_imaging::io::load_image;
+use pyrograph_testing::footage;
 use rayon::prelude::*;
-
-/// PYROGRAPH_FOOTAGE, else `<workspace>/../shared/footage`.
-pub fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/footage"))
-}
 
 /// Gray planes, one per frame, and their shared (width, height).
 pub type GrayFrames = (Vec<Vec<f32>>, (u32, u32));

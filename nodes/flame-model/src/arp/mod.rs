@@ -11,19 +11,13 @@ pub mod sampler;
 use std::sync::Arc;
 
 use faer::Mat;
-use pyrograph_core::params::Cook;
-use pyrograph_core::{CookCtx, NodeError, Registry, port};
+use pyrograph_core::declare::Cook;
+use pyrograph_core::{CookCtx, NodeError, port};
 
 pub use sampler::{ArSampler, ArpSample, BendShape, ControlPorts, Controls, Ramp, sample};
 
 use crate::values::{ArModel, ParamSeries};
 use em::Lambda;
-
-/// Adds `flame_model.arp_learn` and `flame_model.arp_sample`.
-pub fn register(registry: &mut Registry) {
-    registry.add(ArpLearn::node());
-    registry.add(ArpSample::node());
-}
 
 /// How the E-step computes the expected statistics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

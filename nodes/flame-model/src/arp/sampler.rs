@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::params::Cook;
+use pyrograph_core::declare::Cook;
 use pyrograph_core::{CookCtx, NodeError, port};
 
 use super::rng::Rng;

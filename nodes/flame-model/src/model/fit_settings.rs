@@ -83,10 +83,3 @@ impl FitSettings {
         (self.norm_width, self.norm_height)
     }
 }
-
-impl Default for FitSettings {
-    /// The declared defaults of the ports.
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
-    }
-}

@@ -14,9 +14,9 @@ use std::sync::Arc;
 
 use crate::values::{FlameModel, ParamSeries};
 use pyrograph_core::ValueType;
+use pyrograph_core::declare::{ClipOf, Cook};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::params::{ClipOf, Cook};
-use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Registry, Value, port};
+use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value, port};
 use pyrograph_nodes_imaging::color::{ColorRamp, DEFAULT_RAMP};
 use rayon::prelude::*;
 
@@ -28,12 +28,6 @@ pub use render::{Alpha, RenderSettings, colorize, render_frame};
 
 /// Category of the learned-flame nodes in the editor.
 pub const CATEGORY: &str = "Flame model";
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(FitModel::node());
-    registry.add(RenderModel::node());
-}
 
 /// Luma of an image as one gray plane (Rec. 601 weights for RGBA, as `imaging.to_gray`).
 pub fn gray_plane(img: &Image) -> Vec<f32> {

@@ -15,7 +15,7 @@
 //! One file per topic (original colouring, synthetic colouring with HLS and ramps, alpha), their
 //! items re-exported here.
 
-use pyrograph_core::{Channels, Cook, Image, NodeError, Registry};
+use pyrograph_core::{Channels, Image, NodeError};
 
 mod alpha;
 mod original;
@@ -24,17 +24,6 @@ mod synthetic;
 pub use alpha::*;
 pub use original::*;
 pub use synthetic::*;
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(OriginalColoring::node());
-    registry.add(OriginalColoringLayered::node());
-    registry.add(OriginalColoringMasked::node());
-    registry.add(SyntheticColoring::node());
-    registry.add(SyntheticColoringTexture::node());
-    registry.add(Premultiply::node());
-    registry.add(SetAlpha::node());
-}
 
 fn size_text(img: &Image) -> String {
     format!("{}x{}", img.width(), img.height())

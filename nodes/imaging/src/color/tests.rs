@@ -2,7 +2,7 @@
 
 use super::*;
 use proptest::prelude::*;
-use pyrograph_core::params::Port;
+use pyrograph_core::declare::Port;
 use pyrograph_core::{Mask, Value};
 
 fn gray(w: u32, h: u32, data: &[f32]) -> Image {

@@ -4,20 +4,12 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, Registry, port};
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, InputPath, NodeError, OutputPath, port};
 
 use super::IoError;
 use super::files::{BitDepth, ExrType, OutputFormat, output_format, read_image_file, write_image_file};
 use super::sequence::{WriteOptions, open_sequence, write_sequence};
 use crate::color::AlphaMode;
-
-/// Adds the loaders and the sequence writer.
-pub fn register(registry: &mut Registry) {
-    registry.add(LoadSequence::node());
-    registry.add(LoadImage::node());
-    registry.add(WriteSequence::node());
-    registry.add(WriteImage::node());
-}
 
 // ---------------------------------------------------------------------------------------------
 // imaging.load_sequence / imaging.load_image

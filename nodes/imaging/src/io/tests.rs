@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use pyrograph_core::{Channels, Clip, Cook, CookCtx, FrameSet, Image, Inputs, PortType, Value};
+use pyrograph_testing::footage;
 
 use super::*;
 use crate::color::AlphaMode;
@@ -42,12 +43,6 @@ fn assert_close(a: &[f32], b: &[f32], tol: f32) {
     for (x, y) in a.iter().zip(b) {
         assert!((x - y).abs() <= tol, "{a:?} vs {b:?}");
     }
-}
-
-fn footage() -> PathBuf {
-    std::env::var_os("PYROGRAPH_FOOTAGE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/footage")))
 }
 
 #[test]

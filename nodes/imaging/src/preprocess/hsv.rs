@@ -1,6 +1,6 @@
 //! `imaging.hsv_mask`: the multi-layer HSV colour mask of the Eigenfires thesis (§3.2, eq. 3–4, Fig. 17).
 
-use pyrograph_core::params::Field;
+use pyrograph_core::declare::Field;
 use pyrograph_core::{Channels, Cook, CookCtx, Image, Inputs, Mask, NodeError, PortDesc, port};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -422,7 +422,7 @@ impl Cook for HsvMask {
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use pyrograph_core::params::Declared;
+    use pyrograph_core::declare::Declared;
     use pyrograph_core::{NodeDesc, Value};
 
     fn rgba(pixels: &[[f32; 3]]) -> Image {

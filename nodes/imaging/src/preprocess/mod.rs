@@ -12,34 +12,14 @@ pub mod morphology;
 pub mod pose;
 pub mod pose_smooth;
 
-use pyrograph_core::{Cook, Registry};
-
-/// Adds this module's node types.
-pub fn register(registry: &mut Registry) {
-    registry.add(hsv::HsvMask::node());
-    registry.add(hsv_auto::HsvAutoMask::node());
-    registry.add(morphology::Morphology::node());
-    registry.add(morphology::GaussianBlur::node());
-    registry.add(contours::TraceContours::node());
-    registry.add(contours::HoleRemoval::node());
-    registry.add(contours::SimplifyContours::node());
-    registry.add(contours::ContourMask::node());
-    registry.add(contours::ContourOverlay::node());
-    registry.add(hermite::HermiteBackground::node());
-    registry.add(hermite::HermiteBackgroundMasked::node());
-    registry.add(pose::PoseNormalize::node());
-    registry.add(pose_smooth::SmoothAngle::node());
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use pyrograph_core::{BuildOptions, Channels, CookCtx, Evaluator, Graph, Image, Value};
-    use std::path::Path;
     use std::sync::Arc;
 
     fn preset_path() -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../graphs/presets/preprocess.ron")
+        pyrograph_testing::workspace().join("graphs/presets/preprocess.ron")
     }
 
     /// A synthetic RGBA flame: a yellow core in an orange body leaning right, on black.
@@ -61,9 +41,8 @@ mod tests {
 
     #[test]
     fn every_node_is_registered_under_pre_processing() {
-        let mut r = Registry::new();
-        register(&mut r);
-        let names: Vec<&str> = r.descs().map(|d| d.type_name.as_str()).collect();
+        let mut r = pyrograph_core::Registry::new();
+        crate::register(&mut r);
         for want in [
             "imaging.hsv_mask",
             "imaging.morphology",
@@ -77,15 +56,15 @@ mod tests {
             "imaging.hermite_background_masked",
             "imaging.pose_normalize",
         ] {
-            assert!(names.contains(&want), "{want} missing");
+            let d = r.desc(want).unwrap_or_else(|| panic!("{want} missing"));
+            assert!(d.category == "Pre-processing" && d.doc.contains('§'), "{want}: {} / {}", d.category, d.doc);
         }
-        assert!(r.descs().all(|d| d.category == "Pre-processing" && d.doc.contains('§')));
     }
 
     #[test]
     fn preset_loads_and_stands_a_leaning_flame_upright() {
-        let mut r = Registry::with_builtins();
-        register(&mut r);
+        let mut r = pyrograph_core::Registry::with_builtins();
+        crate::register(&mut r);
         let (_, mut g) = Graph::load(&preset_path(), &r, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
         let src = g.index("src").unwrap();
         g.set_const(src, 0, Value::Image(Arc::new(flame_frame(96, 96))));

@@ -40,13 +40,5 @@ pub use node::{FireSpread, parse_ignitions};
 pub use spread_params::SpreadParams;
 pub use surface::Surface;
 
-use pyrograph_core::Registry;
-use pyrograph_core::params::Cook;
-
-/// Adds `particles.fire_spread`.
-pub fn register(registry: &mut Registry) {
-    registry.add(FireSpread::node());
-}
-
 #[cfg(test)]
 mod tests;

@@ -5,8 +5,8 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::Vec3;
+use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::params::Cook;
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::SpreadSource;
@@ -37,12 +37,8 @@ pyrograph_core::node! {
         /// Largest distance from an ignition position to the surface.
         #[range(0.0, 1e6)]
         snap: f32 = 0.05,
-        /// Number of frames.
-        #[range(1, 100_000)]
-        frames: usize = 96,
-        /// Frames per second (speeds are per second).
-        #[range(1.0, 240.0)]
-        fps: f64 = 24.0,
+        /// Length and rate of the clip (`frames`, `fps`; speeds are per second).
+        timeline: pyrograph_core::Timeline = pyrograph_core::Timeline { frames: 96, fps: 24.0 },
         /// Spread steps per frame.
         #[range(1, 64)]
         substeps: usize = 1,
@@ -59,9 +55,9 @@ impl Cook for FireSpread {
     fn cook(self, _: &CookCtx) -> Result<FireSpreadOut, NodeError> {
         let surface = Arc::new(Surface::new(&self.mesh).map_err(|m| NodeError::port(port!(FireSpread, mesh), m))?);
         validate_wind(&self.wind, port!(FireSpread, wind))?;
-        validate(&self.params, self.fps as f32).map_err(port_error)?;
+        validate(&self.params, self.timeline.fps as f32).map_err(port_error)?;
         let ignitions = parse_ignitions(&self.ignite, &surface, self.snap)?;
-        let (frames, fps, substeps) = (self.frames, self.fps, self.substeps);
+        let (frames, fps, substeps) = (self.timeline.frames, self.timeline.fps, self.substeps);
         let mut h = Fingerprinter::new();
         "particles.fire_spread".hash(&mut h);
         Value::custom(self.mesh.clone()).hash_into(&mut h);

@@ -48,9 +48,3 @@ pyrograph_core::ports! {
         seed: u32 = 0,
     }
 }
-
-impl Default for SpreadParams {
-    fn default() -> Self {
-        pyrograph_core::params::defaults()
-    }
-}

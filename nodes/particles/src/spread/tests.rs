@@ -2,7 +2,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pyrograph_core::NodeError;
-use pyrograph_core::params::Declared;
+use pyrograph_core::declare::Declared;
 
 use super::*;
 use crate::mesh::{build_mesh, cube, cylinder, plane};

@@ -123,21 +123,6 @@ impl<T: Cook> Node for Typed<T> {
     }
 }
 
-/// A declared port group (a [`ports!`](crate::ports) struct) at its declared defaults, so an
-/// algorithm's settings struct that *is* the group has a `Default` without restating the values.
-///
-/// # Panics
-/// When a port of the group has no default, or a default does not read back: mistakes in the
-/// declaration, caught by any test that builds the default.
-pub fn defaults<T: Field>() -> T {
-    let mut ports = Vec::new();
-    T::describe("", "", None, None, &mut ports);
-    let desc = NodeDesc { inputs: ports, ..NodeDesc::new("defaults", "", crate::TimeDep::PerFrame, "") };
-    let values: Vec<Value> = desc.inputs.iter().filter_map(|p| p.default.clone()).collect();
-    assert_eq!(values.len(), desc.inputs.len(), "every port of a group read by `defaults` has a default");
-    T::read(&Inputs::new(&desc, &values), "").unwrap_or_else(|e| panic!("a declared default does not read back: {e}"))
-}
-
 /// Joins doc-comment lines (`/// text` arrives as `" text"`): lines of a paragraph with spaces,
 /// paragraphs with a blank line, so the first line is the summary.
 pub fn doc_text(lines: &[&str]) -> String {
@@ -487,7 +472,7 @@ macro_rules! port {
         let _ = |p: &$owner| {
             let _ = &p.$field;
         };
-        $crate::params::port_name(stringify!($field))
+        $crate::declare::port_name(stringify!($field))
     }};
 }
 
@@ -500,7 +485,7 @@ macro_rules! port {
 ///
 /// ```
 /// use std::sync::Arc;
-/// use pyrograph_core::params::Cook;
+/// use pyrograph_core::declare::Cook;
 /// use pyrograph_core::{CookCtx, Image, NodeError};
 ///
 /// pyrograph_core::node! {
@@ -561,7 +546,7 @@ macro_rules! node {
             $( $(#[doc = $odoc])* pub $ofield: $oty, )*
         }
 
-        impl $crate::params::Declared for $name {
+        impl $crate::declare::Declared for $name {
             type Outputs = $out;
 
             fn desc() -> $crate::NodeDesc {
@@ -569,12 +554,12 @@ macro_rules! node {
                     $type_name,
                     $category,
                     $crate::TimeDep::$time,
-                    &$crate::params::doc_text(&[$($doc),*]),
+                    &$crate::declare::doc_text(&[$($doc),*]),
                 );
                 $(
-                    <$fty as $crate::params::Field>::describe(
+                    <$fty as $crate::declare::Field>::describe(
                         stringify!($field),
-                        &$crate::params::doc_text(&[$($fdoc),*]),
+                        &$crate::declare::doc_text(&[$($fdoc),*]),
                         $crate::__opt!($($fdef)?),
                         $crate::__opt!($((($lo) as f64, ($hi) as f64))?),
                         &mut desc.inputs,
@@ -582,9 +567,9 @@ macro_rules! node {
                 )*
                 $(
                     desc.outputs.push($crate::PortDesc::new(
-                        $crate::params::port_name(stringify!($ofield)),
-                        <$oty as $crate::params::Port>::port_type(),
-                        &$crate::params::doc_text(&[$($odoc),*]),
+                        $crate::declare::port_name(stringify!($ofield)),
+                        <$oty as $crate::declare::Port>::port_type(),
+                        &$crate::declare::doc_text(&[$($odoc),*]),
                     ));
                 )*
                 desc
@@ -592,14 +577,14 @@ macro_rules! node {
 
             fn read(inputs: &$crate::Inputs<'_>) -> Result<Self, $crate::NodeError> {
                 Ok($name {
-                    $( $field: <$fty as $crate::params::Field>::read(inputs, stringify!($field))?, )*
+                    $( $field: <$fty as $crate::declare::Field>::read(inputs, stringify!($field))?, )*
                 })
             }
         }
 
-        impl $crate::params::OutputSet for $out {
+        impl $crate::declare::OutputSet for $out {
             fn into_values(self) -> Vec<$crate::Value> {
-                vec![$( $crate::params::Port::into_value(self.$ofield) ),*]
+                vec![$( $crate::declare::Port::into_value(self.$ofield) ),*]
             }
         }
     };
@@ -611,7 +596,9 @@ macro_rules! node {
 /// overrides every default of the group for that node (names, docs and ranges stay shared).
 #[macro_export]
 macro_rules! ports {
+    // The struct and its `Field` impl, for both forms below.
     (
+        @group
         $(#[$meta:meta])*
         $vis:vis struct $name:ident {
             $(
@@ -627,7 +614,7 @@ macro_rules! ports {
             $( $(#[doc = $fdoc])* pub $field: $fty, )*
         }
 
-        impl $crate::params::Field for $name {
+        impl $crate::declare::Field for $name {
             fn describe(
                 _: &str,
                 _: &str,
@@ -639,9 +626,9 @@ macro_rules! ports {
                 // `value` (each renderer frames its own scene); else the group's declared defaults.
                 $(
                     let declared: Option<$fty> = $crate::__opt!($($fdef)?);
-                    <$fty as $crate::params::Field>::describe(
+                    <$fty as $crate::declare::Field>::describe(
                         stringify!($field),
-                        &$crate::params::doc_text(&[$($fdoc),*]),
+                        &$crate::declare::doc_text(&[$($fdoc),*]),
                         match &default {
                             Some(d) => Some(d.$field.clone()),
                             None => declared,
@@ -654,8 +641,54 @@ macro_rules! ports {
 
             fn read(inputs: &$crate::Inputs<'_>, _: &str) -> Result<Self, $crate::NodeError> {
                 Ok($name {
-                    $( $field: <$fty as $crate::params::Field>::read(inputs, stringify!($field))?, )*
+                    $( $field: <$fty as $crate::declare::Field>::read(inputs, stringify!($field))?, )*
                 })
+            }
+        }
+    };
+    // A group whose every port has a default (parameters, not inputs) also gets a `Default` made
+    // of those values, so an algorithm's settings struct that *is* the group has one without
+    // restating them.
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty = $fdef:expr
+            ),* $(,)?
+        }
+    ) => {
+        $crate::ports! {
+            @group
+            $(#[$meta])*
+            $vis struct $name {
+                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty = $fdef, )*
+            }
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                $name { $( $field: $fdef, )* }
+            }
+        }
+    };
+    // A group with required inputs.
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty $(= $fdef:expr)?
+            ),* $(,)?
+        }
+    ) => {
+        $crate::ports! {
+            @group
+            $(#[$meta])*
+            $vis struct $name {
+                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty $(= $fdef)?, )*
             }
         }
     };
@@ -697,7 +730,7 @@ macro_rules! choice {
             }
         }
 
-        impl $crate::params::Port for $name {
+        impl $crate::declare::Port for $name {
             fn port_type() -> $crate::PortType {
                 $crate::PortType::Enum
             }
@@ -720,5 +753,5 @@ macro_rules! choice {
 }
 
 #[cfg(test)]
-#[path = "params_tests.rs"]
+#[path = "declare_tests.rs"]
 mod tests;

@@ -6,10 +6,11 @@
 #   BEFORE=/path/to/old/pyrograph AFTER=target/debug/pyrograph benches/before-after/frames.sh
 #   FRAMES=0-11 limits each render to those frames (whole-clip nodes still read their whole clips).
 #   KEEP=DIR keeps the renders in DIR; with SKIP_RENDER=1 as well, only compares what DIR holds.
-# OpenEXR files are compared by their pixels when their bytes differ: the exr crate compresses
-# chunks in parallel and writes them in the order they finish (the offset table says where each
-# is), so two runs of one binary can write the same pixels in different byte orders. That needs
-# Python with numpy and OpenEXR (PYTHON, default python3; `pip install OpenEXR numpy`).
+# OpenEXR files are compared by their pixels when their bytes differ: binaries before 2026-11-27
+# let the exr crate compress chunks in parallel and write them in the order they finished (the
+# offset table says where each is), so two runs of one such binary wrote the same pixels in
+# different byte orders. That needs Python with numpy and OpenEXR (PYTHON, default python3;
+# `pip install OpenEXR numpy`).
 # Needs PYROGRAPH_FOOTAGE for the footage graphs (default: ../shared/footage beside the checkout).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"

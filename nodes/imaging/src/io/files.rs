@@ -167,6 +167,10 @@ fn unit_to_u16(v: f32) -> u16 {
     (v.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
 }
 
+/// Chunks are compressed one after another (`non_parallel`): in parallel, the exr crate writes them
+/// in the order they finish, so one frame rendered twice gave two different files with the same
+/// pixels, and a farm could not check outputs by their hash. Writers already encode several frames
+/// at once, which keeps the cores busy.
 fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let n = img.channels().count();
@@ -178,22 +182,22 @@ fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
         (Channels::Gray, true) => {
             let pixels =
                 SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (f16::from_f32(sample(p.0, p.1, 0)),));
-            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
+            exr::image::Image::from_channels((w, h), pixels).write().non_parallel().to_buffered(cursor)
         }
         (Channels::Gray, false) => {
             let pixels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (sample(p.0, p.1, 0),));
-            exr::image::Image::from_channels((w, h), pixels).write().to_buffered(cursor)
+            exr::image::Image::from_channels((w, h), pixels).write().non_parallel().to_buffered(cursor)
         }
         (Channels::Rgba, true) => {
             let px = |p: Vec2<usize>| {
                 let s = |c| f16::from_f32(sample(p.0, p.1, c));
                 (s(0), s(1), s(2), s(3))
             };
-            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().non_parallel().to_buffered(cursor)
         }
         (Channels::Rgba, false) => {
             let px = |p: Vec2<usize>| (sample(p.0, p.1, 0), sample(p.0, p.1, 1), sample(p.0, p.1, 2), sample(p.0, p.1, 3));
-            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().to_buffered(cursor)
+            exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().non_parallel().to_buffered(cursor)
         }
     };
     result.map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;

@@ -128,6 +128,21 @@ fn png16_round_trips_within_16_bit_quantization() {
     assert_close(back.data(), g.data(), 0.5 / 65535.0 + 1e-6);
 }
 
+/// Two renders of one frame must be the same file, so a farm can check outputs by their hash:
+/// the exr crate's parallel compression writes chunks in the order they finish.
+#[test]
+fn an_exr_is_the_same_bytes_every_time() {
+    let (w, h) = (96, 512);
+    let mut rng = pyrograph_testing::Lcg::new(7);
+    let img = rgba(w, h, &(0..w * h * 4).map(|_| rng.next_f32() * 4.0).collect::<Vec<f32>>());
+    for half in [true, false] {
+        let first = encode_image(&img, OutputFormat::Exr { half }).unwrap();
+        for _ in 0..8 {
+            assert!(encode_image(&img, OutputFormat::Exr { half }).unwrap() == first, "half {half}: another byte order");
+        }
+    }
+}
+
 #[test]
 fn exr_half_and_float_round_trip_keeping_hdr() {
     let dir = tempfile::tempdir().unwrap();

@@ -22,8 +22,8 @@ use crate::viewer::{FrameTarget, SELECTED, Viewer};
 
 // Part of the canvas's interface, defined below it because its viewer uses them too (the viewer
 // emits actions, shows the pins and frames the view within the zoom limits).
-pub use crate::action::Action;
-pub use crate::viewer::{MAX_SCALE, MIN_SCALE, NodePins};
+use crate::action::Action;
+use crate::viewer::{MAX_SCALE, MIN_SCALE, NodePins};
 
 /// The state of the canvas view.
 pub struct Canvas {

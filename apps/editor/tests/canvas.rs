@@ -324,13 +324,13 @@ fn navigation_frames_the_selection_limits_zoom_and_the_minimap_moves_the_view() 
     }
     h.run_steps(2);
     let s = h.state().canvas.transform().scaling;
-    assert!((s - pyrograph_editor::canvas::MIN_SCALE).abs() < 1e-3, "zoomed out to the limit: {s}");
+    assert!((s - pyrograph_editor::viewer::MIN_SCALE).abs() < 1e-3, "zoomed out to the limit: {s}");
     for _ in 0..40 {
         h.event(Event::Zoom(2.0));
     }
     h.run_steps(2);
     let s = h.state().canvas.transform().scaling;
-    assert!((s - pyrograph_editor::canvas::MAX_SCALE).abs() < 1e-3, "zoomed in to the limit: {s}");
+    assert!((s - pyrograph_editor::viewer::MAX_SCALE).abs() < 1e-3, "zoomed in to the limit: {s}");
 
     // A click in the minimap centres the view there; M hides it.
     let map = h.state().canvas.minimap_rect().expect("the minimap is shown");

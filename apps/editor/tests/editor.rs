@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use pyrograph_editor::canvas::Action;
+use pyrograph_editor::action::Action;
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{Cook, CookCtx, GraphDoc, NodeDoc, NodeError, ParamValue, Registry};
 use pyrograph_testing::workspace;

@@ -8,7 +8,7 @@ use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, InputPath, NodeError, O
 
 use super::IoError;
 use super::files::{BitDepth, ExrType, OutputFormat, output_format, read_image_file, write_image_file};
-use super::sequence::{WriteOptions, open_sequence, write_sequence};
+use super::sequence::{Gaps, WriteOptions, open_sequence, write_sequence};
 use crate::color::AlphaMode;
 
 // ---------------------------------------------------------------------------------------------
@@ -29,6 +29,9 @@ pyrograph_core::node! {
         /// Frames per second; 0 = the video's rate, else 24.
         #[range(0.0, 1000.0)]
         fps: f64 = 0.0,
+        /// A numbered sequence with missing numbers: error (list them) or hold (repeat the frame
+        /// before each gap, so every frame keeps its number's time).
+        gaps: Gaps = Gaps::Error,
     }
     pub struct LoadSequenceOut {
         /// The frames.
@@ -38,7 +41,8 @@ pyrograph_core::node! {
 
 impl Cook for LoadSequence {
     fn cook(self, ctx: &CookCtx) -> Result<LoadSequenceOut, NodeError> {
-        Ok(LoadSequenceOut { clip: ClipOf::new(load_sequence(&self.path, self.fps, ctx)?) })
+        let clip = open_sequence(&self.path, self.fps, self.gaps, ctx, LoadSequence::node_error);
+        Ok(LoadSequenceOut { clip: ClipOf::new(clip.map_err(LoadSequence::node_error)?) })
     }
 }
 
@@ -52,10 +56,11 @@ impl LoadSequence {
     }
 }
 
-/// Loads `path` (folder, pattern, image or video) as `imaging.load_sequence` does, `fps` 0 meaning
-/// automatic; errors name its ports.
+/// Loads `path` (folder, pattern, image or video) as `imaging.load_sequence` does with its default
+/// `gaps` (a numbered sequence with missing numbers is an error), `fps` 0 meaning automatic;
+/// errors name its ports.
 pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
-    open_sequence(path, fps, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
+    open_sequence(path, fps, Gaps::Error, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
 }
 
 pyrograph_core::node! {

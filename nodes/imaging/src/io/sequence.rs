@@ -119,14 +119,31 @@ pub enum InputFiles {
     Video(PathBuf),
 }
 
-/// Resolves a loader path: a directory, a `####` / `%04d` pattern, a video or a single image.
-pub fn find_input_files(path: &Path) -> Result<InputFiles, IoError> {
+pyrograph_core::choice! {
+    /// What a numbered image sequence with missing numbers gives.
+    pub enum Gaps {
+        /// Refuse it, listing the missing numbers: a dropped frame would otherwise shift every
+        /// later frame's time.
+        Error = "error",
+        /// Repeat the frame before each gap, so every frame keeps its number's time.
+        Hold = "hold",
+    }
+}
+
+/// Resolves a loader path: a directory, a `####` / `%04d` pattern, a video or a single image. A
+/// numbered sequence (a pattern, or a folder whose images differ only in their number) with
+/// missing numbers between its first and last is refused or held, as `gaps` says.
+pub fn find_input_files(path: &Path, gaps: Gaps) -> Result<InputFiles, IoError> {
     if path.is_dir() {
-        return list_directory(path).map(InputFiles::Images);
+        let files = list_directory(path)?;
+        return match numbered_files(&files) {
+            Some(numbered) => fill_gaps(numbered, gaps, path).map(InputFiles::Images),
+            None => Ok(InputFiles::Images(files)),
+        };
     }
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
     if let Some(pattern) = FramePattern::parse(name).map_err(IoError::Path)? {
-        return list_pattern(path, &pattern).map(InputFiles::Images);
+        return fill_gaps(list_pattern_numbered(path, &pattern)?, gaps, path).map(InputFiles::Images);
     }
     if !path.is_file() {
         return Err(no_such(path));
@@ -156,6 +173,11 @@ pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
 
 /// The existing files matching `pattern` in the folder of `path`, by frame number.
 pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>, IoError> {
+    Ok(list_pattern_numbered(path, pattern)?.into_iter().map(|(_, p)| p).collect())
+}
+
+/// [`list_pattern`] with each file's frame number.
+fn list_pattern_numbered(path: &Path, pattern: &FramePattern) -> Result<Vec<(u64, PathBuf)>, IoError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -176,7 +198,64 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
     if numbered.is_empty() {
         return Err(IoError::Path(format!("no files match {}", path.display())));
     }
-    Ok(numbered.into_iter().map(|(_, p)| p).collect())
+    Ok(numbered)
+}
+
+/// The frame numbers of a folder's images when they form one numbered sequence: every name is
+/// the same text around its last run of digits (`frame_0007.png`). `None` for other folders.
+fn numbered_files(files: &[PathBuf]) -> Option<Vec<(u64, PathBuf)>> {
+    let mut frame: Option<(String, String)> = None;
+    let mut out = Vec::with_capacity(files.len());
+    for f in files {
+        let name = f.file_name()?.to_str()?;
+        let end = name.rfind(|c: char| c.is_ascii_digit())? + 1;
+        let start = name[..end].rfind(|c: char| !c.is_ascii_digit()).map_or(0, |i| i + 1);
+        let around = (name[..start].to_string(), name[end..].to_string());
+        if frame.get_or_insert_with(|| around.clone()) != &around {
+            return None;
+        }
+        out.push((name[start..end].parse().ok()?, f.clone()));
+    }
+    out.sort();
+    Some(out)
+}
+
+/// The files of a numbered sequence in frame order, from its first number to its last: refused
+/// when numbers are missing (`Gaps::Error`, naming them), or each gap filled with the frame before
+/// it (`Gaps::Hold`).
+pub fn fill_gaps(numbered: Vec<(u64, PathBuf)>, gaps: Gaps, path: &Path) -> Result<Vec<PathBuf>, IoError> {
+    let missing = missing_ranges(&numbered.iter().map(|(n, _)| *n).collect::<Vec<_>>());
+    if missing.is_empty() {
+        return Ok(numbered.into_iter().map(|(_, p)| p).collect());
+    }
+    if gaps == Gaps::Error {
+        let count: u64 = missing.iter().map(|(a, b)| b - a + 1).sum();
+        let list: Vec<String> = missing.iter().map(|&(a, b)| if a == b { a.to_string() } else { format!("{a}-{b}") }).collect();
+        let (first, last) = (numbered[0].0, numbered[numbered.len() - 1].0);
+        let what = if count == 1 { format!("frame {} is", list[0]) } else { format!("frames {} are", list.join(", ")) };
+        return Err(IoError::Path(format!(
+            "{}: {what} missing ({count} of the numbers {first}-{last}); render or copy them, or set gaps \
+             to hold to repeat the frame before each gap",
+            path.display()
+        )));
+    }
+    let mut out = Vec::new();
+    let mut next = numbered[0].0;
+    for (n, file) in numbered {
+        // Numbers below `next` cannot happen (sorted, distinct); `n > next` is a gap to hold over.
+        while next < n {
+            out.push(out.last().cloned().unwrap_or_else(|| file.clone()));
+            next += 1;
+        }
+        out.push(file);
+        next = n + 1;
+    }
+    Ok(out)
+}
+
+/// The missing numbers between the first and last of sorted, distinct `numbers`, as inclusive ranges.
+fn missing_ranges(numbers: &[u64]) -> Vec<(u64, u64)> {
+    numbers.windows(2).filter(|w| w[1] > w[0] + 1).map(|w| (w[0] + 1, w[1] - 1)).collect()
 }
 
 /// Reads every file's header (in parallel) and checks that all frames share one size.
@@ -241,8 +320,8 @@ pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, IoErro
 
 /// Opens `path` (folder, pattern, image or video) as a clip; `fps` 0 means automatic. A video's
 /// frames decode after this returns: their errors reach the user through `report`.
-pub fn open_sequence(path: &Path, fps: f64, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
-    match find_input_files(path)? {
+pub fn open_sequence(path: &Path, fps: f64, gaps: Gaps, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
+    match find_input_files(path, gaps)? {
         InputFiles::Video(video) => crate::video::video_clip(&video, fps, ctx, report),
         InputFiles::Images(files) => image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS }),
     }

@@ -279,6 +279,43 @@ fn loads_a_folder_a_pattern_and_a_single_file() {
     assert_eq!(single.len(), 1);
 }
 
+/// Frames 0-9 of a gray ramp written as `s_####.png`, except the numbers in `skip`.
+fn sequence_with_gaps(dir: &Path, skip: &[usize]) {
+    let ctx = CookCtx::new();
+    let clip = clip_of((0..10).map(|i| gray(2, 2, &[i as f32 / 9.0; 4])).collect());
+    write_sequence(&clip, &options(dir.join("s_####.png"), OutputFormat::Png { sixteen_bit: false }), &ctx).unwrap();
+    for i in skip {
+        std::fs::remove_file(dir.join(format!("s_{i:04}.png"))).unwrap();
+    }
+}
+
+#[test]
+fn a_sequence_with_missing_numbers_is_refused_naming_them_or_held() {
+    let dir = tempfile::tempdir().unwrap();
+    sequence_with_gaps(dir.path(), &[3, 6, 7]);
+    let ctx = CookCtx::new();
+    for path in [dir.path().join("s_####.png"), dir.path().to_path_buf()] {
+        let err = load_sequence(&path, 0.0, &ctx).unwrap_err().to_string();
+        assert!(err.contains("frames 3, 6-7 are missing (3 of the numbers 0-9)") && err.contains("hold"), "{err}");
+        let held = open_sequence(&path, 0.0, Gaps::Hold, &ctx, LoadSequence::node_error).unwrap();
+        assert_eq!(held.len(), 10, "every number keeps its frame");
+        // Frame 3 repeats frame 2; frames 6 and 7 repeat frame 5; the others are their own.
+        for (i, source) in [0, 1, 2, 2, 4, 5, 5, 5, 8, 9].into_iter().enumerate() {
+            assert_close(held.image(i, &ctx).unwrap().data(), &[source as f32 / 9.0; 4], 0.5 / 255.0 + 1e-6);
+        }
+    }
+    let one = tempfile::tempdir().unwrap();
+    sequence_with_gaps(one.path(), &[4]);
+    let err = load_sequence(one.path(), 0.0, &ctx).unwrap_err().to_string();
+    assert!(err.contains("frame 4 is missing (1 of the numbers 0-9)"), "{err}");
+    // A folder of unrelated names is no numbered sequence: nothing is missing from it.
+    let loose = tempfile::tempdir().unwrap();
+    for name in ["a1.png", "b7.png"] {
+        std::fs::copy(dir.path().join("s_0000.png"), loose.path().join(name)).unwrap();
+    }
+    assert_eq!(load_sequence(loose.path(), 0.0, &ctx).unwrap().len(), 2);
+}
+
 #[test]
 fn missing_paths_and_unmatched_patterns_are_errors() {
     let dir = tempfile::tempdir().unwrap();

@@ -232,9 +232,13 @@ pub fn fill_gaps(numbered: Vec<(u64, PathBuf)>, gaps: Gaps, path: &Path) -> Resu
         let count: u64 = missing.iter().map(|(a, b)| b - a + 1).sum();
         let list: Vec<String> = missing.iter().map(|&(a, b)| if a == b { a.to_string() } else { format!("{a}-{b}") }).collect();
         let (first, last) = (numbered[0].0, numbered[numbered.len() - 1].0);
-        let what = if count == 1 { format!("frame {} is", list[0]) } else { format!("frames {} are", list.join(", ")) };
+        let (what, them) = if count == 1 {
+            (format!("frame {} is", list[0]), "it")
+        } else {
+            (format!("frames {} are", list.join(", ")), "them")
+        };
         return Err(IoError::Path(format!(
-            "{}: {what} missing ({count} of the numbers {first}-{last}); render or copy them, or set gaps \
+            "{}: {what} missing ({count} of the numbers {first}-{last}); render or copy {them}, or set gaps \
              to hold to repeat the frame before each gap",
             path.display()
         )));

@@ -200,18 +200,7 @@ impl Swarm {
     fn statistics(&self, y: &[f64], lam: &Lambda, ll: f64) -> Result<Stats, String> {
         let (dim, n, np, lag, frames) = (self.dim, self.n, self.np, self.lag, self.frames);
         let Swarm { xs, anc, pre, .. } = self;
-        let mut st = Stats {
-            log_likelihood: ll,
-            sxz: Mat::zeros(dim, n),
-            sx1: vec![0.0; dim],
-            szz: Mat::zeros(n, n),
-            sz1: vec![0.0; n],
-            sxx: Mat::zeros(dim, dim),
-            transitions: frames.saturating_sub(1),
-            obs_sq: vec![0.0; dim],
-            frames,
-            z1: vec![0.0; n],
-        };
+        let mut st = Stats { z1: vec![0.0; n], ..Stats::zeroed(dim, n, frames, ll) };
         if !ll.is_finite() {
             return Err("the log-likelihood is not finite".into());
         }

@@ -74,6 +74,25 @@ pub struct Stats {
     pub z1: Vec<f64>,
 }
 
+impl Stats {
+    /// Sums still to accumulate for a state of `n` (observations of `dim`) over `frames` frames,
+    /// with the E-step's log-likelihood `ll`; `z1` is left for the E-step that knows it.
+    pub fn zeroed(dim: usize, n: usize, frames: usize, ll: f64) -> Stats {
+        Stats {
+            log_likelihood: ll,
+            sxz: Mat::zeros(dim, n),
+            sx1: vec![0.0; dim],
+            szz: Mat::zeros(n, n),
+            sz1: vec![0.0; n],
+            sxx: Mat::zeros(dim, dim),
+            transitions: frames.saturating_sub(1),
+            obs_sq: vec![0.0; dim],
+            frames,
+            z1: Vec::new(),
+        }
+    }
+}
+
 /// Makes `m` exactly symmetric: each pair of mirrored entries becomes their mean.
 pub(super) fn symmetrize(m: &mut Mat<f64>) {
     let n = m.nrows();

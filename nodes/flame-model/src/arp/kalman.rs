@@ -126,18 +126,7 @@ fn backward(y: &[f64], frames: usize, lam: &Lambda, fw: &Forward) -> Result<Stat
     let Forward { m_pred, m_filt, p_pred, p_filt, fp, ll, steady_from } = fw;
     let (ll, steady_from) = (*ll, *steady_from);
     // Backward pass (RTS), accumulating the statistics of transition t−1 → t as it goes.
-    let mut st = Stats {
-        log_likelihood: ll,
-        sxz: Mat::zeros(dim, n),
-        sx1: vec![0.0; dim],
-        szz: Mat::zeros(n, n),
-        sz1: vec![0.0; n],
-        sxx: Mat::zeros(dim, dim),
-        transitions: frames.saturating_sub(1),
-        obs_sq: vec![0.0; dim],
-        frames,
-        z1: Vec::new(),
-    };
+    let mut st = Stats::zeroed(dim, n, frames, ll);
     let mut ms = m_filt[frames - 1].clone();
     let mut ps = p_filt[frames - 1].clone();
     add_obs(&mut st, &y[(frames - 1) * dim..frames * dim], &ms, &ps);

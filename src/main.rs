@@ -596,9 +596,16 @@ fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure>
             (n.id.to_string(), n.node.desc().type_name.clone(), n.lifted, outs)
         })
         .collect();
+    let animated = animated_params(&graph);
     if json_out {
-        let nodes: Vec<_> =
-            rows.iter().map(|(id, ty, lifted, outs)| json!({"id": id, "type": ty, "lifted": lifted, "outputs": outs})).collect();
+        let nodes: Vec<_> = rows
+            .iter()
+            .map(|(id, ty, lifted, outs)| {
+                let anim: serde_json::Map<String, serde_json::Value> =
+                    animated.iter().filter(|(n, _, _)| n == id).map(|(_, p, v)| (p.clone(), json!(v))).collect();
+                json!({"id": id, "type": ty, "lifted": lifted, "outputs": outs, "animated": anim})
+            })
+            .collect();
         println!(
             "{}",
             json!({"file": path.display().to_string(), "description": doc.description, "nodes": nodes,
@@ -617,7 +624,27 @@ fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure>
     for (a, b) in &doc.edges {
         println!("  {a} -> {b}");
     }
+    if !animated.is_empty() {
+        println!("  animated parameters:");
+        for (node, port, value) in &animated {
+            println!("    {node}.{port} = {value}");
+        }
+    }
     Ok(())
+}
+
+/// Every parameter that changes over time, as `(node, port, value as written)`, in cook order.
+fn animated_params(graph: &Graph) -> Vec<(String, String, String)> {
+    let mut out = Vec::new();
+    for &i in graph.topo_order() {
+        let n = graph.node(i);
+        for (src, port) in n.inputs.iter().zip(&n.node.desc().inputs) {
+            if let pyrograph_frontend::core::graph::InputSource::Const(pyrograph_frontend::core::Value::Anim(a)) = src {
+                out.push((n.id.to_string(), port.name.clone(), a.summary()));
+            }
+        }
+    }
+    out
 }
 
 fn bench(registry: &Registry, iters: usize, json_out: bool) {

@@ -69,6 +69,15 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("nodes/imaging/src/video.rs", "width", "a key of ffprobe's output"),
     ("nodes/imaging/src/video.rs", "height", "a key of ffprobe's output"),
     ("nodes/imaging/src/preprocess/hsv.rs", "blend", "the hand-written Field impl of an HSV layer is its declaration"),
+    ("crates/core/src/anim/channel.rs", "frame", "a key's frame, named in its error"),
+    ("crates/core/src/anim/channel.rs", "value", "a key's value, named in its error"),
+    ("crates/core/src/anim/mod.rs", "alpha", "a colour component, named in errors"),
+    ("crates/core/src/anim/mod.rs", "x", "a vector component, named in errors"),
+    ("crates/core/src/anim/mod.rs", "y", "a vector component, named in errors"),
+    ("crates/core/src/anim/expr.rs", "frame", "an expression variable"),
+    ("crates/core/src/anim/expr.rs", "fps", "an expression variable"),
+    ("crates/core/src/anim/expr.rs", "clamp", "an expression function"),
+    ("crates/core/src/anim/expr.rs", "char", "a kind of rhai token, named in a parse error"),
 ];
 
 #[test]

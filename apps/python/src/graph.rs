@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyTuple};
 
 use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::{
-    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, Value,
+    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, ParamValue, Value,
 };
 
 use crate::clip::{Clip, frame_selection, frames_to_py, pull_frames};
@@ -286,15 +286,38 @@ impl Graph {
     }
 
     /// Sets parameter `endpoint` ("node.param") to `value` (bool, int, float, str, path or a
-    /// tuple for colours and vectors); the next cook re-cooks only what depends on it.
+    /// tuple for colours and vectors; `"keys([(0, 1.0), (40, 2.0)])"` or `"expr(sin(time))"` to
+    /// animate it); the next cook re-cooks only what depends on it.
     fn set(&mut self, py: Python<'_>, endpoint: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        let (id, param) = self::endpoint(py, endpoint)?;
-        let ty = self.node_doc(py, id)?.type_name.clone();
-        check_param(py, id, &ty, param)?;
         let v = crate::param_values::from_py(value)?;
-        self.node_doc(py, id)?.params.insert(param.to_string(), v);
-        self.edited();
-        Ok(())
+        self.set_param(py, endpoint, v)
+    }
+
+    /// Keys parameter `endpoint`: `keys` is a list of `(frame, value)` or
+    /// `(frame, value, interpolation)` ("smooth", "linear", "constant", "ease"); `extrapolation`
+    /// is "hold", "cycle" or "linear" on both sides, or a `(before, after)` pair.
+    #[pyo3(signature = (endpoint, keys, extrapolation=None))]
+    fn set_keys(
+        &mut self,
+        py: Python<'_>,
+        endpoint: &str,
+        keys: &Bound<'_, PyAny>,
+        extrapolation: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let list = crate::param_values::from_py(keys)?;
+        let arg = match extrapolation.map(crate::param_values::from_py).transpose()? {
+            None => list,
+            Some(ParamValue::List(sides)) => ParamValue::List(std::iter::once(list).chain(sides).collect()),
+            Some(both) => ParamValue::List(vec![list, both]),
+        };
+        self.set_param(py, endpoint, ParamValue::Call("keys".into(), Box::new(arg)))
+    }
+
+    /// Sets parameter `endpoint` to an expression of `frame`, `time` and `fps`, e.g.
+    /// `"0.5 + 0.2 * sin(time * 3)"`.
+    fn set_expr(&mut self, py: Python<'_>, endpoint: &str, expression: &str) -> PyResult<()> {
+        let form = ParamValue::Call("expr".into(), Box::new(ParamValue::String(expression.to_string())));
+        self.set_param(py, endpoint, form)
     }
 
     /// Parameter `endpoint` ("node.param") as written in the graph, else its default (None for
@@ -432,6 +455,17 @@ impl Graph {
 }
 
 /// Refuses a parameter the node type does not have (includes are checked when built).
+impl Graph {
+    fn set_param(&mut self, py: Python<'_>, endpoint: &str, v: ParamValue) -> PyResult<()> {
+        let (id, param) = self::endpoint(py, endpoint)?;
+        let ty = self.node_doc(py, id)?.type_name.clone();
+        check_param(py, id, &ty, param)?;
+        self.node_doc(py, id)?.params.insert(param.to_string(), v);
+        self.edited();
+        Ok(())
+    }
+}
+
 fn check_param(py: Python<'_>, id: &str, ty: &str, name: &str) -> PyResult<()> {
     let Some(desc) = registry().desc(ty) else { return Ok(()) };
     if ty == pyrograph_frontend::core::builtin::INCLUDE_TYPE || desc.input_index(name).is_some() {

@@ -30,7 +30,8 @@ fn from_py_at(obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<ParamValue> {
         return Ok(ParamValue::Float(obj.extract()?));
     }
     if obj.is_instance_of::<PyString>() {
-        return Ok(ParamValue::String(obj.extract()?));
+        let text: String = obj.extract()?;
+        return Ok(animated_text(&text).unwrap_or(ParamValue::String(text)));
     }
     if obj.is_instance_of::<PyTuple>() || obj.is_instance_of::<PyList>() {
         if depth >= MAX_DEPTH {
@@ -55,6 +56,16 @@ fn from_py_at(obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<ParamValue> {
     )))
 }
 
+/// A string written as an animated parameter, `keys([...])` or `expr(...)`, as in a graph file
+/// and on the command line.
+fn animated_text(text: &str) -> Option<ParamValue> {
+    let t = text.trim();
+    if !(t.starts_with("keys(") || t.starts_with("expr(")) || !t.ends_with(')') {
+        return None;
+    }
+    Some(ParamValue::parse_cli(t)).filter(|v| matches!(v, ParamValue::Call(..)))
+}
+
 fn is_numpy_bool(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
     let ty = obj.get_type();
     let module: String = ty.module()?.extract()?;
@@ -73,5 +84,7 @@ pub fn to_py<'py>(py: Python<'py>, v: &ParamValue) -> PyResult<Bound<'py, PyAny>
             let items = items.iter().map(|i| to_py(py, i)).collect::<PyResult<Vec<_>>>()?;
             PyTuple::new(py, items)?.into_any()
         }
+        // As written in the file, so `set(endpoint, get(endpoint))` keeps it.
+        ParamValue::Call(..) => v.to_string().into_pyobject(py)?.into_any(),
     })
 }

@@ -151,5 +151,7 @@ pub fn to_py<'py>(py: Python<'py>, v: &RustValue) -> PyResult<Bound<'py, PyAny>>
         RustValue::Mask(m) => mask_array(py, m)?,
         RustValue::Contours(c) => Bound::new(py, Contours { inner: c.clone() })?.into_any(),
         RustValue::Custom(_) | RustValue::Clip(_) => Bound::new(py, Opaque { value: v.clone() })?.into_any(),
+        // An animated default (a preset's keyed parameter) reads as it is written in the file.
+        RustValue::Anim(a) => a.summary().into_pyobject(py)?.into_any(),
     })
 }

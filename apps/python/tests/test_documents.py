@@ -136,3 +136,35 @@ def test_describe_is_the_node_reference_section(root):
     assert text in reference
     with pytest.raises(pyrograph.GraphError, match="did you mean 'imaging.bloom'"):
         pyrograph.describe("imaging.blom")
+
+
+def test_keys_and_expressions_set_from_python_save_like_the_cli(cli, tmp_path):
+    path = ROOT / "graphs" / "flame-cards.ron"
+    g = pyrograph.Graph.load(path)
+    g.set_keys("calm.turbulence", [(0, 0.3), (11, 1.5, "ease")], extrapolation="cycle")
+    g.set_expr("wild.turbulence", "2 + sin(time * 3)")
+    g.save(tmp_path / "python.ron")
+    subprocess.run(
+        [cli, "save", path, "-o", tmp_path / "cli.ron",
+         "--set", "calm.turbulence=keys([(0, 0.3), (11, 1.5, ease)], cycle)",
+         "--set", "wild.turbulence=expr(2 + sin(time * 3))"],
+        check=True,
+        capture_output=True,
+    )
+    saved = (tmp_path / "python.ron").read_text()
+    assert saved == (tmp_path / "cli.ron").read_text()
+    assert "version: 4," in saved and "keys([(0, 0.3), (11, 1.5, ease)], cycle)" in saved, saved
+    # What get() returns sets the same value again.
+    written = g.get("calm.turbulence")
+    assert written.startswith("keys(") and "ease" in written, written
+    again = pyrograph.Graph.load(path)
+    again.set("calm.turbulence", written)
+    again.set("wild.turbulence", g.get("wild.turbulence"))
+    assert again == g
+
+
+def test_a_bad_expression_is_a_problem_naming_node_parameter_and_column():
+    g = pyrograph.Graph.load(ROOT / "graphs" / "flame-cards.ron")
+    g.set_expr("calm.turbulence", "1 +* 2")
+    problems = g.check()
+    assert any("calm" in str(p) and "turbulence" in str(p) and "column 4" in str(p) for p in problems), problems

@@ -93,7 +93,11 @@ pub struct CookCtx {
     node: Option<Arc<str>>,
     written: Arc<std::sync::Mutex<Vec<std::path::PathBuf>>>,
     warnings: Arc<std::sync::Mutex<Vec<Warning>>>,
+    frame_log: Option<Arc<std::sync::Mutex<FrameLog>>>,
 }
+
+/// The `(node, frame)` pairs per-frame nodes computed, in order.
+type FrameLog = Vec<(Arc<str>, usize)>;
 
 impl CookCtx {
     /// A context with no progress reporting that is never cancelled.
@@ -114,6 +118,26 @@ impl CookCtx {
     pub fn with_settings(mut self, settings: CookSettings) -> Self {
         self.settings = Arc::new(settings);
         self
+    }
+    /// Records every frame a per-frame node computes (not served from the frame cache), for
+    /// recompute tests; off by default, since a long render would grow the log with its length.
+    pub fn with_frame_log(mut self) -> Self {
+        self.frame_log = Some(Arc::default());
+        self
+    }
+    /// Notes that the node being cooked computed frame `frame` (when the frame log is on).
+    pub fn log_frame(&self, frame: usize) {
+        if let (Some(log), Some(node)) = (&self.frame_log, &self.node)
+            && let Ok(mut l) = log.lock()
+        {
+            l.push((node.clone(), frame));
+        }
+    }
+    /// Takes the `(node, frame)` pairs computed since the last take, in the order they were
+    /// computed (empty without [`CookCtx::with_frame_log`]).
+    pub fn take_frame_log(&self) -> Vec<(String, usize)> {
+        let Some(log) = &self.frame_log else { return Vec::new() };
+        log.lock().map(|mut l| l.drain(..).map(|(n, f)| (n.to_string(), f)).collect()).unwrap_or_default()
     }
     /// The render settings.
     pub fn settings(&self) -> &CookSettings {

@@ -3,9 +3,9 @@
 //! The document is its own set of plain structs, separate from the runtime graph: it keeps node
 //! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
 //! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`],
-//! [`migrate_v2`]), never serde aliases. A document is written in the oldest version that can hold
-//! it, so a graph without groups, comments or preset metadata stays readable by releases that know
-//! only version 1.
+//! [`migrate_v2`], [`migrate_v3`]), never serde aliases. A document is written in the oldest version
+//! that can hold it, so a graph without groups, comments, preset metadata or animated parameters
+//! stays readable by releases that know only version 1.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -17,9 +17,14 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 
+mod param_serde;
+
 /// The newest version this build reads and writes (2: canvas groups and comments; 3: preset
-/// metadata).
-pub const CURRENT_VERSION: u32 = 3;
+/// metadata; 4: animated parameters, `keys(…)` and `expr(…)`).
+pub const CURRENT_VERSION: u32 = 4;
+
+/// The version of documents with animated parameters (keyframes or expressions).
+pub const ANIMATION_VERSION: u32 = 4;
 
 /// The version of documents with canvas groups or comments and no preset metadata.
 pub const CANVAS_VERSION: u32 = 2;
@@ -31,8 +36,12 @@ pub const PRESET_VERSION: u32 = 3;
 pub const PLAIN_VERSION: u32 = 1;
 
 /// A parameter value as written in a graph file; converted to a typed value against the port.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+///
+/// Besides literals, a value may be a *form*, `name(argument)`: `keys([(0, 0.2), (40, 1.5, ease)])`
+/// (a keyframed channel), `expr("0.5 + 0.2 * sin(time)")` (an expression) and, inside a key,
+/// `tangent(in, out)`. RON reads `name(x)` as the one-entry map `{"name": x}` (and `name(x, y)` as
+/// `{"name": [x, y]}`), which is how forms are recognised; the `anim` module gives them meaning.
+#[derive(Clone, Debug, PartialEq)]
 pub enum ParamValue {
     /// `true` / `false`.
     Bool(bool),
@@ -44,6 +53,9 @@ pub enum ParamValue {
     String(String),
     /// A tuple or list (`(1.0, 0.5, 0.2)` for colours and vectors).
     List(Vec<ParamValue>),
+    /// A form `name(argument)`: `keys(…)`, `expr(…)`, `tangent(…)`; several arguments arrive as
+    /// one list.
+    Call(String, Box<ParamValue>),
 }
 
 impl fmt::Display for ParamValue {
@@ -63,15 +75,37 @@ impl fmt::Display for ParamValue {
                 }
                 write!(f, ")")
             }
+            // A form reads as it is written in a file: `keys([(0, 0.2), (40, 1.5, ease)])`.
+            ParamValue::Call(name, arg) => match ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::new().depth_limit(0)) {
+                Ok(text) => f.write_str(&text),
+                Err(_) => write!(f, "{name}({arg})"),
+            },
         }
     }
 }
 
 impl ParamValue {
-    /// Parses a value as typed on a command line (`0.5`, `"a b"`, `(1, 0, 0)`); text that is not
-    /// RON becomes a string, so `--set load.path=frames/a.png` needs no quotes.
+    /// Parses a value as typed on a command line (`0.5`, `"a b"`, `(1, 0, 0)`,
+    /// `keys([(0, 1), (40, 2)])`); text that is not RON becomes a string, so
+    /// `--set load.path=frames/a.png` needs no quotes. `expr(…)` takes the text between its
+    /// parentheses as the expression, quoted or not (`--set 'wind.noise_c=expr(0.02 * sin(time))'`).
     pub fn parse_cli(text: &str) -> ParamValue {
+        let trimmed = text.trim();
+        if let Some(inner) = trimmed.strip_prefix("expr(").and_then(|t| t.strip_suffix(')')) {
+            let quoted = ron::from_str::<String>(inner.trim()).ok();
+            let expression = quoted.unwrap_or_else(|| inner.trim().to_string());
+            return ParamValue::Call("expr".into(), Box::new(ParamValue::String(expression)));
+        }
         ron::from_str::<ParamValue>(text).unwrap_or_else(|_| ParamValue::String(text.to_string()))
+    }
+
+    /// Whether the value is, or holds, a form (an animated parameter).
+    pub fn is_animated(&self) -> bool {
+        match self {
+            ParamValue::Call(..) => true,
+            ParamValue::List(items) => items.iter().any(ParamValue::is_animated),
+            _ => false,
+        }
     }
 }
 
@@ -227,7 +261,8 @@ pub struct PresetDoc {
     pub thumbnail_frame: Option<u32>,
 }
 
-/// A graph document, version 3 (version 1 plus canvas groups and comments, then preset metadata).
+/// A graph document, version 4 (version 1 plus canvas groups and comments, then preset metadata,
+/// then animated parameters).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GraphDoc {
     /// Always [`CURRENT_VERSION`] after loading.
@@ -323,7 +358,11 @@ impl GraphDoc {
                 let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
                 Ok(migrate_v2(old))
             }
-            3 => ron_options().from_str(text).map_err(syntax_error),
+            3 => {
+                let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v3(old))
+            }
+            4 => ron_options().from_str(text).map_err(syntax_error),
             v => Err(Diagnostics::one(Diagnostic::new(
                 DiagnosticKind::Version,
                 Location::File,
@@ -343,10 +382,12 @@ impl GraphDoc {
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }
 
-    /// The oldest version that holds this document: 3 with preset metadata, else 2 with groups
-    /// or comments, else 1.
+    /// The oldest version that holds this document: 4 with animated parameters, 3 with preset
+    /// metadata, else 2 with groups or comments, else 1.
     pub fn needed_version(&self) -> u32 {
-        if self.preset.is_some() {
+        if self.nodes.0.iter().any(|(_, n)| n.params.values().any(ParamValue::is_animated)) {
+            ANIMATION_VERSION
+        } else if self.preset.is_some() {
             PRESET_VERSION
         } else if self.groups.is_empty() && self.comments.is_empty() {
             PLAIN_VERSION
@@ -476,6 +517,13 @@ pub fn migrate_v1(mut old: GraphDoc) -> GraphDoc {
 
 /// Migrates version 2 to version 3: version 3 only adds the optional `preset` metadata.
 pub fn migrate_v2(mut old: GraphDoc) -> GraphDoc {
+    old.version = CURRENT_VERSION;
+    old
+}
+
+/// Migrates version 3 to version 4: version 4 only adds animated parameter values (`keys(…)`,
+/// `expr(…)`), which no version 3 file holds.
+pub fn migrate_v3(mut old: GraphDoc) -> GraphDoc {
     old.version = CURRENT_VERSION;
     old
 }
@@ -649,7 +697,7 @@ mod tests {
         let out = doc.to_ron();
         assert!(out.contains("version: 3,") && out.contains("preset: (") && !out.contains("Some("), "{out}");
         assert_eq!(GraphDoc::from_ron(&out).unwrap(), doc);
-        let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 4")).unwrap_err();
+        let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 5")).unwrap_err();
         assert_eq!(err.0[0].kind, DiagnosticKind::Version);
         // Without metadata the same graph is written for older readers again.
         let mut plain = doc.clone();

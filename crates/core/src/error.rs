@@ -153,6 +153,9 @@ pub enum DiagnosticKind {
     OutsideOutput,
     /// A node id that cannot be used (empty, or holding the include separator `/`).
     BadId,
+    /// An animated parameter that is malformed (keys out of order, an expression that does not
+    /// parse) or set where nothing samples it over time.
+    Animation,
 }
 
 /// One problem found while loading or validating a graph, with its location.

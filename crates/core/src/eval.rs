@@ -312,20 +312,75 @@ fn levels_of_cone(graph: &Graph, roots: &[NodeIndex]) -> Vec<Vec<NodeIndex>> {
 }
 
 /// A per-frame node run over clips: one lazy clip per output; frame i cooks the node on frame i
-/// of every clip input (constants stay constant). The clip is as long as the shortest input clip.
+/// of every clip input (constants stay constant), with its animated parameters sampled at frame i.
+/// The clip is as long as the shortest input clip.
 struct Lifted {
     node: Arc<dyn Node>,
     id: Arc<str>,
     inputs: Vec<Value>,
     lift: Vec<bool>,
     len: usize,
+    fps: f64,
+    /// Hash of the node type, its salt and the clip rate.
+    base: u64,
+    /// The sum of [`input_key`] over the inputs that are the same at every frame: summed, not
+    /// hashed in order, so a parameter keyed to the constant it had keeps every frame's key.
+    constants: u64,
     recent: Mutex<VecDeque<(usize, Arc<Vec<Value>>)>>,
+    /// Frame keys computed so far (a chain of lifted nodes asks for them repeatedly).
+    keys: Mutex<HashMap<usize, Option<u64>>>,
 }
 
 /// How many recent frames a multi-output lifted node keeps, so sibling output clips share work.
 const LIFTED_RECENT: usize = 16;
 
 impl Lifted {
+    /// The inputs of frame `frame`: clip inputs' frames and animated parameters sampled there.
+    fn frame_inputs(&self, frame: usize, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        let desc = self.node.desc();
+        let mut values = Vec::with_capacity(self.inputs.len());
+        for ((v, lift), port) in self.inputs.iter().zip(&self.lift).zip(&desc.inputs) {
+            match (v, lift) {
+                (Value::Clip(c), true) => values.push(c.get(frame, ctx)?),
+                (Value::Anim(a), _) => {
+                    values.push(a.sample_in(frame as f64, self.fps, port.range).map_err(|e| NodeError::port(&port.name, e))?)
+                }
+                _ => values.push(v.clone()),
+            }
+        }
+        Ok(values)
+    }
+
+    /// What frame `frame`'s outputs depend on, without computing them: the base, the clip
+    /// inputs' frame keys and the animated parameters' values there. `None` when a sample fails
+    /// (cooking the frame reports why).
+    fn frame_key(&self, frame: usize) -> Option<u64> {
+        if let Some(k) = self.keys.lock().ok().and_then(|m| m.get(&frame).copied()) {
+            return k;
+        }
+        let mut sum = self.constants;
+        let mut ok = true;
+        for (i, ((v, lift), port)) in self.inputs.iter().zip(&self.lift).zip(&self.node.desc().inputs).enumerate() {
+            match (v, lift) {
+                (Value::Clip(c), true) => sum = sum.wrapping_add(input_key(i, c.frame_key(frame))),
+                (Value::Anim(a), _) => match a.sample_in(frame as f64, self.fps, port.range) {
+                    Ok(sampled) => sum = sum.wrapping_add(input_key(i, sampled.fingerprint())),
+                    Err(_) => ok = false,
+                },
+                _ => {}
+            }
+        }
+        let key = ok.then(|| {
+            let mut h = Fingerprinter::new();
+            (self.base, sum).hash(&mut h);
+            h.finish()
+        });
+        if let Ok(mut m) = self.keys.lock() {
+            m.insert(frame, key);
+        }
+        key
+    }
+
     fn frame_outputs(&self, frame: usize, ctx: &CookCtx) -> Result<Arc<Vec<Value>>, NodeError> {
         if let Some(hit) = self.recent.lock().ok().and_then(|r| r.iter().find(|(f, _)| *f == frame).map(|(_, v)| v.clone())) {
             return Ok(hit);
@@ -336,14 +391,12 @@ impl Lifted {
             type_name: desc.type_name.clone(),
             source: Box::new(NodeError::Frame { frame, source: Box::new(e) }),
         };
-        let mut values = Vec::with_capacity(self.inputs.len());
-        for (v, lift) in self.inputs.iter().zip(&self.lift) {
-            match (v, lift) {
-                (Value::Clip(c), true) => values.push(c.get(frame, ctx)?),
-                _ => values.push(v.clone()),
-            }
-        }
+        let values = self.frame_inputs(frame, ctx).map_err(|e| match e {
+            NodeError::Port { .. } => in_frame(e),
+            other => other,
+        })?;
         let node_ctx = ctx.for_node(&self.id);
+        node_ctx.log_frame(frame);
         let out = self.node.cook(&Inputs::new(desc, &values), &node_ctx).map_err(in_frame)?;
         if out.len() != desc.outputs.len() {
             return Err(in_frame(NodeError::msg("wrong number of outputs")));
@@ -361,6 +414,13 @@ impl Lifted {
     }
 }
 
+/// Input `index`'s share of a frame key, from the fingerprint of its value at that frame.
+fn input_key(index: usize, value: u64) -> u64 {
+    let mut h = Fingerprinter::new();
+    (index, value).hash(&mut h);
+    h.finish()
+}
+
 struct LiftedPort {
     lifted: Arc<Lifted>,
     port: usize,
@@ -373,6 +433,12 @@ impl FrameSource for LiftedPort {
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
         Ok(self.lifted.frame_outputs(index, ctx)?[self.port].clone())
     }
+    fn frame_key(&self, index: usize) -> Option<u64> {
+        let mut h = Fingerprinter::new();
+        h.write_u64(self.lifted.frame_key(index)?);
+        h.write_usize(self.port);
+        Some(h.finish())
+    }
 }
 
 fn lift(gn: &GraphNode, inputs: Vec<Value>, fingerprint: u64) -> Vec<Value> {
@@ -383,8 +449,36 @@ fn lift(gn: &GraphNode, inputs: Vec<Value>, fingerprint: u64) -> Vec<Value> {
         || inputs.iter().zip(&lift).filter(|(_, l)| **l).filter_map(|(v, _)| if let Value::Clip(c) = v { Some(c) } else { None });
     let len = clips().map(Clip::len).min().unwrap_or(0);
     let fps = clips().next().map_or(24.0, Clip::fps);
-    let lifted =
-        Arc::new(Lifted { node: gn.node.clone(), id: gn.id.clone(), inputs, lift, len, recent: Mutex::new(VecDeque::new()) });
+    let mut constants = 0u64;
+    for (i, ((v, l), port)) in inputs.iter().zip(&lift).zip(&desc.inputs).enumerate() {
+        if !*l && !matches!(v, Value::Anim(_)) {
+            let mut h = Fingerprinter::new();
+            v.hash_into(&mut h);
+            // As in the node's fingerprint: a file it reads counts as it is on disk.
+            if let (Some(PathRole::Input), Value::Path(path)) = (port.path_role, v) {
+                hash_path_on_disk(&mut h, path);
+            }
+            constants = constants.wrapping_add(input_key(i, h.finish()));
+        }
+    }
+    let mut h = Fingerprinter::new();
+    desc.type_name.hash(&mut h);
+    gn.node.fingerprint_salt().hash(&mut h);
+    // The rate is part of every frame's key: an expression of `time` samples differently at another fps.
+    fps.to_bits().hash(&mut h);
+    let base = h.finish();
+    let lifted = Arc::new(Lifted {
+        node: gn.node.clone(),
+        id: gn.id.clone(),
+        inputs,
+        lift,
+        len,
+        fps,
+        base,
+        constants,
+        recent: Mutex::new(VecDeque::new()),
+        keys: Mutex::new(HashMap::new()),
+    });
     desc.outputs
         .iter()
         .enumerate()

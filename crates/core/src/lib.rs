@@ -3,6 +3,7 @@
 //! beyond `graph.include` and small value/math utilities.
 #![deny(missing_docs)]
 
+pub mod anim;
 pub mod builtin;
 pub mod ctx;
 pub mod declare;
@@ -18,6 +19,7 @@ pub mod stepping;
 pub mod timeline;
 pub mod value;
 
+pub use anim::Animated;
 pub use ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn, Warning};
 pub use declare::{ClipOf, Cook, InputPath, OutputPath};
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};

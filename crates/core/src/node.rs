@@ -58,6 +58,10 @@ pub struct PortDesc {
     pub options: Vec<String>,
     /// For `Path` parameters, how the path resolves.
     pub path_role: Option<PathRole>,
+    /// The node samples this parameter itself, at every step of its simulation (a field of type
+    /// `Anim`, declared in the `declare` module). Other parameters are sampled by the evaluator at the frame a
+    /// per-frame node cooks, and cannot be animated on a node that cooks once for the whole clip.
+    pub sampled_by_node: bool,
     /// One line of help for tooltips and the node reference.
     pub doc: String,
 }
@@ -72,6 +76,7 @@ impl PortDesc {
             range: None,
             options: Vec::new(),
             path_role: None,
+            sampled_by_node: false,
             doc: doc.to_string(),
         }
     }

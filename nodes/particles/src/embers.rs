@@ -96,7 +96,7 @@ pub fn simulate_embers(
     if roots.is_empty() || p.rate <= 0.0 {
         return Ok(Particles { particles, sides: 8, time: frame as f32, trails: true });
     }
-    let sampler = WindSampler::new(wind);
+    let sampler = WindSampler::at_rate(wind, fps);
     let now = frame as f64;
     let longest = p.lifetime as f64 * (1.0 + p.lifetime_jitter.clamp(0.0, 1.0) as f64);
     let rate = p.rate as f64;

@@ -508,6 +508,7 @@ struct FlameSource {
     wind: WindField,
     params: FlameParams,
     frames: usize,
+    fps: f64,
 }
 
 impl FrameSource for FlameSource {
@@ -515,7 +516,9 @@ impl FrameSource for FlameSource {
         self.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &self.wind, &self.params, index)?)))
+        // Frame T is a long exposure at time T, so an animated wind is sampled once, at T.
+        let wind = self.wind.at_frame(index as f64, self.fps)?;
+        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &wind, &self.params, index)?)))
     }
 }
 
@@ -533,7 +536,9 @@ impl Cook for ParticleFlame {
         Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}", self.params).hash(&mut h);
         self.timeline.frames.hash(&mut h);
-        let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames: self.timeline.frames };
+        self.timeline.fps.to_bits().hash(&mut h);
+        let (frames, fps) = (self.timeline.frames, self.timeline.fps);
+        let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames, fps };
         let clip = Clip::new(PortType::of::<Particles>(), self.timeline.fps, h.finish(), Arc::new(source));
         Ok(ParticleFlameOut { flames: ClipOf::new(clip) })
     }

@@ -3,10 +3,10 @@
 
 use std::sync::Arc;
 
-use crate::types::{LargeWind, WindField};
+use crate::types::{LargeWind, WindAnimation, WindField};
 use glam::{DVec3, Vec3};
 use noise::permutationtable::{NoiseHasher, PermutationTable};
-use pyrograph_core::declare::Cook;
+use pyrograph_core::declare::{Anim, Cook};
 use pyrograph_core::{CookCtx, NodeError, port};
 
 /// The world's up axis `ĵ`, along which eq. 3.1 measures height and time scrolls the noise.
@@ -139,16 +139,23 @@ pub fn validate_wind(wind: &WindField, port: &str) -> Result<(), NodeError> {
     }
 }
 
-/// Evaluates a [`WindField`]: the noise lattice is built once per field.
+/// Evaluates a [`WindField`]: the noise lattice is built once per field. An animated field is
+/// sampled at the time of each call, so a particle stepped through a gust feels it when it blows.
 pub struct WindSampler {
     field: WindField,
     lattice: Lattice,
+    fps: f64,
 }
 
 impl WindSampler {
-    /// A sampler for `field`.
+    /// A sampler for `field`, whose animated parameters (if any) run at 24 frames per second.
     pub fn new(field: &WindField) -> Self {
-        WindSampler { field: field.clone(), lattice: Lattice::new(field.seed) }
+        WindSampler::at_rate(field, 24.0)
+    }
+
+    /// A sampler for `field` in a clip at `fps` (what an expression's `time` counts in).
+    pub fn at_rate(field: &WindField, fps: f64) -> Self {
+        WindSampler { field: field.clone(), lattice: Lattice::new(field.seed), fps }
     }
 
     /// The field being sampled.
@@ -194,9 +201,16 @@ impl WindSampler {
         self.noise_gradient(q) * (height * f.noise_c)
     }
 
-    /// The whole field `u∞ = −k_g g + w_L + w_S`.
+    /// The whole field `u∞ = −k_g g + w_L + w_S` at time `t` (frames).
     pub fn at(&self, p: Vec3, p0: Vec3, t: f32) -> Vec3 {
-        -v3(self.field.gravity) * self.field.k_g + self.large(p) + self.small(p, p0, t)
+        if self.field.animation.is_none() {
+            return -v3(self.field.gravity) * self.field.k_g + self.large(p) + self.small(p, p0, t);
+        }
+        // A sample that fails (an expression giving NaN) makes the wind NaN, which the particle
+        // nodes report as a wind that drives a particle to a non-finite position.
+        let Ok(field) = self.field.at_frame(f64::from(t), self.fps) else { return Vec3::NAN };
+        let now = WindSampler { field, lattice: self.lattice.clone(), fps: self.fps };
+        now.at(p, p0, t)
     }
 }
 
@@ -225,11 +239,11 @@ pyrograph_core::node! {
         gravity: [f32; 3] = [0.0, -1.0, 0.0],
         /// Convection coefficient k_g: flames rise against gravity (Perry: 1.0).
         #[range(0.0, 10.0)]
-        k_g: f32 = 1.0,
+        k_g: Anim<f32> = Anim::constant(1.0),
         /// Large-scale wind w_L: none, the constant `wind`, a vortex, or −`object_velocity` (§3.4).
         large_scale: LargeScale = LargeScale::None,
-        /// Constant wind vector (large_scale = constant).
-        wind: [f32; 3] = [0.0, 0.0, 0.0],
+        /// Constant wind vector (large_scale = constant); animate it for gusts.
+        wind: Anim<[f32; 3]> = Anim::constant([0.0, 0.0, 0.0]),
         /// Velocity of the burning object (large_scale = moving_object).
         object_velocity: [f32; 3] = [0.0, 0.0, 0.0],
         /// A point on the vertical vortex axis (large_scale = vortex).
@@ -242,7 +256,7 @@ pyrograph_core::node! {
         vortex_radius: f32 = 1.0,
         /// Flame noisiness C of eq. 3.1 (Table 3.1; footnote 5: 0.04).
         #[range(0.0, 0.04)]
-        noise_c: f32 = 0.04,
+        noise_c: Anim<f32> = Anim::constant(0.04),
         /// Inverse inter-flame cohesion k_p: position scale into the noise (Table 3.1).
         #[range(0.1, 10.0)]
         k_p: f32 = 1.0,
@@ -280,7 +294,7 @@ impl WindFieldNode {
     pub fn field(&self) -> Result<WindField, NodeError> {
         let large = match self.large_scale {
             LargeScale::None => LargeWind::None,
-            LargeScale::Constant => LargeWind::Constant(finite3(self.wind, port!(WindFieldNode, wind))?),
+            LargeScale::Constant => LargeWind::Constant(finite3(*self.wind.value(), port!(WindFieldNode, wind))?),
             LargeScale::MovingObject => {
                 LargeWind::MovingObject(finite3(self.object_velocity, port!(WindFieldNode, object_velocity))?)
             }
@@ -292,9 +306,9 @@ impl WindFieldNode {
         };
         Ok(WindField {
             gravity: finite3(self.gravity, port!(WindFieldNode, gravity))?,
-            k_g: finite(self.k_g, port!(WindFieldNode, k_g))?,
+            k_g: finite(*self.k_g.value(), port!(WindFieldNode, k_g))?,
             large,
-            noise_c: finite(self.noise_c, port!(WindFieldNode, noise_c))?,
+            noise_c: finite(*self.noise_c.value(), port!(WindFieldNode, noise_c))?,
             k_p: finite(self.k_p, port!(WindFieldNode, k_p))?,
             k_s: finite(self.k_s, port!(WindFieldNode, k_s))?,
             seed: self.seed,
@@ -302,7 +316,18 @@ impl WindFieldNode {
                 h if h > 0.0 => h,
                 h => return Err(NodeError::port(port!(WindFieldNode, height_unit), format!("must be positive, got {h}"))),
             },
+            animation: self.animation(),
         })
+    }
+
+    /// The ports that change over time, for the field to sample at each frame or step.
+    fn animation(&self) -> Option<Arc<WindAnimation>> {
+        let anim = WindAnimation {
+            wind: self.wind.is_animated().then(|| self.wind.clone()),
+            noise_c: self.noise_c.is_animated().then(|| self.noise_c.clone()),
+            k_g: self.k_g.is_animated().then(|| self.k_g.clone()),
+        };
+        (anim != WindAnimation::default()).then(|| Arc::new(anim))
     }
 }
 

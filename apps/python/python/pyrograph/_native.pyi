@@ -1,7 +1,7 @@
 """Type stubs for pyrograph's compiled module (re-exported by `pyrograph`)."""
 
 import os
-from typing import Any, Callable, Iterable, Optional, Sequence, Union
+from typing import Any, Callable, Iterable, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -101,7 +101,12 @@ class Graph:
         """Connects "node.output" to "node.input"; types are checked at check/cook time."""
     def disconnect(self, src: str, dst: str) -> None: ...
     def set(self, endpoint: str, value: Param) -> None:
-        """Sets "node.param"; the next cook re-cooks only what depends on it."""
+        """Sets "node.param"; the next cook re-cooks only what depends on it. A string
+        "keys([...])" or "expr(...)" animates it."""
+    def set_keys(self, endpoint: str, keys: Sequence[Tuple[Any, ...]], extrapolation: Optional[Union[str, Tuple[str, str]]] = None) -> None:
+        """Keys "node.param": (frame, value) or (frame, value, interpolation) tuples."""
+    def set_expr(self, endpoint: str, expression: str) -> None:
+        """Sets "node.param" to an expression of frame, time and fps."""
     def get(self, endpoint: str) -> Any:
         """"node.param" as written, else its default."""
     def cook(self, endpoint: str, frames: Optional[Frames] = None, progress: Optional[ProgressCallback] = None) -> Cooked:

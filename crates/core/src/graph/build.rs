@@ -125,6 +125,9 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
     };
     let fed: HashSet<(NodeIndex, usize)> = interface.iter().flat_map(|i| i.inputs.iter().map(|(_, n, p)| (*n, *p))).collect();
     check_missing_inputs(&parts, &fed, &mut diags);
+    if !ctx.nested {
+        check_animated(&parts, &mut diags);
+    }
     check_groups(doc, &known, &mut diags);
 
     if !diags.is_empty() {
@@ -340,6 +343,40 @@ fn type_check(parts: &mut Parts, order: &[NodeIndex], diags: &mut Vec<Diagnostic
         node.out_types = node.node.desc().outputs.iter().map(|p| p.ty.clone()).collect();
         if lifted {
             node.out_types = node.node.desc().outputs.iter().map(|p| PortType::clip_of(p.ty.clone())).collect();
+        }
+    }
+}
+
+/// An animated parameter needs something that samples it over time: the evaluator, for a
+/// per-frame node fed a clip (it cooks frame `f` with the value at `f`), or the node itself, for
+/// a parameter it declares as sampled per step. Anywhere else the animation would be read once
+/// and silently frozen, so it is refused with what would make it follow time.
+fn check_animated(parts: &Parts, diags: &mut Vec<Diagnostic>) {
+    for idx in parts.g.node_indices() {
+        let node = &parts.g[idx];
+        let desc = node.node.desc();
+        for (i, (src, port)) in node.inputs.iter().zip(&desc.inputs).enumerate() {
+            if !matches!(src, InputSource::Const(Value::Anim(_))) || port.sampled_by_node || node.lifted {
+                continue;
+            }
+            let why = match desc.time {
+                TimeDep::PerFrame => format!(
+                    "'{}' is not fed a clip here, so it cooks once rather than per frame; connect a clip to one of its inputs",
+                    node.id
+                ),
+                t => format!(
+                    "'{}' is a {} node and reads '{}' once for the whole clip (`pyrograph nodes` marks the parameters it samples per step)",
+                    desc.type_name,
+                    t.name(),
+                    port.name
+                ),
+            };
+            let (node_id, name) = parts.input_label((idx, i));
+            diags.push(diag(
+                DiagnosticKind::Animation,
+                Location::Port { node: node_id, port: name.clone() },
+                format!("'{name}' is animated, but nothing samples it over time: {why}, or set a constant"),
+            ));
         }
     }
 }

@@ -120,8 +120,14 @@ fn check_range(v: f64, port: &PortDesc) -> Result<(), (DiagnosticKind, String)> 
     }
 }
 
-/// Converts a parameter from a file to a typed value for `port`, checking kind and range.
+/// Converts a parameter from a file to a typed value for `port`, checking kind and range; a
+/// keyframed or expression value becomes [`Value::Anim`], its keys checked against the range.
 pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) -> Result<Value, (DiagnosticKind, String)> {
+    match crate::value::animated_param(pv, &port.ty) {
+        Ok(Some(animated)) => return animated_value(animated, port),
+        Ok(None) => {}
+        Err(message) => return Err((DiagnosticKind::Animation, message)),
+    }
     let wrong = |what: &str| (DiagnosticKind::WrongKind, format!("needs {what}, got {pv}"));
     match &port.ty {
         PortType::Float => {
@@ -193,6 +199,24 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
     }
 }
 
+/// An animated parameter, its keys checked against the port's range (values between keys are
+/// checked when they are sampled, with the frame named).
+fn animated_value(animated: crate::anim::Animated, port: &PortDesc) -> Result<Value, (DiagnosticKind, String)> {
+    if let Some((lo, hi)) = port.range {
+        for track in animated.tracks() {
+            if let crate::anim::Track::Keys(channel) = track
+                && let Some((i, k)) = channel.keys().iter().enumerate().find(|(_, k)| !(lo..=hi).contains(&k.value))
+            {
+                return Err((
+                    DiagnosticKind::OutOfRange,
+                    format!("key {} (frame {}): {} is outside the range {lo}..={hi}", i + 1, k.frame, k.value),
+                ));
+            }
+        }
+    }
+    Ok(Value::Anim(std::sync::Arc::new(animated)))
+}
+
 /// Converts a typed constant back to its file form (for presets and the editor).
 pub fn value_to_param(v: &Value) -> Option<ParamValue> {
     Some(match v {
@@ -204,6 +228,7 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         Value::Vec3(c) => ParamValue::List(c.iter().map(|x| ParamValue::Float(*x)).collect()),
         Value::String(s) | Value::Enum(s) => ParamValue::String(s.clone()),
         Value::Path(p) => ParamValue::String(p.display().to_string()),
+        Value::Anim(a) => a.written().clone(),
         Value::Image(_) | Value::Mask(_) | Value::Contours(_) | Value::Custom(_) | Value::Clip(_) => {
             return None;
         }

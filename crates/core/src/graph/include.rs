@@ -38,7 +38,12 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<
     let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, &canon, d.0))?;
     let mut stack = ctx.include_stack.clone();
     stack.push(canon.clone());
-    let child = LoadCtx { dir: canon.parent().map(Path::to_path_buf).unwrap_or_default(), include_stack: stack, ..ctx.clone() };
+    let child = LoadCtx {
+        dir: canon.parent().map(Path::to_path_buf).unwrap_or_default(),
+        include_stack: stack,
+        nested: true,
+        ..ctx.clone()
+    };
     let mut sub = build(&doc, &child).map_err(|d| nested(id, &canon, d.0))?;
     sub.file = Some(canon.clone());
     let desc = describe(&doc, &sub).map_err(|m| vec![include_diag(id, format!("{}: {m}", canon.display()))])?;
@@ -95,7 +100,7 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
 pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
     let options = BuildOptions { describe_only: true, ..BuildOptions::default() };
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let ctx = LoadCtx { registry, root: dir.clone(), dir, options: &options, include_stack: Vec::new() };
+    let ctx = LoadCtx { registry, root: dir.clone(), dir, options: &options, include_stack: Vec::new(), nested: false };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(name));
     load("preset", &nd, &ctx).map(|(_, desc)| desc).map_err(|d| Diagnostics(d).in_file(path))

@@ -129,6 +129,9 @@ pub(crate) struct LoadCtx<'a> {
     pub root: PathBuf,
     /// Canonical paths of the files being included, outermost first (for cycle detection).
     pub include_stack: Vec<PathBuf>,
+    /// Whether this builds an included file (checks that depend on how the includer connects
+    /// it, such as where animated parameters are sampled, wait for the whole graph).
+    pub nested: bool,
 }
 
 impl Graph {
@@ -146,7 +149,7 @@ impl Graph {
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let stack = vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())];
         let root = options.output_dir.clone().unwrap_or_else(|| dir.clone());
-        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root };
+        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root, nested: false };
         let mut graph = build(doc, &ctx).map_err(|d| d.in_file(path))?;
         graph.file = Some(path.to_path_buf());
         Ok(graph)
@@ -155,7 +158,7 @@ impl Graph {
     /// Validates and type-checks a document whose relative paths resolve against `dir`.
     pub fn build(doc: &GraphDoc, registry: &Registry, dir: &Path, options: &BuildOptions) -> Result<Graph, Diagnostics> {
         let root = options.output_dir.clone().unwrap_or_else(|| dir.to_path_buf());
-        let ctx = LoadCtx { registry, dir: dir.to_path_buf(), options, include_stack: Vec::new(), root };
+        let ctx = LoadCtx { registry, dir: dir.to_path_buf(), options, include_stack: Vec::new(), root, nested: false };
         build(doc, &ctx)
     }
 

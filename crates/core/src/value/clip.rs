@@ -23,7 +23,18 @@ pub trait FrameSource: Send + Sync {
     }
     /// Computes frame `index` (`index < len()`); results are cached by the clip.
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError>;
+    /// A key for frame `index`'s content that is known without computing it (a per-frame node's
+    /// frame: its inputs' frame keys and its parameters sampled at that frame). A clip whose
+    /// source gives one caches the frame under it, so a re-cooked node serves every frame whose
+    /// key did not change from the cache: moving one key re-cooks only the frames it moved.
+    fn frame_key(&self, _index: usize) -> Option<u64> {
+        None
+    }
 }
+
+/// The frame-cache index under which content-keyed frames are kept: no clip has that many frames,
+/// so a content key never meets a clip id's frames.
+const KEYED: usize = usize::MAX;
 
 /// A lazy, random-access sequence of per-frame values; each frame is computed on demand and cached.
 #[derive(Clone)]
@@ -103,12 +114,27 @@ impl Clip {
         self.fingerprint
     }
 
+    /// What identifies frame `index`'s content: its source's frame key, else the clip's
+    /// fingerprint and the index.
+    pub fn frame_key(&self, index: usize) -> u64 {
+        self.source.frame_key(index).unwrap_or_else(|| {
+            let mut h = Fingerprinter::new();
+            h.write_u64(self.fingerprint);
+            h.write_usize(index);
+            h.finish()
+        })
+    }
+
     /// Frame `index`, computed on first use and cached.
     pub fn get(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
         if index >= self.len() {
             return Err(NodeError::msg(format!("frame {index} is past the end of a {}-frame clip", self.len())));
         }
-        if let Some(v) = self.key.cache.get(self.key.id, index) {
+        let (id, slot) = match self.source.frame_key(index) {
+            Some(k) => (k, KEYED),
+            None => (self.key.id, index),
+        };
+        if let Some(v) = self.key.cache.get(id, slot) {
             return Ok(v);
         }
         ctx.check_cancel()?;
@@ -116,7 +142,7 @@ impl Clip {
             NodeError::Message(_) | NodeError::Port { .. } => NodeError::Frame { frame: index, source: Box::new(e) },
             other => other,
         })?;
-        self.key.cache.put(self.key.id, index, &v);
+        self.key.cache.put(id, slot, &v);
         Ok(v)
     }
 

@@ -5,6 +5,7 @@ use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod animated;
 pub mod clip;
 mod compact;
 pub mod frame_cache;
@@ -12,6 +13,7 @@ pub mod frame_cache;
 use crate::fingerprint::{Fingerprinter, hash_f32s};
 mod custom;
 
+pub use animated::animated_param;
 pub use clip::{Clip, FrameSource};
 pub use custom::{CustomValue, TypeInfo, ValueType};
 
@@ -299,6 +301,9 @@ pub enum Value {
     Custom(Arc<dyn CustomValue>),
     /// See [`PortType::Clip`].
     Clip(Clip),
+    /// A parameter that changes over time (keys or an expression), of the port type it samples
+    /// to; the evaluator or the node samples it at the frame it computes (see [`crate::anim`]).
+    Anim(Arc<crate::anim::Animated>),
 }
 
 impl Value {
@@ -319,6 +324,7 @@ impl Value {
             Value::Contours(_) => PortType::Contours,
             Value::Custom(v) => PortType::Custom(v.type_info()),
             Value::Clip(c) => PortType::clip_of(c.element().clone()),
+            Value::Anim(a) => a.port_type(),
         }
     }
 
@@ -382,6 +388,7 @@ impl Value {
                 v.hash_value(h);
             }
             Value::Clip(c) => c.fingerprint().hash(h),
+            Value::Anim(a) => a.hash_into(h),
         }
     }
 
@@ -413,6 +420,7 @@ impl Value {
             Value::Contours(c) => format!("Contours {} in {}x{}", c.contours.len(), c.width, c.height),
             Value::Custom(v) => v.value_summary(),
             Value::Clip(c) => format!("Clip<{}> {} frames @ {} fps", c.element(), c.len(), c.fps()),
+            Value::Anim(a) => a.summary(),
         }
     }
 }

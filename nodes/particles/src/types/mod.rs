@@ -5,4 +5,4 @@ mod mesh;
 mod wind;
 
 pub use mesh::{CharMark, FlameRoot, Mesh, NO_NEIGHBOR, SpreadState};
-pub use wind::{LargeWind, WindField};
+pub use wind::{LargeWind, WindAnimation, WindField};

@@ -1,9 +1,11 @@
 //! The wind field value (Perry 1994 §3.2.3), as data the particle nodes evaluate.
 
 use std::hash::Hash;
+use std::sync::Arc;
 
+use pyrograph_core::declare::Anim;
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{TypeInfo, ValueType};
+use pyrograph_core::{NodeError, TypeInfo, ValueType};
 
 /// The large-scale part `w_L(p, t)` of a [`WindField`] (Perry 1994 §3.2.3, §3.4).
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -48,6 +50,40 @@ pub struct WindField {
     /// World length of one unit of the height factor of eq. 3.1 (the paper measures height in
     /// unit-time integration steps; smaller values bend flames more).
     pub height_unit: f32,
+    /// Parameters that change over time (a gust, turbulence that rises), sampled at the time of
+    /// each frame or simulation step; `None` for a wind that is the same at every frame.
+    pub animation: Option<Arc<WindAnimation>>,
+}
+
+/// The animated parameters of a [`WindField`]: each, when set, replaces the field's constant
+/// at the time it is sampled.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct WindAnimation {
+    /// The constant large-scale wind `w_L` (when `large` is [`LargeWind::Constant`]).
+    pub wind: Option<Anim<[f32; 3]>>,
+    /// Flame noisiness `C`.
+    pub noise_c: Option<Anim<f32>>,
+    /// Convection coefficient `k_g`.
+    pub k_g: Option<Anim<f32>>,
+}
+
+impl WindField {
+    /// The field as it is at `frame` (fractional for sub-steps) of a clip at `fps`: every animated
+    /// parameter sampled, no animation left. Errors name the wind field's port and the frame.
+    pub fn at_frame(&self, frame: f64, fps: f64) -> Result<WindField, NodeError> {
+        let Some(anim) = &self.animation else { return Ok(self.clone()) };
+        let mut out = WindField { animation: None, ..self.clone() };
+        if let (Some(w), LargeWind::Constant(v)) = (&anim.wind, &mut out.large) {
+            *v = w.at(frame, fps)?;
+        }
+        if let Some(c) = &anim.noise_c {
+            out.noise_c = c.at(frame, fps)?;
+        }
+        if let Some(k) = &anim.k_g {
+            out.k_g = k.at(frame, fps)?;
+        }
+        Ok(out)
+    }
 }
 
 impl Default for WindField {
@@ -61,6 +97,7 @@ impl Default for WindField {
             k_s: 0.1,
             seed: 0,
             height_unit: 1.0,
+            animation: None,
         }
     }
 }

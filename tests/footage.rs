@@ -45,3 +45,24 @@ fn tealight_video_loads_through_ffmpeg_as_796_frames_of_480x480() {
     }
     assert!((clip.fps() - 30.0).abs() < 0.1, "fps {}", clip.fps());
 }
+
+/// Summed blue over summed red of a frame's pixels: the bloom's tint dominates the halo.
+fn blue_over_red(path: &std::path::Path) -> f64 {
+    let img = image::open(path).unwrap().to_rgb8();
+    let (r, b) = img.pixels().fold((0.0, 0.0), |(r, b), p| (r + f64::from(p[0]), b + f64::from(p[2])));
+    b / r.max(1.0)
+}
+
+#[test]
+#[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
+fn the_tealight_whose_tint_is_keyed_turns_from_orange_to_blue() {
+    let out = tempfile::tempdir().unwrap();
+    let graph = workspace().join("graphs/tealight-timed.ron");
+    let o = pyrograph(&["render", graph.to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let frame = |i: usize| out.path().join(format!("tealight-timed/timed_{i:04}.png"));
+    // The tint is orange until frame 16 and blue from frame 48 (keyed per component).
+    let (early, late) = (blue_over_red(&frame(4)), blue_over_red(&frame(60)));
+    assert!(early < 0.9 && late > 1.0 && late > 1.5 * early, "blue/red: frame 4 {early:.3}, frame 60 {late:.3}");
+    assert!(out.path().join("tealight-timed-strip.png").exists());
+}

@@ -144,3 +144,39 @@ fn mass_spring_flames_match_their_golden_frame() {
 fn flame_cards_match_their_golden_frames() {
     golden("flame-cards.ron", (5, 5), &["flame-cards/calm_0005.png", "flame-cards/wild_0005.png"]);
 }
+
+#[test]
+fn ramps_in_the_old_text_form_load_as_the_typed_keys_they_spell() {
+    let registry = pyrograph_frontend::registry();
+    let path = workspace().join("tests/fixtures/migrate/v3-text-ramps.ron");
+    let (doc, old) = Graph::load(&path, &registry, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let mut typed = doc.clone();
+    let set = |doc: &mut GraphDoc, node: &str, port: &str, ron: &str| {
+        doc.set_param(node, port, pyrograph_frontend::core::ParamValue::parse_cli(ron)).unwrap();
+    };
+    // The text form sorted its keys; the typed form is written in order.
+    set(
+        &mut typed,
+        "flames",
+        "center_ramp",
+        "[(0, (0.3, 0.4, 1, 0.12)), (0.15, (1, 0.8, 0.45, 0.16)), (1, (0.9, 0.2, 0.02, 0))]",
+    );
+    set(&mut typed, "flames", "width_ramp", "[(0, 0.67), (0.5, 1.07), (1, 0.67)]");
+    set(&mut typed, "tint", "ramp", "[(0, (0, 0, 0)), (0.3, (0.6, 0.05, 0)), (1, (1, 0.95, 0.75))]");
+    let new = Graph::build_file(&typed, &path, &registry, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    for (node, port) in [("flames", "center_ramp"), ("flames", "width_ramp"), ("tint", "ramp")] {
+        let constant = |g: &Graph| {
+            let n = g.node(g.index(node).unwrap());
+            let i = n.node.desc().input_index(port).unwrap();
+            match &n.inputs[i] {
+                pyrograph_frontend::core::graph::InputSource::Const(v @ Value::Ramp(_)) => v.fingerprint(),
+                other => panic!("{node}.{port} is {other:?}"),
+            }
+        };
+        assert_eq!(constant(&old), constant(&new), "{node}.{port}");
+    }
+    // A typed key out of order is an error naming the key.
+    set(&mut typed, "flames", "width_ramp", "[(0.5, 1.07), (0, 0.67)]");
+    let e = Graph::build_file(&typed, &path, &registry, &BuildOptions::default()).err().unwrap().to_string();
+    assert!(e.contains("width_ramp") && e.contains("key 2 at 0 comes before key 1"), "{e}");
+}

@@ -76,6 +76,8 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("crates/core/src/anim/mod.rs", "y", "a vector component, named in errors"),
     ("crates/core/src/anim/expr.rs", "frame", "an expression variable"),
     ("crates/core/src/anim/expr.rs", "fps", "an expression variable"),
+    ("crates/core/src/anim/expr.rs", "time", "an expression variable"),
+    ("crates/core/src/builtin_time.rs", "frame", "a salt of the frame clip's fingerprint"),
     ("crates/core/src/anim/expr.rs", "clamp", "an expression function"),
     ("crates/core/src/anim/expr.rs", "char", "a kind of rhai token, named in a parse error"),
 ];

@@ -6,6 +6,8 @@
 #   BEFORE=/path/to/old/pyrograph AFTER=target/debug/pyrograph benches/before-after/frames.sh
 #   FRAMES=0-11 limits each render to those frames (whole-clip nodes still read their whole clips).
 #   KEEP=DIR keeps the renders in DIR; with SKIP_RENDER=1 as well, only compares what DIR holds.
+#   BEFORE_ROOT=DIR renders the before side from another checkout's graphs (a change that migrates
+#   graph files: `git worktree add /tmp/old <commit>`); graphs that checkout lacks are new, and skipped.
 # OpenEXR files are compared by their pixels when their bytes differ: binaries before 2026-11-27
 # let the exr crate compress chunks in parallel and write them in the order they finished (the
 # offset table says where each is), so two runs of one such binary wrote the same pixels in
@@ -26,18 +28,22 @@ frames=()
 failed=0
 cd "$root"
 graphs=$(ls graphs/*.ron graphs/readme/*.ron | wc -l)
+before_root="${BEFORE_ROOT:-$root}"
 [ -n "${SKIP_RENDER:-}" ] || for g in graphs/*.ron graphs/readme/*.ron; do
   name="$(basename "$(dirname "$g")")-$(basename "$g" .ron)"
+  if [ ! -e "$before_root/$g" ]; then
+    echo "new graph, not compared: $g"; graphs=$((graphs - 1)); continue
+  fi
   for side in before after; do
-    bin="$BEFORE"; [ "$side" = after ] && bin="$AFTER"
-    if ! "$bin" render "$g" --out "$out/$side/$name" "${frames[@]}" >"$out/$side-$name.log" 2>&1; then
+    bin="$BEFORE"; dir="$before_root"; [ "$side" = after ] && { bin="$AFTER"; dir="$root"; }
+    if ! (cd "$dir" && "$bin" render "$g" --out "$out/$side/$name" "${frames[@]}") >"$out/$side-$name.log" 2>&1; then
       echo "$side: $g failed to render:"; tail -n 3 "$out/$side-$name.log"; failed=1
     fi
   done
 done
 [ -n "${SKIP_RENDER:-}" ] || for side in before after; do
-  bin="$BEFORE"; [ "$side" = after ] && bin="$AFTER"
-  "$bin" presets --dir graphs/presets --thumbnails --out "$out/$side/thumbs" >"$out/$side-thumbs.log" 2>&1 \
+  bin="$BEFORE"; dir="$before_root"; [ "$side" = after ] && { bin="$AFTER"; dir="$root"; }
+  (cd "$dir" && "$bin" presets --dir graphs/presets --thumbnails --out "$out/$side/thumbs") >"$out/$side-thumbs.log" 2>&1 \
     || { echo "$side: preset thumbnails failed:"; tail -n 3 "$out/$side-thumbs.log"; failed=1; }
 done
 

@@ -10,6 +10,7 @@ use crate::action::Action;
 use crate::annotate::Annotation;
 use crate::browser::{PresetBrowser, SavePresetDialog};
 use crate::canvas::Canvas;
+use crate::key_ui::KeyUi;
 use crate::palette::palette_ui;
 use crate::state::{Editor, diagnostic_nodes};
 
@@ -45,6 +46,8 @@ pub struct EditorApp {
     pub browser: Option<PresetBrowser>,
     /// The "Save selection as preset" dialog, when open.
     pub save_preset: Option<SavePresetDialog>,
+    /// Keyframing: the selected keys, the curve editor's view and drag.
+    pub key_ui: KeyUi,
     last_dump: String,
 }
 
@@ -70,6 +73,7 @@ impl EditorApp {
             last_dump: String::new(),
             browser: None,
             save_preset: None,
+            key_ui: KeyUi::default(),
         }
     }
 
@@ -88,7 +92,10 @@ impl EditorApp {
             self.notify_set = true;
         }
         self.editor.poll();
+        self.key_ui.sync(self.editor.current());
         self.handle_keys(&ctx);
+        self.key_ui.panel_rect = None;
+        self.key_ui.toggle_rects.clear();
         self.advance_playback(&ctx);
 
         let title = self.editor.title();
@@ -109,6 +116,9 @@ impl EditorApp {
             });
             egui::CentralPanel::default().show(ui, |ui| self.preview_ui(ui));
         });
+        if self.curves_wanted() {
+            egui::Panel::bottom("curves").resizable(true).default_size(240.0).min_size(140.0).show(ui, |ui| self.curves_ui(ui));
+        }
         let actions =
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| self.canvas.show(ui, &self.editor)).inner;
         if self.first_frame {
@@ -132,9 +142,10 @@ impl EditorApp {
         }
     }
 
-    /// The editor's state as JSON: the selection and where each node is on screen (points from
-    /// the window's top-left). A test driving the real window with synthetic mouse events reads
-    /// it to know where to click and what the click did.
+    /// The editor's state as JSON: the selection, where each node and each key toggle of the
+    /// inspector is on screen (points from the window's top-left), the current node's
+    /// parameters as written and the playhead's frame. A test driving the real window with
+    /// synthetic mouse events reads it to know where to click and what the click did.
     pub fn state_json(&self, ctx: &egui::Context) -> serde_json::Value {
         let nodes: serde_json::Map<String, serde_json::Value> = self
             .editor
@@ -147,7 +158,19 @@ impl EditorApp {
                 Some((id.clone(), serde_json::json!({"x": r.min.x, "y": r.min.y, "w": r.width(), "h": r.height()})))
             })
             .collect();
+        let rect = |r: &egui::Rect| serde_json::json!({"x": r.min.x, "y": r.min.y, "w": r.width(), "h": r.height()});
+        let toggles: serde_json::Map<String, serde_json::Value> =
+            self.key_ui.toggle_rects.iter().map(|(k, r)| (k.clone(), rect(r))).collect();
+        let params: serde_json::Map<String, serde_json::Value> = self
+            .editor
+            .current()
+            .and_then(|id| self.editor.doc().node(id))
+            .map(|n| n.params.iter().map(|(k, v)| (k.clone(), v.to_string().into())).collect())
+            .unwrap_or_default();
         serde_json::json!({
+            "frame": self.editor.frame(),
+            "key_toggles": toggles,
+            "params": params,
             "selection": self.editor.selection(),
             "annotation": self.canvas.annotation.map(|a| format!("{a:?}")),
             "groups": self.editor.doc().groups.len(),
@@ -184,8 +207,14 @@ impl EditorApp {
                     self.editor.duplicate(&ids);
                 }
                 Action::ToggleParamPins(id) => self.canvas.toggle_param_pins(&id),
-                Action::Preview(id) => self.editor.select(&id),
-                Action::Select(ids) => self.editor.set_selection(ids),
+                Action::Preview(id) => {
+                    self.key_ui.clear_selection();
+                    self.editor.select(&id);
+                }
+                Action::Select(ids) => {
+                    self.key_ui.clear_selection();
+                    self.editor.set_selection(ids);
+                }
                 Action::SelectAnnotation(a) => self.canvas.annotation = a,
                 Action::MoveComment(i, p) => {
                     self.editor.move_comment(i, (p.x, p.y));
@@ -278,9 +307,11 @@ impl EditorApp {
             self.open_palette(ctx);
         }
         if del {
-            self.delete_selected();
+            self.delete_selected_keys_or_nodes();
         }
-        if frame {
+        if frame && self.key_ui.hovered(ctx) {
+            self.key_ui.request_fit();
+        } else if frame {
             let sel = self.editor.selection().to_vec();
             self.canvas.frame_nodes(&sel);
         }
@@ -340,6 +371,18 @@ impl EditorApp {
                 _ => {}
             }
         }
+    }
+
+    /// Deletes the selected keys of the current node if any are selected (in the curve editor or
+    /// the key strip), else the selected nodes, group or comment.
+    pub fn delete_selected_keys_or_nodes(&mut self) {
+        let keys = self.key_ui.selected().to_vec();
+        if let (false, Some(node)) = (keys.is_empty(), self.editor.current().map(str::to_string)) {
+            let _ = self.editor.delete_keys_at(&node, &keys);
+            self.key_ui.clear_selection();
+            return;
+        }
+        self.delete_selected();
     }
 
     /// Deletes the selected nodes, or else the selected group (its nodes stay) or comment.
@@ -579,6 +622,7 @@ impl EditorApp {
             ui.close();
         }
         ui.checkbox(&mut self.canvas.show_minimap, "Minimap  (M)");
+        ui.checkbox(&mut self.key_ui.show_curves, "Curve editor (for animated parameters)");
         ui.separator();
         frame_cache_ui(ui);
     }

@@ -1,5 +1,5 @@
-//! The side panels: the inspector (parameters of the current node, or the selected group or
-//! comment) and the preview with its frame scrubber.
+//! The side panels: the inspector (parameters of the current node with their key toggles, or
+//! the selected group or comment) and the preview with its frame scrubber and key strip.
 
 use std::time::Instant;
 
@@ -7,6 +7,7 @@ use eframe::egui::{self, Color32, RichText};
 
 use crate::annotate::{Annotation, COMMENT_COLOR, GROUP_COLOR, hex_rgb, rgb_hex};
 use crate::app::EditorApp;
+use crate::keying::animated_row;
 use crate::param_widgets::{buffered_text, param_widget, raw_widget};
 
 impl EditorApp {
@@ -47,11 +48,14 @@ impl EditorApp {
         ui.separator();
         let mut change = None;
         let mut reset = None;
-        egui::Grid::new(("params", &id)).num_columns(3).striped(true).spacing([8.0, 4.0]).show(ui, |ui| {
+        let frame = self.editor.frame() as f64;
+        let fps = self.editor.fps();
+        egui::Grid::new(("params", &id)).num_columns(4).striped(true).spacing([8.0, 4.0]).show(ui, |ui| {
             for port in &desc.inputs {
                 let label = ui.label(&port.name).on_hover_text(format!("{}: {}\n{}", port.name, port.ty, port.doc));
                 let _ = label;
                 if let Some(src) = self.editor.incoming(&id, &port.name) {
+                    ui.label("");
                     ui.label(RichText::new(format!("from {src}")).italics().color(Color32::from_rgb(140, 190, 250)))
                         .on_hover_text("driven by a connection");
                     ui.label("");
@@ -64,35 +68,20 @@ impl EditorApp {
                     } else {
                         ("default", Color32::GRAY)
                     };
+                    ui.label("");
                     ui.label(RichText::new(t).color(c));
                     ui.label("");
                     ui.end_row();
                     continue;
                 }
                 let set = nd.params.get(&port.name).cloned();
-                let widget_id = egui::Id::new(("param", &id, &port.name));
-                match self.editor.param_value(&id, port) {
-                    Some(value) => {
-                        let r = ui
-                            .scope(|ui| {
-                                let r = param_widget(ui, widget_id, port, &value);
-                                match r {
-                                    Some(v) => Some(v),
-                                    None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
-                                    None => None,
-                                }
-                            })
-                            .inner;
-                        if let Some(v) = r {
-                            change = Some((port.name.clone(), v));
-                        }
-                    }
-                    None => {
-                        let mut s = String::new();
-                        if ui.add(egui::TextEdit::singleline(&mut s).hint_text("required")).changed() {
-                            change = Some((port.name.clone(), pyrograph_frontend::core::ParamValue::parse_cli(&s)));
-                        }
-                    }
+                if matches!(port.ty, pyrograph_frontend::core::PortType::Float | pyrograph_frontend::core::PortType::Int) {
+                    self.key_toggle_cell(ui, &id, port, set.as_ref());
+                } else {
+                    ui.label("");
+                }
+                if let Some(v) = self.value_cell(ui, &id, port, set.as_ref(), frame, fps) {
+                    change = Some((port.name.clone(), v));
                 }
                 if set.is_some() {
                     if ui.small_button("⟲").on_hover_text("reset to default").clicked() {
@@ -104,14 +93,71 @@ impl EditorApp {
                 ui.end_row();
             }
         });
-        if let Some((name, v)) = change
-            && let Err(e) = self.editor.set_param(&id, &name, v)
-        {
-            self.editor.set_status(e, true);
+        if let Some((name, v)) = change {
+            let animated = v.is_animated();
+            if let Err(e) = self.editor.set_param(&id, &name, v) {
+                self.editor.set_status(e, true);
+            }
+            // Keys or an expression typed in: one step, as Enter commits them.
+            if animated {
+                self.editor.seal();
+            }
         }
         if let Some(name) = reset {
             self.editor.reset_param(&id, &name);
             self.editor.seal();
+        }
+    }
+
+    /// The play button and frame slider of a clip of `len` frames, with the key strip under them.
+    fn scrubber(&mut self, ui: &mut egui::Ui, req: &crate::cook::PreviewRequest, len: usize) {
+        let mut slider = None;
+        ui.horizontal(|ui| {
+            if ui.button(if self.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
+                self.playing = !self.playing;
+                self.last_advance = Instant::now();
+            }
+            let mut frame = req.frame.min(len - 1);
+            let r = ui.add(egui::Slider::new(&mut frame, 0..=len - 1).show_value(false));
+            slider = Some(r.rect);
+            if r.changed() {
+                self.playing = false;
+                self.editor.set_frame(frame);
+            }
+            ui.label(format!("frame {} / {}", frame, len - 1));
+        });
+        if let Some(rect) = slider {
+            self.key_strip(ui, &req.node, rect, len);
+        }
+    }
+
+    /// The value cell of a parameter row: the widget for its type, the row of an animated
+    /// value, the raw text of a value of the wrong kind, or a field for a required value.
+    fn value_cell(
+        &mut self,
+        ui: &mut egui::Ui,
+        id: &str,
+        port: &pyrograph_frontend::core::PortDesc,
+        set: Option<&pyrograph_frontend::core::ParamValue>,
+        frame: f64,
+        fps: f64,
+    ) -> Option<pyrograph_frontend::core::ParamValue> {
+        let widget_id = egui::Id::new(("param", id, &port.name));
+        match self.editor.param_value(id, port) {
+            Some(value) if value.is_animated() => animated_row(ui, widget_id, port, &value, frame, fps),
+            Some(value) => {
+                ui.scope(|ui| match param_widget(ui, widget_id, port, &value) {
+                    Some(v) => Some(v),
+                    None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
+                    None => None,
+                })
+                .inner
+            }
+            None => {
+                let mut s = String::new();
+                let changed = ui.add(egui::TextEdit::singleline(&mut s).hint_text("required")).changed();
+                changed.then(|| pyrograph_frontend::core::ParamValue::parse_cli(&s))
+            }
         }
     }
 
@@ -187,19 +233,7 @@ impl EditorApp {
         if let Some(len) = p.clip_len
             && len > 0
         {
-            ui.horizontal(|ui| {
-                if ui.button(if self.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
-                    self.playing = !self.playing;
-                    self.last_advance = Instant::now();
-                }
-                let mut frame = req.frame.min(len - 1);
-                let r = ui.add(egui::Slider::new(&mut frame, 0..=len - 1).show_value(false));
-                if r.changed() {
-                    self.playing = false;
-                    self.editor.set_frame(frame);
-                }
-                ui.label(format!("frame {} / {}", frame, len - 1));
-            });
+            self.scrubber(ui, &req, len);
         }
         let serial = self.editor.preview_serial();
         if let Some(img) = &p.image {

@@ -23,8 +23,10 @@ pub use crate::layout::auto_layout;
 use crate::layout::relative_path;
 
 mod files;
+mod keyframes;
 mod preset_lib;
 
+pub use keyframes::{AnimParam, value_text};
 pub use preset_lib::{SelectionPreset, filter_presets};
 
 /// A message for the status bar.
@@ -91,6 +93,8 @@ pub struct Editor {
     preset_dirs: Vec<PathBuf>,
     /// Outcomes received since the last call to [`Editor::take_outcomes`] (tests read logs here).
     received: Vec<CookOutcome>,
+    /// Keys copied by [`Editor::copy_keys`], frames relative to the first.
+    key_clipboard: Vec<crate::keys::KeyDoc>,
     /// Whether preview cooks are requested automatically after edits.
     pub auto_cook: bool,
 }
@@ -133,6 +137,7 @@ impl Editor {
             recent_file: None,
             preset_dirs,
             received: Vec::new(),
+            key_clipboard: Vec::new(),
             auto_cook: true,
         };
         ed.revalidate();

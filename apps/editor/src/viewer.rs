@@ -31,7 +31,7 @@ pub fn type_color(ty: &PortType) -> Color32 {
         PortType::Float => Color32::from_rgb(120, 200, 120),
         PortType::Int => Color32::from_rgb(80, 170, 170),
         PortType::Bool => Color32::from_rgb(220, 110, 110),
-        PortType::Color => Color32::from_rgb(235, 200, 80),
+        PortType::Color | PortType::Ramp(_) => Color32::from_rgb(235, 200, 80),
         PortType::Vec2 | PortType::Vec3 => Color32::from_rgb(170, 130, 220),
         PortType::String | PortType::Path | PortType::Enum => Color32::from_rgb(160, 160, 160),
         PortType::Image => Color32::from_rgb(240, 140, 60),

@@ -1,19 +1,24 @@
 //! The editor in a real X11 window: Xvfb for a screen, xdotool for a mouse and keyboard, and
 //! the editor's `--state-dump` to read what the clicks did. This is the path a user's hand
-//! takes (window system events through winit), which the headless tests cannot cover.
+//! takes (window system events through winit), which the headless tests cannot cover: selecting
+//! nodes on the canvas, and setting a key with the inspector's key toggle (then Ctrl+Z).
 //!
 //! Uses the binary in `PYROGRAPH_EDITOR_BIN` when set (a release build, say), else
 //! the one cargo built for this test.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use pyrograph_testing::workspace;
 use serde_json::Value;
 
-/// Kills the child processes however the test ends.
-struct Kill(Vec<Child>);
+/// Kills the child processes however the test ends, then lets the next test have the screen.
+struct Kill(Vec<Child>, #[allow(dead_code)] MutexGuard<'static, ()>);
+
+/// One editor at a time: tests running in parallel would pick the same free display.
+static SCREEN: Mutex<()> = Mutex::new(());
 
 impl Drop for Kill {
     fn drop(&mut self) {
@@ -59,9 +64,10 @@ fn selection(dump: &Value) -> Vec<String> {
     dump["selection"].as_array().map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect()).unwrap_or_default()
 }
 
-#[test]
-#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
-fn a_click_in_a_real_window_selects_the_node() {
+/// Xvfb on a free display and the editor on `graph` in it (with `args`), writing its state to
+/// the returned dump file. Everything started is killed when the returned guard drops.
+fn start_editor(graph: &Path, args: &[&str], dir: &Path) -> (Kill, String, PathBuf) {
+    let serial = SCREEN.lock().unwrap_or_else(|e| e.into_inner());
     let display_num = (90..140).find(|n| !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()).expect("a free display");
     let display = format!(":{display_num}");
     let xvfb = Command::new("Xvfb")
@@ -70,31 +76,47 @@ fn a_click_in_a_real_window_selects_the_node() {
         .stderr(Stdio::null())
         .spawn()
         .expect("Xvfb starts (apt-get install xvfb)");
-    let mut procs = Kill(vec![xvfb]);
+    let mut procs = Kill(vec![xvfb], serial);
     let socket = PathBuf::from(format!("/tmp/.X11-unix/X{display_num}"));
     let start = Instant::now();
     while !socket.exists() {
         assert!(start.elapsed() < Duration::from_secs(20), "Xvfb did not come up on {display}");
         std::thread::sleep(Duration::from_millis(50));
     }
-
-    let dir = tempfile::tempdir().unwrap();
-    let dump = dir.path().join("state.json");
+    let dump = dir.join("state.json");
     let bin = std::env::var_os("PYROGRAPH_EDITOR_BIN")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_pyrograph-editor")));
     let editor = Command::new(&bin)
-        .arg(workspace().join("graphs/burning-cube.ron"))
+        .arg(graph)
+        .args(args)
         .arg("--state-dump")
         .arg(&dump)
         .env("DISPLAY", &display)
-        .env("XDG_CONFIG_HOME", dir.path())
+        .env("XDG_CONFIG_HOME", dir)
         .env_remove("WAYLAND_DISPLAY")
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap_or_else(|e| panic!("cannot start {}: {e}", bin.display()));
     procs.0.push(editor);
+    (procs, display, dump)
+}
+
+/// Keys go to the focused window: with no window manager on the Xvfb screen, focus it by hand.
+fn focus_editor(display: &str) {
+    let out = Command::new("xdotool").args(["search", "--name", "pyrograph"]).env("DISPLAY", display).output().unwrap();
+    let window = String::from_utf8_lossy(&out.stdout).lines().next().map(str::to_string).expect("the editor's window");
+    xdotool(display, &["windowfocus", "--sync", &window]);
+    std::thread::sleep(Duration::from_millis(500));
+}
+
+#[test]
+#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
+fn a_click_in_a_real_window_selects_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_procs, display, dump) = start_editor(&workspace().join("graphs/burning-cube.ron"), &[], dir.path());
+    let start = Instant::now();
 
     // The first frames lay the graph out and frame it; wait until every node has a place on
     // screen that holds still.
@@ -119,12 +141,8 @@ fn a_click_in_a_real_window_selects_the_node() {
     xdotool(&display, &["mouseup", "1"]);
     let v = wait_for(&dump, "spread selected", |v| selection(v) == ["spread"]);
 
-    // Shift-click adds a second node. Keys go to the focused window: with no window manager
-    // on the Xvfb screen, focus it by hand.
-    let out = Command::new("xdotool").args(["search", "--name", "pyrograph"]).env("DISPLAY", &display).output().unwrap();
-    let window = String::from_utf8_lossy(&out.stdout).lines().next().map(str::to_string).expect("the editor's window");
-    xdotool(&display, &["windowfocus", "--sync", &window]);
-    std::thread::sleep(Duration::from_millis(500));
+    // Shift-click adds a second node (a key held down: the window needs the focus).
+    focus_editor(&display);
     let (x, y) = center(&v, "render");
     xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
     for step in [&["keydown", "shift"][..], &["click", "1"], &["keyup", "shift"]] {
@@ -156,4 +174,43 @@ fn a_click_in_a_real_window_selects_the_node() {
         (&v["nodes"]["cube"]["x"], &v["nodes"]["cube"]["y"]),
         (&first["nodes"]["cube"]["x"], &first["nodes"]["cube"]["y"])
     );
+}
+
+#[test]
+#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
+fn a_click_on_the_key_toggle_in_a_real_window_sets_a_key_and_ctrl_z_takes_it_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("bloom.ron");
+    std::fs::write(
+        &graph,
+        r#"(
+    version: 1,
+    nodes: {
+        "flame": (type: "imaging.turbulence_flame", params: {"width": 48, "height": 64, "frames": 24, "octaves": 2}, pos: (0, 0)),
+        "bloom": (type: "imaging.bloom", params: {"strength": 0.4, "sigma": 4.0, "passes": 2}, pos: (320, 0)),
+    },
+    edges: [("flame.clip", "bloom.image")],
+)"#,
+    )
+    .unwrap();
+    let (_procs, display, dump) = start_editor(&graph, &["--select", "bloom"], dir.path());
+    let v = wait_for(&dump, "the key toggle of strength", |v| v["key_toggles"]["strength"].is_object());
+    assert_eq!(v["params"]["strength"], "0.4");
+    // Let the layout settle, then press and release on the diamond.
+    std::thread::sleep(Duration::from_millis(700));
+    let v = wait_for(&dump, "the key toggle of strength", |v| v["key_toggles"]["strength"].is_object());
+    let t = &v["key_toggles"]["strength"];
+    let f = |k: &str| t[k].as_f64().unwrap();
+    let (x, y) = ((f("x") + f("w") / 2.0) as i64, (f("y") + f("h") / 2.0) as i64);
+    xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
+    xdotool(&display, &["mousedown", "1"]);
+    std::thread::sleep(Duration::from_millis(150));
+    xdotool(&display, &["mouseup", "1"]);
+    let v = wait_for(&dump, "a key on strength", |v| v["params"]["strength"] != "0.4");
+    assert_eq!(v["params"]["strength"].as_str().map(|s| s.replace(' ', "")), Some("keys([(0,0.4)])".into()), "{v}");
+    // Ctrl+Z takes it back.
+    focus_editor(&display);
+    xdotool(&display, &["mousemove", "500", "500"]);
+    xdotool(&display, &["key", "ctrl+z"]);
+    wait_for(&dump, "the key undone", |v| v["params"]["strength"] == "0.4");
 }

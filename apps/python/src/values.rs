@@ -153,5 +153,7 @@ pub fn to_py<'py>(py: Python<'py>, v: &RustValue) -> PyResult<Bound<'py, PyAny>>
         RustValue::Custom(_) | RustValue::Clip(_) => Bound::new(py, Opaque { value: v.clone() })?.into_any(),
         // An animated default (a preset's keyed parameter) reads as it is written in the file.
         RustValue::Anim(a) => a.summary().into_pyobject(py)?.into_any(),
+        // A ramp as the list of (position, value) keys a graph file holds.
+        RustValue::Ramp(r) => crate::param_values::to_py(py, &r.to_param())?,
     })
 }

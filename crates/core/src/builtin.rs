@@ -9,7 +9,9 @@ use crate::node::{Node, NodeDesc, PathRole, PortDesc, TimeDep};
 /// The built-in node types, for [`crate::Registry::with_builtins`] (a list rather than a
 /// `register(&mut Registry)`, so this module does not depend on the registry that depends on it).
 pub fn nodes() -> Vec<std::sync::Arc<dyn Node>> {
-    vec![FloatValue::node(), IntValue::node(), Add::node(), Multiply::node()]
+    let mut nodes = vec![FloatValue::node(), IntValue::node(), Add::node(), Multiply::node()];
+    nodes.extend(crate::builtin_time::nodes());
+    nodes
 }
 
 /// The type name of include nodes.

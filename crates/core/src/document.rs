@@ -99,6 +99,16 @@ impl ParamValue {
         ron::from_str::<ParamValue>(text).unwrap_or_else(|_| ParamValue::String(text.to_string()))
     }
 
+    /// The arguments of `keys(…)` when there are several: the key list and what follows it. RON
+    /// reads `keys([k, …])` as the key list itself (`None` here) and `keys([k, …], cycle)` as
+    /// `[[k, …], cycle]`, which the first item (a list of lists) tells apart.
+    pub fn key_args(items: &[ParamValue]) -> Option<(&[ParamValue], &[ParamValue])> {
+        match items.first() {
+            Some(ParamValue::List(list)) if list.iter().all(|k| matches!(k, ParamValue::List(_))) => Some((list, &items[1..])),
+            _ => None,
+        }
+    }
+
     /// Whether the value is, or holds, a form (an animated parameter).
     pub fn is_animated(&self) -> bool {
         match self {

@@ -5,6 +5,7 @@
 
 pub mod anim;
 pub mod builtin;
+pub mod builtin_time;
 pub mod ctx;
 pub mod declare;
 pub mod document;

@@ -175,6 +175,9 @@ fn keys_out_of_order_and_bad_expressions_are_load_errors_naming_node_and_port() 
     assert!(text.iter().any(|t| t.contains("'b'") && t.contains("offset") && t.contains("column")), "{text:?}");
     let err = build(&doc("keys([(0, 1.0), (20, 200.0)])", "0.0")).err().unwrap();
     assert!(err.0[0].message.contains("key 2") && err.0[0].message.contains("200"), "{}", err.0[0]);
+    // Keys in range whose tangents carry the curve out of it between them.
+    let err = build(&doc("keys([(0, 90.0, tangent(40)), (10, 95.0)])", "0.0")).err().unwrap();
+    assert!(err.0[0].message.contains("overshoot") && err.0[0].message.contains("-100..=100"), "{}", err.0[0]);
 }
 
 #[test]

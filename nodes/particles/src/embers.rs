@@ -53,7 +53,7 @@ pyrograph_core::ports! {
         /// Particles along a streak.
         #[range(2, 64)]
         samples: usize = 5,
-        /// Colour over normalized age: `pos: r g b a; …`.
+        /// Colour over normalized age: `[(position, (r, g, b, a)), …]`.
         color_ramp: Ramp<4> = Ramp::preset(EMBER_RAMP),
         /// Seed of births, roots, directions and lifetimes.
         #[range(0, u32::MAX)]

@@ -99,7 +99,7 @@ impl FireLook {
             dt: self.dt,
             speed: self.speed,
             normalize: self.normalize,
-            size: self.flame_size,
+            size: pyrograph_core::declare::Anim::constant(self.flame_size),
             size_jitter: self.size_jitter,
             shape: Shape::Ramp,
             width_ramp: self.width_ramp.clone(),
@@ -142,7 +142,7 @@ pub fn root_flames(state: &SpreadState, wind: &WindSampler, look: &FireLook) -> 
                 return Vec::new();
             }
             let jitter = 1.0 + p.size_jitter * (2.0 * crate::flame::unit_random(p.seed, r.id as usize, 3) - 1.0);
-            let size = p.size * jitter * (0.35 + 0.65 * f);
+            let size = *p.size.value() * jitter * (0.35 + 0.65 * f);
             let n = path.len();
             path.iter()
                 .enumerate()

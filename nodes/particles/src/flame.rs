@@ -7,8 +7,9 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use noise::{NoiseFn, Perlin};
-use pyrograph_core::declare::{Cook, Port};
+use pyrograph_core::declare::{Anim, Cook, Port};
 use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::value::RampKeys;
 use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 use rayon::prelude::*;
 
@@ -16,13 +17,12 @@ use crate::types::WindField;
 use crate::wind::{WindSampler, finite3, validate_wind};
 use pyrograph_render::{Particle, Particles};
 
-/// A piecewise-linear ramp over normalized age 0..1 with `N` components per key; a String port
-/// written `pos: v…; pos: v…` (a bad text is an error naming the port).
+/// A piecewise-linear ramp over normalized age 0..1 with `N` components per key: a ColorRamp
+/// (N = 4) or Curve (N = 1) port, written `[(position, value), …]` in a graph file (older files'
+/// text form `"pos: v…; pos: v…"` still reads).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ramp<const N: usize> {
     keys: Vec<(f32, [f32; N])>,
-    /// The text the ramp was written as: the port's value.
-    text: String,
 }
 
 impl<const N: usize> Ramp<N> {
@@ -32,12 +32,10 @@ impl<const N: usize> Ramp<N> {
             return None;
         }
         keys.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let text =
-            keys.iter().map(|(p, v)| format!("{p}: {}", v.map(|x| x.to_string()).join(" "))).collect::<Vec<_>>().join("; ");
-        Some(Ramp { keys, text })
+        Some(Ramp { keys })
     }
 
-    /// A built-in ramp (a port default).
+    /// A built-in ramp (a port default), written in the short text form for the declaration's sake.
     ///
     /// # Panics
     /// When `text` does not parse: a declaration error, caught by every test that builds a default.
@@ -45,25 +43,18 @@ impl<const N: usize> Ramp<N> {
         Ramp::parse(text).unwrap_or_else(|e| panic!("built-in ramp '{text}': {e}"))
     }
 
-    /// Parses `"pos: v…; pos: v…"`, e.g. `"0: 1 0.5 0 1; 1: 1 0 0 0"` (N = 4) or `"0: 1; 1: 0.5"`.
+    /// Parses the text form `"pos: v…; pos: v…"`, e.g. `"0: 1 0.5 0 1; 1: 1 0 0 0"` (N = 4).
     pub fn parse(text: &str) -> Result<Self, String> {
-        let mut keys = Vec::new();
-        for part in text.split(';').map(str::trim).filter(|s| !s.is_empty()) {
-            let (pos, vals) =
-                part.split_once(':').ok_or_else(|| format!("key '{part}' is not of the form 'position: values'"))?;
-            let pos: f32 = pos.trim().parse().map_err(|_| format!("'{}' is not a number", pos.trim()))?;
-            let nums: Vec<f32> = vals
-                .split([' ', ','])
-                .filter(|s| !s.is_empty())
-                .map(|s| s.parse::<f32>().map_err(|_| format!("'{s}' is not a number")))
-                .collect::<Result<_, _>>()?;
-            let vals: [f32; N] =
-                nums.try_into().map_err(|v: Vec<f32>| format!("key at {pos} has {} values, needs {N}", v.len()))?;
-            keys.push((pos, vals));
+        Self::from_keys(&RampKeys::parse_legacy(text, N)?)
+    }
+
+    fn from_keys(keys: &RampKeys) -> Result<Self, String> {
+        if keys.width() != N {
+            return Err(format!("needs keys of {N} values, got {}", keys.width()));
         }
-        let mut ramp = Ramp::new(keys).ok_or_else(|| "needs at least one key of finite numbers".to_string())?;
-        ramp.text = text.to_string();
-        Ok(ramp)
+        // Ports hold f64; the particles compute in f32, so rounding here is the intent.
+        let keys = keys.keys().iter().map(|(p, v)| (*p as f32, std::array::from_fn(|c| v[c] as f32))).collect();
+        Ramp::new(keys).ok_or_else(|| "needs at least one key of finite numbers".to_string())
     }
 
     /// The value at `t`, clamped to the first and last keys.
@@ -84,13 +75,31 @@ impl<const N: usize> Ramp<N> {
 
 impl<const N: usize> Port for Ramp<N> {
     fn port_type() -> PortType {
-        PortType::String
+        PortType::Ramp(N)
     }
     fn into_value(self) -> Value {
-        Value::String(self.text)
+        // The shortest decimal of each f32, so defaults print as declared (0.1, not 0.10000000149…).
+        let short = |x: f32| x.to_string().parse::<f64>().unwrap_or(f64::from(x));
+        let keys = self
+            .keys
+            .iter()
+            .map(|(p, v)| {
+                let mut c = [0.0f64; 4];
+                c.iter_mut().zip(v).for_each(|(o, x)| *o = short(*x));
+                (short(*p), c)
+            })
+            .collect();
+        match RampKeys::new(N, keys) {
+            Ok(k) => Value::Ramp(Arc::new(k)),
+            // `Ramp::new` keeps keys finite and sorted, which is all `RampKeys::new` checks.
+            Err(m) => Value::String(m),
+        }
     }
     fn from_value(v: &Value) -> Result<Self, String> {
-        Ramp::parse(&String::from_value(v)?)
+        match v {
+            Value::Ramp(keys) => Ramp::from_keys(keys),
+            other => Err(format!("needs a ramp, got {}", other.type_name())),
+        }
     }
 }
 
@@ -109,9 +118,9 @@ pyrograph_core::ports! {
     /// particle flames.
     #[derive(PartialEq)]
     pub struct FlameColors {
-        /// Centre vertex RGBA over normalized age: `pos: r g b a; …`.
+        /// Centre vertex RGBA over normalized age: `[(position, (r, g, b, a)), …]`.
         center_ramp: Ramp<4> = Ramp::preset(DEFAULT_CENTER),
-        /// Rim vertex RGBA over normalized age: `pos: r g b a; …`.
+        /// Rim vertex RGBA over normalized age: `[(position, (r, g, b, a)), …]`.
         edge_ramp: Ramp<4> = Ramp::preset(DEFAULT_EDGE),
     }
 }
@@ -135,9 +144,9 @@ pyrograph_core::ports! {
         speed: f32 = 1.0,
         /// Re-normalize |v_p| every step (§3.2.3; for intense winds).
         normalize: bool = false,
-        /// Particle radius in world units (footnote 1: unit circle).
+        /// Particle radius in world units (footnote 1: unit circle); animatable per frame.
         #[range(0.0, 1000.0)]
-        size: f32 = 1.0,
+        size: Anim<f32> = Anim::constant(1.0),
         /// Random per-flame size variation.
         #[range(0.0, 1.0)]
         size_jitter: f32 = 0.0,
@@ -183,6 +192,15 @@ pyrograph_core::ports! {
 }
 
 impl FlameParams {
+    /// The parameters as they are at `frame` of a clip at `fps`: animated ones sampled (a flame is a
+    /// long exposure at its frame, so one sample serves the frame). Errors name the port and frame.
+    pub fn at_frame(&self, frame: f64, fps: f64) -> Result<FlameParams, NodeError> {
+        if !self.size.is_animated() {
+            return Ok(self.clone());
+        }
+        Ok(FlameParams { size: Anim::constant(self.size.at(frame, fps)?), ..self.clone() })
+    }
+
     /// The `(x, y)` scale of a particle of age `step` in a trajectory of `steps` steps.
     pub fn scale(&self, step: usize, steps: usize) -> Vec2 {
         let a = if steps > 1 { step as f32 / (steps - 1) as f32 } else { 0.0 };
@@ -244,7 +262,7 @@ pub fn validate_params(p: &FlameParams) -> Result<(), NodeError> {
     for (name, v) in [
         (port!(FlameParams, dt), p.dt),
         (port!(FlameParams, speed), p.speed),
-        (port!(FlameParams, size), p.size),
+        (port!(FlameParams, size), *p.size.value()),
         (port!(FlameParams, size_jitter), p.size_jitter),
         (port!(FlameParams, lifetime_jitter), p.lifetime_jitter),
     ] {
@@ -328,7 +346,7 @@ fn flame_particles(
     let fade =
         if p.fade == 0 { 1.0 } else { ((age + 1) as f32 / p.fade as f32).min((life - age) as f32 / p.fade as f32).min(1.0) };
     let stretch = flicker(i, p, t);
-    let size = stretch * p.size * (1.0 + p.size_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, i, 3) - 1.0));
+    let size = stretch * *p.size.value() * (1.0 + p.size_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, i, 3) - 1.0));
     let mut path = trace(root, wind, p, t);
     if stretch != 1.0 {
         path.iter_mut().for_each(|(q, _)| *q = root.position + (*q - root.position) * stretch);
@@ -483,7 +501,7 @@ pyrograph_core::node! {
     /// centre RGBA, rim vertices with the edge RGBA) moved `steps` steps through the wind field by
     /// v(s+1) = v(s) + u∞·dt, optionally re-normalized. The particle's x/y scale follows footnote 1
     /// (0.67 + 0.4 sin(π·age/24), y slope 0.032) or user ramps; colours follow centre and edge ramps over
-    /// age (`pos: r g b a; …`). Each flame has a lifetime l_f (Table 3.1) with per-flame jitter from
+    /// age (`[(position, (r, g, b, a)), …]`). Each flame has a lifetime l_f (Table 3.1) with per-flame jitter from
     /// `seed`. Frame T samples the noise at k_p·p − k_s·T·ĵ, so frames are deterministic and independent.
     /// Render with particles.render_flames.
     #[node("particles.particle_flame", "Particles", Simulation)]
@@ -516,9 +534,10 @@ impl FrameSource for FlameSource {
         self.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        // Frame T is a long exposure at time T, so an animated wind is sampled once, at T.
+        // Frame T is a long exposure at time T, so an animated wind or size is sampled once, at T.
         let wind = self.wind.at_frame(index as f64, self.fps)?;
-        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &wind, &self.params, index)?)))
+        let params = self.params.at_frame(index as f64, self.fps)?;
+        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &wind, &params, index)?)))
     }
 }
 
@@ -682,5 +701,27 @@ mod tests {
     fn table_3_1_lifetime_range_is_the_port_range() {
         let desc = ParticleFlame::desc();
         assert_eq!(desc.inputs[desc.input_index("lifetime").unwrap()].range, Some((1.0, 1000.0)));
+    }
+
+    #[test]
+    fn an_animated_size_is_sampled_at_each_frame_and_checked_against_its_range() {
+        let size = |text: &str| {
+            let v = pyrograph_core::value::animated_param(&pyrograph_core::ParamValue::parse_cli(text), &PortType::Float);
+            let desc = ParticleFlame::desc();
+            let port = &desc.inputs[desc.input_index("size").unwrap()];
+            <Anim<f32> as Port>::from_port(&Value::Anim(Arc::new(v.unwrap().unwrap())), port).unwrap()
+        };
+        let p = FlameParams { size: size("keys([(0, 0.1, linear), (10, 0.3)])"), ..FlameParams::default() };
+        let roots = [up_root(0.0, 0.0)];
+        let wind = WindField::default();
+        let width = |frame: usize| {
+            let q = p.at_frame(frame as f64, 24.0).unwrap();
+            simulate_frame(&roots, &wind, &q, frame).unwrap().particles[0].size[0]
+        };
+        let (w0, w5, w10) = (width(0), width(5), width(10));
+        assert!((w5 / w0 - 2.0).abs() < 1e-4 && (w10 / w0 - 3.0).abs() < 1e-4, "{w0} {w5} {w10}");
+        let wild = FlameParams { size: size("expr(\"frame * 200\")"), ..FlameParams::default() };
+        let e = wild.at_frame(6.0, 24.0).unwrap_err().to_string();
+        assert!(e.contains("size") && e.contains("frame 6") && e.contains("1200"), "{e}");
     }
 }

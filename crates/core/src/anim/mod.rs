@@ -203,14 +203,7 @@ fn keys(arg: &ParamValue, shape: Shape) -> Result<Channel, String> {
     let ParamValue::List(items) = arg else {
         return Err(format!("keys takes a list of (frame, value) keys, e.g. keys([(0, 0.2), (40, 1.5)]), got {arg}"));
     };
-    // `keys([k, …])` arrives as the key list; `keys([k, …], cycle)` as [[k, …], cycle].
-    let several = items
-        .first()
-        .is_some_and(|first| matches!(first, ParamValue::List(k) if k.iter().all(|x| matches!(x, ParamValue::List(_)))));
-    let (list, extras): (&[ParamValue], &[ParamValue]) = match (several, items.first()) {
-        (true, Some(ParamValue::List(list))) => (list, &items[1..]),
-        _ => (items, &[]),
-    };
+    let (list, extras) = ParamValue::key_args(items).unwrap_or((items, &[]));
     let (before, after) = match extras {
         [] => (Extrap::Hold, Extrap::Hold),
         [both] => (extrap(both)?, extrap(both)?),

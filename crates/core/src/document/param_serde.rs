@@ -83,7 +83,7 @@ fn serialize_form<S: Serializer>(name: &str, arg: &ParamValue, s: S) -> Result<S
     };
     match arg {
         // `keys([...], cycle)`: several arguments.
-        ParamValue::List(items) if name != "keys" || items.first().is_some_and(is_key_list) => {
+        ParamValue::List(items) if name != "keys" || ParamValue::key_args(items).is_some() => {
             let mut t = s.serialize_tuple_variant("ParamValue", 0, variant, items.len())?;
             for item in items {
                 t.serialize_field(&Inner(item))?;
@@ -92,11 +92,6 @@ fn serialize_form<S: Serializer>(name: &str, arg: &ParamValue, s: S) -> Result<S
         }
         other => s.serialize_newtype_variant("ParamValue", 0, variant, &Inner(other)),
     }
-}
-
-/// Whether `v` is a list of keys (a list of lists), i.e. the first of several `keys` arguments.
-fn is_key_list(v: &ParamValue) -> bool {
-    matches!(v, ParamValue::List(items) if items.iter().all(|k| matches!(k, ParamValue::List(_))))
 }
 
 /// A value inside a form: lists are written as tuples (`(40, 1.5, ease)`) and mode names bare.

@@ -153,6 +153,14 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
             };
             c.map(Value::Color).ok_or_else(|| wrong("a colour: (r, g, b), (r, g, b, a) or \"#rrggbb\""))
         }
+        PortType::Ramp(width) => {
+            // Older files hold the text form; it reads as it always did.
+            let keys = match pv {
+                ParamValue::String(text) => crate::value::RampKeys::parse_legacy(text, *width),
+                other => crate::value::RampKeys::from_param(other, *width),
+            };
+            keys.map(|k| Value::Ramp(std::sync::Arc::new(k))).map_err(|m| (DiagnosticKind::WrongKind, m))
+        }
         PortType::Vec2 => numbers::<2>(pv).map(Value::Vec2).ok_or_else(|| wrong("(x, y)")),
         PortType::Vec3 => numbers::<3>(pv).map(Value::Vec3).ok_or_else(|| wrong("(x, y, z)")),
         PortType::String => match pv {
@@ -204,12 +212,22 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
 fn animated_value(animated: crate::anim::Animated, port: &PortDesc) -> Result<Value, (DiagnosticKind, String)> {
     if let Some((lo, hi)) = port.range {
         for track in animated.tracks() {
-            if let crate::anim::Track::Keys(channel) = track
-                && let Some((i, k)) = channel.keys().iter().enumerate().find(|(_, k)| !(lo..=hi).contains(&k.value))
-            {
+            let crate::anim::Track::Keys(channel) = track else { continue };
+            if let Some((i, k)) = channel.keys().iter().enumerate().find(|(_, k)| !(lo..=hi).contains(&k.value)) {
                 return Err((
                     DiagnosticKind::OutOfRange,
                     format!("key {} (frame {}): {} is outside the range {lo}..={hi}", i + 1, k.frame, k.value),
+                ));
+            }
+            // Keys in range can still overshoot between them with explicit tangents.
+            let (low, high) = channel.value_bounds();
+            if let Some(x) = [low, high].into_iter().find(|x| !(lo..=hi).contains(x)) {
+                return Err((
+                    DiagnosticKind::OutOfRange,
+                    format!(
+                        "between its keys the curve reaches {x:.4}, outside the range {lo}..={hi}: its tangents overshoot; \
+                         make them flatter or use smooth"
+                    ),
                 ));
             }
         }
@@ -229,6 +247,7 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         Value::String(s) | Value::Enum(s) => ParamValue::String(s.clone()),
         Value::Path(p) => ParamValue::String(p.display().to_string()),
         Value::Anim(a) => a.written().clone(),
+        Value::Ramp(r) => r.to_param(),
         Value::Image(_) | Value::Mask(_) | Value::Contours(_) | Value::Custom(_) | Value::Clip(_) => {
             return None;
         }

@@ -9,6 +9,7 @@ mod animated;
 pub mod clip;
 mod compact;
 pub mod frame_cache;
+pub mod ramp;
 
 use crate::fingerprint::{Fingerprinter, hash_f32s};
 mod custom;
@@ -16,6 +17,7 @@ mod custom;
 pub use animated::animated_param;
 pub use clip::{Clip, FrameSource};
 pub use custom::{CustomValue, TypeInfo, ValueType};
+pub use ramp::RampKeys;
 
 /// The closed set of types a port can carry.
 ///
@@ -38,6 +40,9 @@ pub enum PortType {
     Vec3,
     /// Free text.
     String,
+    /// Keys over a position in 0..1 with this many components each: a colour ramp (4) or a
+    /// scalar curve (1), written `[(position, value), …]`.
+    Ramp(usize),
     /// A file-system path; relative paths resolve against the graph file's folder.
     Path,
     /// One of a fixed list of names (the port description lists them).
@@ -85,6 +90,9 @@ impl fmt::Display for PortType {
         match self {
             PortType::Clip(inner) => write!(f, "Clip<{inner}>"),
             PortType::Custom(info) => f.write_str(info.name),
+            PortType::Ramp(4) => f.write_str("ColorRamp"),
+            PortType::Ramp(1) => f.write_str("Curve"),
+            PortType::Ramp(n) => write!(f, "Ramp{n}"),
             other => write!(f, "{other:?}"),
         }
     }
@@ -289,6 +297,8 @@ pub enum Value {
     String(String),
     /// See [`PortType::Path`].
     Path(PathBuf),
+    /// See [`PortType::Ramp`].
+    Ramp(Arc<RampKeys>),
     /// See [`PortType::Enum`]: the chosen option's name.
     Enum(String),
     /// See [`PortType::Image`].
@@ -318,6 +328,7 @@ impl Value {
             Value::Vec3(_) => PortType::Vec3,
             Value::String(_) => PortType::String,
             Value::Path(_) => PortType::Path,
+            Value::Ramp(r) => PortType::Ramp(r.width()),
             Value::Enum(_) => PortType::Enum,
             Value::Image(_) => PortType::Image,
             Value::Mask(_) => PortType::Mask,
@@ -368,6 +379,7 @@ impl Value {
             Value::Vec3(c) => c.iter().for_each(|v| v.to_bits().hash(h)),
             Value::String(s) | Value::Enum(s) => s.hash(h),
             Value::Path(p) => p.hash(h),
+            Value::Ramp(r) => r.hash_into(h),
             Value::Image(img) => {
                 (img.width, img.height, img.channels).hash(h);
                 hash_f32s(h, &img.data);
@@ -415,6 +427,7 @@ impl Value {
             Value::Vec3(c) => format!("({}, {}, {})", c[0], c[1], c[2]),
             Value::String(s) | Value::Enum(s) => s.clone(),
             Value::Path(p) => p.display().to_string(),
+            Value::Ramp(r) => r.summary(),
             Value::Image(img) => format!("Image {}x{} {:?}", img.width, img.height, img.channels),
             Value::Mask(m) => format!("Mask {}x{}", m.width, m.height),
             Value::Contours(c) => format!("Contours {} in {}x{}", c.contours.len(), c.width, c.height),

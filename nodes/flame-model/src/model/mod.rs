@@ -181,8 +181,8 @@ pyrograph_core::node! {
         /// Scale the fitted picture (e.g. an auto crop) to fit the output, so the flame's size does not depend on the
         /// footage's resolution; scale applies on top.
         fit_to_output: bool = false,
-        /// Intensity → colour ramp of the color output: pos:r,g,b; …
-        ramp: String = DEFAULT_RAMP.to_string(),
+        /// Intensity → colour ramp of the color output: `[(position, (r, g, b)), …]`.
+        ramp: ColorRamp = ColorRamp::preset(DEFAULT_RAMP),
         /// Intensity multiplier before the colour ramp.
         #[range(0.0, 100.0)]
         exposure: f32 = 1.0,
@@ -273,7 +273,6 @@ impl Cook for RenderModel {
         if settings.size.0 == 0 && model.frame_size.0 == 0 || settings.size.1 == 0 && model.frame_size.1 == 0 {
             return Err(NodeError::port(port!(RenderModel, width), "the model has no frame size; set width and height"));
         }
-        let ramp = ColorRamp::parse(&ramp).map_err(|m| NodeError::port(port!(RenderModel, ramp), m))?;
         let fps = match fps {
             f if f > 0.0 => f,
             _ if params.fps > 0.0 => params.fps,

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, port};
+use pyrograph_core::declare::Port;
+use pyrograph_core::value::RampKeys;
+use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, PortType, Value, port};
 
 use super::{check_size, rgb};
 
@@ -62,6 +64,29 @@ pub struct ColorRamp {
     stops: Vec<(f32, [f32; 3])>,
 }
 
+/// A ColorRamp port of `(position, (r, g, b))` keys: `[(0, (0, 0, 0)), (1, (1, 0.95, 0.75))]`.
+impl Port for ColorRamp {
+    fn port_type() -> PortType {
+        PortType::Ramp(3)
+    }
+    fn into_value(self) -> Value {
+        // The shortest decimal of each f32, so defaults print as declared.
+        let short = |x: f32| x.to_string().parse::<f64>().unwrap_or(f64::from(x));
+        let keys = self.stops.iter().map(|(p, c)| (short(*p), [short(c[0]), short(c[1]), short(c[2]), 0.0])).collect();
+        match RampKeys::new(3, keys) {
+            Ok(k) => Value::Ramp(Arc::new(k)),
+            // `ColorRamp::new` keeps stops finite and sorted, which is all `RampKeys::new` checks.
+            Err(m) => Value::String(m),
+        }
+    }
+    fn from_value(v: &Value) -> Result<Self, String> {
+        match v {
+            Value::Ramp(keys) => ColorRamp::from_keys(keys),
+            other => Err(format!("needs a colour ramp, got {}", other.type_name())),
+        }
+    }
+}
+
 /// The default flame ramp: black, deep red, orange, yellow-white.
 pub const DEFAULT_RAMP: &str = "0:0,0,0; 0.3:0.6,0.05,0; 0.65:1,0.5,0.05; 1:1,0.95,0.75";
 
@@ -78,22 +103,26 @@ impl ColorRamp {
         Ok(ColorRamp { stops })
     }
 
-    /// Parses `"pos:r,g,b; pos:r,g,b; …"` (components in 0..1), e.g. [`DEFAULT_RAMP`].
+    /// Parses the text form older files hold, `"pos:r,g,b; pos:r,g,b; …"` (components in 0..1),
+    /// e.g. [`DEFAULT_RAMP`].
     pub fn parse(text: &str) -> Result<Self, String> {
-        let mut stops = Vec::new();
-        for part in text.split(';').map(str::trim).filter(|p| !p.is_empty()) {
-            let (pos, col) = part.split_once(':').ok_or_else(|| format!("stop '{part}' is not of the form pos:r,g,b"))?;
-            let pos: f32 = pos.trim().parse().map_err(|_| format!("stop '{part}': '{pos}' is not a number"))?;
-            let comps: Vec<f32> = col
-                .split(',')
-                .map(|c| c.trim().parse::<f32>().map_err(|_| format!("stop '{part}': '{c}' is not a number")))
-                .collect::<Result<_, _>>()?;
-            let [r, g, b] = comps[..] else {
-                return Err(format!("stop '{part}' needs three colour components r,g,b"));
-            };
-            stops.push((pos, [r, g, b]));
+        ColorRamp::from_keys(&RampKeys::parse_legacy(text, 3)?)
+    }
+
+    /// A built-in ramp (a port default).
+    ///
+    /// # Panics
+    /// When `text` does not parse: a declaration error, caught by every test that builds a default.
+    pub fn preset(text: &str) -> Self {
+        ColorRamp::parse(text).unwrap_or_else(|e| panic!("built-in ramp '{text}': {e}"))
+    }
+
+    fn from_keys(keys: &RampKeys) -> Result<Self, String> {
+        if keys.width() != 3 {
+            return Err(format!("needs (r, g, b) keys, got {} values a key", keys.width()));
         }
-        ColorRamp::new(stops)
+        // Ports hold f64; colouring computes in f32, so rounding here is the intent.
+        ColorRamp::new(keys.keys().iter().map(|(p, v)| (*p as f32, [v[0] as f32, v[1] as f32, v[2] as f32])).collect())
     }
 
     /// The colour at `t` (clamped to the end stops), linearly interpolated: the intensity → colour
@@ -179,8 +208,8 @@ pyrograph_core::node! {
         mode: SyntheticMode = SyntheticMode::Solid,
         /// Blend colour of mode solid (orange)
         color: [f32; 4] = [1.0, 0.5, 0.1, 1.0],
-        /// Colour ramp of modes ramp and ramp_direct: pos:r,g,b; …
-        ramp: String = DEFAULT_RAMP.to_string(),
+        /// Colour ramp of modes ramp and ramp_direct: `[(position, (r, g, b)), …]`.
+        ramp: ColorRamp = ColorRamp::preset(DEFAULT_RAMP),
     }
     pub struct SyntheticColoringOut {
         /// Coloured flame (RGBA)
@@ -196,8 +225,8 @@ impl Cook for SyntheticColoring {
                 synthetic_coloring(&self.source, &Blend::Solid([c[0], c[1], c[2]]))?
             }
             SyntheticMode::Ramp | SyntheticMode::RampDirect => {
-                let ramp = ColorRamp::parse(&self.ramp).map_err(|m| NodeError::port(port!(SyntheticColoring, ramp), m))?;
-                let blend = if self.mode == SyntheticMode::Ramp { Blend::Ramp(&ramp) } else { Blend::RampDirect(&ramp) };
+                let ramp = &self.ramp;
+                let blend = if self.mode == SyntheticMode::Ramp { Blend::Ramp(ramp) } else { Blend::RampDirect(ramp) };
                 synthetic_coloring(&self.source, &blend)?
             }
         };

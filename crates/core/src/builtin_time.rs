@@ -9,9 +9,7 @@
 
 use std::f64::consts::TAU;
 use std::hash::{Hash, Hasher};
-use std::sync::{Arc, LazyLock};
-
-use noise::{NoiseFn, Perlin};
+use std::sync::Arc;
 
 use crate::ctx::CookCtx;
 use crate::declare::{Anim, ClipOf, Cook, Port};
@@ -192,14 +190,12 @@ impl Cook for Fit {
 /// `x` mapped from `a..b` to `c..d`; with `clamp` the same numbers as an expression's
 /// `fit(x, a, b, c, d)`, so a graph can move a formula into nodes without changing a frame.
 fn fit(x: f64, a: f64, b: f64, c: f64, d: f64, clamp: bool) -> f64 {
+    if clamp {
+        return crate::anim::expr::fit(x, a, b, c, d);
+    }
     // An empty input range is a step at `a` rather than 0/0, as in Houdini and the expressions.
     let t = if a == b { if x < a { 0.0 } else { 1.0 } } else { (x - a) / (b - a) };
-    if !clamp {
-        return c + t * (d - c);
-    }
-    let t = t.clamp(0.0, 1.0);
-    // Rounding in `c + t·(d − c)` can step an ulp outside the output range; the clamp promises not to.
-    (c + t * (d - c)).max(c.min(d)).min(c.max(d))
+    c + t * (d - c)
 }
 
 crate::node! {
@@ -320,21 +316,7 @@ crate::node! {
 
 impl Cook for Noise {
     fn cook(self, _: &CookCtx) -> Result<NoiseOut, NodeError> {
-        Ok(NoiseOut { value: self.amplitude * perlin(self.frequency * self.x, f64::from(self.seed)) })
+        // The expressions' own noise, so the node and `noise(frequency * x, seed)` agree bit for bit.
+        Ok(NoiseOut { value: self.amplitude * crate::anim::expr::perlin(self.frequency * self.x, f64::from(self.seed)) })
     }
-}
-
-/// The 3-D Perlin field the noise samples: seed 0, as the expressions' (whose function is private
-/// to `anim::expr`), so the node and `noise(x, seed)` give the same numbers. Built once: building
-/// shuffles a permutation table.
-static PERLIN: LazyLock<Perlin> = LazyLock::new(|| Perlin::new(0));
-
-/// Perlin noise along a line through the field, placed exactly as `anim::expr` places it: at
-/// y = 0.5, z = 0.25 (the noise is zero at every lattice point), a whole-number cell per seed, and
-/// `x` wrapped into the field's period of 256 so huge `x` neither saturates nor seams.
-fn perlin(x: f64, seed: f64) -> f64 {
-    let cell = (seed.floor() as i64 as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    let y = 0.5 + (cell >> 56) as f64;
-    let z = 0.25 + ((cell >> 48) & 0xff) as f64;
-    PERLIN.get([x.rem_euclid(256.0), y, z])
 }

@@ -302,8 +302,9 @@ fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
     x.max(lo).min(hi)
 }
 
-/// Houdini's `fit`: `x` mapped from `omin..omax` to `nmin..nmax`, clamped to the new range.
-fn fit(x: f64, omin: f64, omax: f64, nmin: f64, nmax: f64) -> f64 {
+/// Houdini's `fit`: `x` mapped from `omin..omax` to `nmin..nmax`, clamped to the new range (also
+/// `math.fit`'s, so a formula moved into nodes keeps its numbers).
+pub(crate) fn fit(x: f64, omin: f64, omax: f64, nmin: f64, nmax: f64) -> f64 {
     // An empty old range is a step at `omin` rather than 0/0.
     let t = if omax == omin { step(omin, x) } else { clamp((x - omin) / (omax - omin), 0.0, 1.0) };
     // The final clamp keeps rounding in `nmin + t * (nmax - nmin)` from stepping an ulp outside the range.
@@ -329,8 +330,8 @@ fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
 /// point; the field repeats every 256 on each axis, so wrapping `x` into `[0, 256)` keeps the output
 /// within range for huge `x` (the crate's integer corner would saturate there) without a seam.
 /// A seed moves the line to another whole-number cell in y and z, giving an unrelated pattern;
-/// seed 0 is the plain `noise(x)`.
-fn perlin(x: f64, seed: f64) -> f64 {
+/// seed 0 is the plain `noise(x)`. Also `math.noise`'s.
+pub(crate) fn perlin(x: f64, seed: f64) -> f64 {
     let cell = (seed.floor() as i64 as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let y = 0.5 + (cell >> 56) as f64;
     let z = 0.25 + ((cell >> 48) & 0xff) as f64;

@@ -4,11 +4,12 @@
 //! scrubber, Delete and undo. The graph: a procedural flame clip into `imaging.bloom`, a per-frame
 //! node whose `strength` (Float, 0..4) is sampled at each frame.
 
-use std::time::{Duration, Instant};
-
 use eframe::egui::{self, Event, Modifiers, PointerButton, Pos2, accesskit::Role, accesskit::Toggled};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
+mod common;
+
+use common::settle;
 use pyrograph_editor::keys::KeyList;
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{GraphDoc, ParamValue};
@@ -101,25 +102,10 @@ fn key_edits_are_single_undo_steps_and_out_of_range_values_are_refused() {
 
 // ----- through the UI -----
 
-const WAIT: Duration = Duration::from_secs(30);
-
 fn harness(app: EditorApp) -> Harness<'static, EditorApp> {
     let mut h = Harness::builder().with_size(egui::vec2(1400.0, 900.0)).build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
     h.run_steps(8);
     h
-}
-
-/// Steps until the cook worker is idle.
-fn settle(h: &mut Harness<'_, EditorApp>) {
-    let start = Instant::now();
-    loop {
-        h.step();
-        if !h.state().editor.is_cooking() || start.elapsed() > WAIT {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    h.run_steps(2);
 }
 
 fn click(h: &mut Harness<'_, EditorApp>, pos: Pos2) {

@@ -6,6 +6,9 @@ use std::time::{Duration, Instant};
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+mod common;
+
+use common::settle;
 use pyrograph_editor::action::Action;
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{Cook, CookCtx, GraphDoc, NodeDoc, NodeError, ParamValue, Registry};
@@ -15,19 +18,6 @@ const WAIT: Duration = Duration::from_secs(20);
 
 fn harness(app: EditorApp) -> Harness<'static, EditorApp> {
     Harness::builder().with_size(egui::vec2(1400.0, 900.0)).build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app)
-}
-
-/// Steps the harness until the editor's cook worker is idle.
-fn settle(h: &mut Harness<'_, EditorApp>) {
-    let start = Instant::now();
-    loop {
-        h.step();
-        if !h.state().editor.is_cooking() || start.elapsed() > WAIT {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    h.step();
 }
 
 #[test]

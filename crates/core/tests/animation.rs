@@ -2,31 +2,11 @@
 //! key re-cooks only the frames it moved (recompute log), chunks equal a full cook, and
 //! parameters nothing samples over time are refused when the graph loads.
 
+mod common;
+
+use common::Ramp;
 use pyrograph_core::document::ParamValue;
-use pyrograph_core::{
-    BuildOptions, Clip, ClipOf, Cook, CookCtx, DiagnosticKind, Graph, GraphDoc, NodeError, PortType, Registry, Value,
-};
-
-pyrograph_core::node! {
-    /// A clip of floats 0, 1, 2, …
-    #[node("test.ramp", "Test", Source)]
-    pub struct Ramp {
-        /// length
-        #[range(0, 100_000)]
-        frames: usize = 60,
-    }
-    pub struct RampOut {
-        /// the ramp
-        clip: ClipOf<f64>,
-    }
-}
-
-impl Cook for Ramp {
-    fn cook(self, _: &CookCtx) -> Result<RampOut, NodeError> {
-        let frames = (0..self.frames).map(|f| Value::Float(f as f64)).collect();
-        Ok(RampOut { clip: ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)) })
-    }
-}
+use pyrograph_core::{BuildOptions, Cook, CookCtx, DiagnosticKind, Graph, GraphDoc, NodeError, PortType, Registry, Value};
 
 pyrograph_core::node! {
     /// value × gain + offset
@@ -63,7 +43,7 @@ fn registry() -> Registry {
 fn doc(gain: &str, offset: &str) -> GraphDoc {
     let text = format!(
         r#"(version: 4, nodes: {{
-            "ramp": (type: "test.ramp"),
+            "ramp": (type: "test.ramp", params: {{"frames": 60}}),
             "a": (type: "test.gain", params: {{"gain": {gain}}}),
             "b": (type: "test.gain", params: {{"offset": {offset}}}),
         }}, edges: [("ramp.clip", "a.value"), ("a.value", "b.value")])"#

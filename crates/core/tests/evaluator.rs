@@ -4,8 +4,11 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod common;
+
+use common::Ramp;
 use pyrograph_core::{
-    BuildOptions, CancelToken, Clip, ClipOf, Cook, CookCtx, Graph, GraphDoc, InputPath, NodeDoc, NodeError, ParamValue, PortType,
+    BuildOptions, CancelToken, ClipOf, Cook, CookCtx, Graph, GraphDoc, InputPath, NodeDoc, NodeError, ParamValue, PortType,
     Progress, Registry, Value, port,
 };
 
@@ -31,27 +34,6 @@ impl Cook for Fail {
             return Err(NodeError::port(port!(Fail, fail), "asked to fail"));
         }
         Ok(FailOut { value: self.a })
-    }
-}
-
-pyrograph_core::node! {
-    /// A clip of floats 0, 1, 2, …
-    #[node("test.ramp", "Test", Source)]
-    pub struct Ramp {
-        /// length
-        #[range(0, 100_000)]
-        frames: usize = 10,
-    }
-    pub struct RampOut {
-        /// the ramp
-        clip: ClipOf<f64>,
-    }
-}
-
-impl Cook for Ramp {
-    fn cook(self, _: &CookCtx) -> Result<RampOut, NodeError> {
-        let frames = (0..self.frames).map(|f| Value::Float(f as f64)).collect();
-        Ok(RampOut { clip: ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)) })
     }
 }
 

@@ -1,0 +1,22 @@
+//! Harness helpers shared by the editor's egui_kittest tests.
+
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use pyrograph_editor::EditorApp;
+
+/// How long a test waits for the cook worker before going on (and failing on what it finds).
+const WAIT: Duration = Duration::from_secs(30);
+
+/// Steps the harness until the editor's cook worker is idle, then twice more to draw the result.
+pub fn settle(h: &mut Harness<'_, EditorApp>) {
+    let start = Instant::now();
+    loop {
+        h.step();
+        if !h.state().editor.is_cooking() || start.elapsed() > WAIT {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    h.run_steps(2);
+}

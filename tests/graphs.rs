@@ -146,9 +146,9 @@ fn flame_cards_match_their_golden_frames() {
 }
 
 #[test]
-fn ramps_in_the_old_text_form_load_as_the_typed_keys_they_spell() {
+fn ramps_and_points_in_the_old_text_forms_load_as_the_typed_values_they_spell() {
     let registry = pyrograph_frontend::registry();
-    let path = workspace().join("tests/fixtures/migrate/v3-text-ramps.ron");
+    let path = workspace().join("tests/fixtures/migrate/v3-text-forms.ron");
     let (doc, old) = Graph::load(&path, &registry, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
     let mut typed = doc.clone();
     let set = |doc: &mut GraphDoc, node: &str, port: &str, ron: &str| {
@@ -163,13 +163,14 @@ fn ramps_in_the_old_text_form_load_as_the_typed_keys_they_spell() {
     );
     set(&mut typed, "flames", "width_ramp", "[(0, 0.67), (0.5, 1.07), (1, 0.67)]");
     set(&mut typed, "tint", "ramp", "[(0, (0, 0, 0)), (0.3, (0.6, 0.05, 0)), (1, (1, 0.95, 0.75))]");
+    set(&mut typed, "spread", "ignite", "[(0.5, 0.2, -0.15), (1.5, face(3, (0.2, 0.3, 0.5))), (2, face(1))]");
     let new = Graph::build_file(&typed, &path, &registry, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
-    for (node, port) in [("flames", "center_ramp"), ("flames", "width_ramp"), ("tint", "ramp")] {
+    for (node, port) in [("flames", "center_ramp"), ("flames", "width_ramp"), ("tint", "ramp"), ("spread", "ignite")] {
         let constant = |g: &Graph| {
             let n = g.node(g.index(node).unwrap());
             let i = n.node.desc().input_index(port).unwrap();
             match &n.inputs[i] {
-                pyrograph_frontend::core::graph::InputSource::Const(v @ Value::Ramp(_)) => v.fingerprint(),
+                pyrograph_frontend::core::graph::InputSource::Const(v @ (Value::Ramp(_) | Value::Points(_))) => v.fingerprint(),
                 other => panic!("{node}.{port} is {other:?}"),
             }
         };
@@ -179,4 +180,9 @@ fn ramps_in_the_old_text_form_load_as_the_typed_keys_they_spell() {
     set(&mut typed, "flames", "width_ramp", "[(0.5, 1.07), (0, 0.67)]");
     let e = Graph::build_file(&typed, &path, &registry, &BuildOptions::default()).err().unwrap().to_string();
     assert!(e.contains("width_ramp") && e.contains("key 2 at 0 comes before key 1"), "{e}");
+    // So is a point that is no place.
+    set(&mut typed, "flames", "width_ramp", "[(0, 0.67), (0.5, 1.07)]");
+    set(&mut typed, "spread", "ignite", "[(0.5, 0.2, -0.15), (1.5, (0.2, 0.3))]");
+    let e = Graph::build_file(&typed, &path, &registry, &BuildOptions::default()).err().unwrap().to_string();
+    assert!(e.contains("'ignite'") && e.contains("point 2: a point is (x, y, z)"), "{e}");
 }

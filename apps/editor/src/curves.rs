@@ -4,7 +4,8 @@
 //! undo step per drag; a click selects it (Shift adds) and Delete deletes the selection. The
 //! playhead is a vertical line; a click or drag on the background scrubs it. "Frame" (or F with
 //! the pointer over the panel) fits the view to the keys; the wheel zooms frames, Ctrl+wheel
-//! values, a right or middle drag pans. Expressions are drawn dashed, without handles.
+//! values, a right or middle drag pans. Expressions are drawn dashed, without handles. A single
+//! selected key shows its tangent handles (`tangents`).
 
 use std::collections::BTreeSet;
 
@@ -161,6 +162,7 @@ impl EditorApp {
             );
         }
         self.key_handles(ui, &node, &shown, &view);
+        self.tangent_handles(ui, &node, &shown, &view);
     }
 
     fn curves_header(&mut self, ui: &mut egui::Ui, node: &str, params: &[AnimParam]) {

@@ -16,6 +16,8 @@ pub struct KeyUi {
     pub(crate) view: Option<CurveView>,
     pub(crate) hidden: BTreeSet<String>,
     pub(crate) drag: Option<KeyDrag>,
+    /// The key whose tangent handle is being dragged: (parameter, key index).
+    pub(crate) tangent_drag: Option<(String, usize)>,
     pub(crate) fit: bool,
     pub(crate) copied_from: Option<String>,
     /// Where the panel was drawn last frame (F over it frames the curves, not the canvas).
@@ -68,6 +70,7 @@ impl Default for KeyUi {
             view: None,
             hidden: BTreeSet::new(),
             drag: None,
+            tangent_drag: None,
             fit: false,
             copied_from: None,
             panel_rect: None,

@@ -1,5 +1,5 @@
-//! Keyframing in the inspector and under the preview: the key toggle beside Float and Int
-//! parameters (filled diamond: a key at the current frame; hollow: animated, no key here; dim
+//! Keyframing in the inspector and under the preview: the key toggle beside Float, Int, Vec2,
+//! Vec3 and Color parameters (filled diamond: a key at the current frame; hollow: animated, no key here; dim
 //! hollow: constant), the row of an animated parameter (its value at the current frame and its
 //! keys or expression as text), and the strip of key ticks under the frame scrubber.
 
@@ -13,6 +13,7 @@ use crate::app::EditorApp;
 use crate::keys::{KeyList, frame_text};
 use crate::param_widgets::buffered_text;
 use crate::state::value_text;
+use crate::state::vector_keys::{all_keyed_at, components};
 
 /// The key colour.
 pub const KEY_COLOR: Color32 = Color32::from_rgb(240, 190, 60);
@@ -33,6 +34,16 @@ impl KeyState {
     pub fn of(value: Option<&ParamValue>, frame: f64) -> KeyState {
         match value {
             Some(v) if KeyList::read(v).is_some_and(|l| l.find(frame).is_some()) => KeyState::KeyHere,
+            Some(v) if v.is_animated() => KeyState::Animated,
+            _ => KeyState::Constant,
+        }
+    }
+
+    /// The state of a Vec2, Vec3 or Color parameter of `n` components holding `value`: a key
+    /// here when every component has one at `frame`.
+    pub fn of_vector(value: Option<&ParamValue>, n: usize, frame: f64) -> KeyState {
+        match value {
+            Some(v) if all_keyed_at(v, n, frame) => KeyState::KeyHere,
             Some(v) if v.is_animated() => KeyState::Animated,
             _ => KeyState::Constant,
         }
@@ -127,18 +138,31 @@ impl EditorApp {
     /// The key toggle of `port` on `node` in the inspector, with its right-click menu.
     pub(crate) fn key_toggle_cell(&mut self, ui: &mut egui::Ui, node: &str, port: &PortDesc, value: Option<&ParamValue>) {
         let frame = self.editor.frame() as f64;
-        let state = KeyState::of(value, frame);
+        let vector = components(&port.ty);
+        let state = match vector {
+            Some(n) => KeyState::of_vector(value, n, frame),
+            None => KeyState::of(value, frame),
+        };
         let resp = key_toggle(ui, state, &port.name, frame);
         self.key_ui.toggle_rects.insert(port.name.clone(), resp.rect);
+        let toggle = |app: &mut EditorApp| {
+            // Errors go to the status line.
+            let _ = match vector {
+                Some(_) => app.editor.toggle_vector_key(node, &port.name, frame),
+                None => app.editor.toggle_key(node, &port.name, frame),
+            };
+            app.editor.seal();
+        };
         if resp.clicked() {
-            let _ = self.editor.toggle_key(node, &port.name, frame);
-            self.editor.seal();
+            toggle(self);
         }
         resp.context_menu(|ui| {
             if ui.button(if state == KeyState::KeyHere { "Delete key" } else { "Set key" }).clicked() {
-                let _ = self.editor.toggle_key(node, &port.name, frame);
-                self.editor.seal();
+                toggle(self);
                 ui.close();
+            }
+            if vector.is_some() {
+                return;
             }
             let sampled = self.editor.scalar_at(node, port, frame).ok();
             let sampled = sampled.map(|v| if port.ty == PortType::Int { v.round() } else { v });

@@ -257,6 +257,20 @@ pub fn move_key(pv: &ParamValue, index: usize, frame: f64, value: f64, int: bool
     Ok((list.to_param(int), i))
 }
 
+/// `pv` with key `index` given the explicit slope `slope` (value per frame) on both sides:
+/// `tangent(slope)`, as a tangent handle dragged in the curve editor writes it.
+pub fn set_tangent(pv: &ParamValue, index: usize, slope: f64, int: bool) -> Result<ParamValue, String> {
+    if !slope.is_finite() {
+        return Err(format!("a tangent's slope must be a finite number, got {slope}"));
+    }
+    let mut list = KeyList::read(pv).ok_or("the parameter has no keys")?;
+    let n = list.keys.len();
+    let key = list.keys.get_mut(index).ok_or_else(|| format!("there is no key {} (the curve has {n})", index + 1))?;
+    key.interp = Some(ParamValue::Call("tangent".into(), Box::new(ParamValue::Float(slope))));
+    key.written = None;
+    Ok(list.to_param(int))
+}
+
 /// `pv` with `copied` keys pasted from frame `at` (a constant becomes keyed).
 pub fn paste_keys(pv: &ParamValue, copied: &[KeyDoc], at: f64, int: bool) -> Result<ParamValue, String> {
     if copied.is_empty() {
@@ -278,6 +292,14 @@ mod tests {
     /// The value as the file would hold it, spaces dropped.
     fn text(v: &ParamValue) -> String {
         v.to_string().replace(' ', "")
+    }
+
+    #[test]
+    fn a_tangent_is_written_on_its_key_alone() {
+        let v = set_tangent(&pv("keys([(0, 0.2), (40, 1.5, ease), (72, 0.4)], cycle)"), 1, 0.05, false).unwrap();
+        assert_eq!(text(&v), "keys([(0,0.2),(40,1.5,tangent(0.05)),(72,0.4)],cycle)");
+        assert!(set_tangent(&v, 3, 0.1, false).unwrap_err().contains("no key 4"));
+        assert!(set_tangent(&v, 0, f64::NAN, false).is_err());
     }
 
     #[test]

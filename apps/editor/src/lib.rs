@@ -23,6 +23,7 @@ pub mod clipboard;
 pub mod cook;
 pub mod curves;
 pub mod gesture;
+pub mod gradient;
 pub mod history;
 pub mod key_ui;
 pub mod keying;
@@ -33,6 +34,7 @@ pub mod palette;
 mod panels;
 pub mod param_widgets;
 pub mod state;
+pub mod tangents;
 pub mod viewer;
 
 pub use app::EditorApp;

@@ -75,7 +75,8 @@ impl EditorApp {
                     continue;
                 }
                 let set = nd.params.get(&port.name).cloned();
-                if matches!(port.ty, pyrograph_frontend::core::PortType::Float | pyrograph_frontend::core::PortType::Int) {
+                use pyrograph_frontend::core::PortType as T;
+                if matches!(port.ty, T::Float | T::Int | T::Vec2 | T::Vec3 | T::Color) {
                     self.key_toggle_cell(ui, &id, port, set.as_ref());
                 } else {
                     ui.label("");
@@ -146,10 +147,12 @@ impl EditorApp {
         match self.editor.param_value(id, port) {
             Some(value) if value.is_animated() => animated_row(ui, widget_id, port, &value, frame, fps),
             Some(value) => {
-                ui.scope(|ui| match param_widget(ui, widget_id, port, &value) {
-                    Some(v) => Some(v),
-                    None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
-                    None => None,
+                ui.scope(|ui| {
+                    match structured_widget(ui, widget_id, port, &value).or_else(|| param_widget(ui, widget_id, port, &value)) {
+                        Some(v) => Some(v),
+                        None if set.is_some() && !kind_ok(port, &value) => raw_widget(ui, &value),
+                        None => None,
+                    }
                 })
                 .inner
             }
@@ -287,6 +290,22 @@ impl EditorApp {
 }
 
 /// Whether a stored value has the kind the port expects (else the raw editor is offered).
+/// The ramp editor or the point list field, for ports of those types (`None` otherwise, and when
+/// nothing changed).
+fn structured_widget(
+    ui: &mut egui::Ui,
+    id: egui::Id,
+    port: &pyrograph_frontend::core::PortDesc,
+    value: &pyrograph_frontend::core::ParamValue,
+) -> Option<pyrograph_frontend::core::ParamValue> {
+    use pyrograph_frontend::core::PortType;
+    match &port.ty {
+        PortType::Ramp(width) => crate::gradient::ramp_widget(ui, id, &port.name, *width, value),
+        PortType::Points => crate::gradient::points_widget(ui, id, value),
+        _ => None,
+    }
+}
+
 fn kind_ok(port: &pyrograph_frontend::core::PortDesc, v: &pyrograph_frontend::core::ParamValue) -> bool {
     use pyrograph_frontend::core::{ParamValue as P, PortType as T};
     match (&port.ty, v) {
@@ -294,6 +313,9 @@ fn kind_ok(port: &pyrograph_frontend::core::PortDesc, v: &pyrograph_frontend::co
         (T::String | T::Path | T::Enum, P::String(_)) => true,
         (T::Color, _) => crate::param_widgets::as_color(v).is_some(),
         (T::Vec2 | T::Vec3, P::List(_)) => true,
+        (T::Ramp(width), _) => crate::gradient::read_keys(v, *width).is_some(),
+        // The point list's field shows any value as text, a bad one included.
+        (T::Points, _) => true,
         _ => false,
     }
 }

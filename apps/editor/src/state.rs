@@ -25,6 +25,7 @@ use crate::layout::relative_path;
 mod files;
 mod keyframes;
 mod preset_lib;
+pub mod vector_keys;
 
 pub use keyframes::{AnimParam, value_text};
 pub use preset_lib::{SelectionPreset, filter_presets};

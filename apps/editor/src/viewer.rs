@@ -32,7 +32,7 @@ pub fn type_color(ty: &PortType) -> Color32 {
         PortType::Int => Color32::from_rgb(80, 170, 170),
         PortType::Bool => Color32::from_rgb(220, 110, 110),
         PortType::Color | PortType::Ramp(_) => Color32::from_rgb(235, 200, 80),
-        PortType::Vec2 | PortType::Vec3 => Color32::from_rgb(170, 130, 220),
+        PortType::Vec2 | PortType::Vec3 | PortType::Points => Color32::from_rgb(170, 130, 220),
         PortType::String | PortType::Path | PortType::Enum => Color32::from_rgb(160, 160, 160),
         PortType::Image => Color32::from_rgb(240, 140, 60),
         PortType::Mask => Color32::from_rgb(235, 235, 235),

@@ -259,3 +259,74 @@ fn a_drag_above_the_range_stops_at_its_end_and_an_expression_is_typed_in_the_row
     assert!(h.query_by_label("key 1 of strength").is_none(), "no handles on an expression");
     assert!(h.query_by_label("Curves · bloom").is_some());
 }
+
+#[test]
+fn a_colour_is_keyed_per_component_by_its_toggle_and_one_undo_takes_a_toggle_back() {
+    use pyrograph_editor::state::vector_keys::all_keyed_at;
+    let mut ed = editor();
+    ed.select("bloom");
+    let mut h = harness(EditorApp::new(ed));
+    settle(&mut h);
+    let tint = |h: &Harness<'_, EditorApp>| h.state().editor.doc().node("bloom").unwrap().params.get("tint_color").cloned();
+    assert_eq!(tint(&h), None, "the default colour, unset");
+    h.get_by_label("key tint_color").click();
+    h.run_steps(3);
+    let keyed = tint(&h).expect("the colour is set");
+    assert!(all_keyed_at(&keyed, 4, 0.0), "every component keyed at frame 0: {keyed}");
+    assert_eq!(h.get_by_label("key tint_color").accesskit_node().toggled(), Some(Toggled::True));
+
+    // At frame 10 the toggle is hollow; a click keys all four components there too.
+    h.state_mut().editor.set_frame(10);
+    settle(&mut h);
+    assert_eq!(h.get_by_label("key tint_color").accesskit_node().toggled(), Some(Toggled::False));
+    h.get_by_label("key tint_color").click();
+    h.run_steps(3);
+    let both = tint(&h).unwrap();
+    assert!(all_keyed_at(&both, 4, 0.0) && all_keyed_at(&both, 4, 10.0), "{both}");
+    assert!(h.state().editor.validation().diagnostics.is_empty(), "{:?}", h.state().editor.validation().diagnostics);
+
+    // Clicked again, the keys at 10 go; one undo brings them back.
+    h.get_by_label("key tint_color").click();
+    h.run_steps(3);
+    assert_eq!(tint(&h).as_ref(), Some(&keyed), "back to the keys at frame 0 alone");
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(3);
+    assert_eq!(tint(&h), Some(both));
+}
+
+#[test]
+fn a_selected_keys_tangent_handle_drags_its_slope_in_one_undo_step() {
+    let mut ed = editor();
+    ed.set_param("bloom", "strength", ParamValue::parse_cli("keys([(0, 0.4), (12, 1.2), (24, 0.8)])")).unwrap();
+    ed.seal();
+    ed.select("bloom");
+    let mut h = harness(EditorApp::new(ed));
+    settle(&mut h);
+    assert!(h.query_by_label("tangent out of key 2 of strength").is_none(), "no tangent handles before a key is selected");
+    let key = h.get_by_label("key 2 of strength").rect().center();
+    click(&mut h, key);
+    assert_eq!(h.state().key_ui.selected(), [("strength".to_string(), 12.0)]);
+    // Key 2 is a peak: the smooth curve is flat there, so its handle points straight ahead.
+    let out = h.get_by_label("tangent out of key 2 of strength").rect().center();
+    assert!((out.y - key.y).abs() < 1.5 && out.x > key.x + 20.0, "flat at the peak: key {key:?}, handle {out:?}");
+
+    // Drag it up by 30 pixels: the key's slope becomes the line from the key to the pointer.
+    let view = h.state().key_ui.view().unwrap();
+    let to = out - egui::vec2(0.0, 30.0);
+    drag(&mut h, out, to);
+    let want = pyrograph_editor::tangents::slope_to(&view, 12.0, 1.2, to).unwrap();
+    assert!(want > 0.0, "{want}");
+    let text = strength(&h.state().editor).to_string();
+    assert!(text.contains(&format!("tangent({want})")), "{text} should hold tangent({want})");
+    assert_eq!(keys(&h.state().editor), [(0.0, 0.4), (12.0, 1.2), (24.0, 0.8)], "the keys did not move");
+
+    // One undo takes the whole drag back: smooth again.
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(3);
+    assert!(!strength(&h.state().editor).to_string().contains("tangent"), "{}", strength(&h.state().editor));
+
+    // A slope steep enough to carry the curve past 4 (the range's end) is refused.
+    h.state_mut().editor.seal();
+    let e = h.state_mut().editor.set_key_tangent("bloom", "strength", 1, 5.0).unwrap_err();
+    assert!(e.contains("outside the range 0..=4"), "{e}");
+}

@@ -31,7 +31,7 @@ fn from_py_at(obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<ParamValue> {
     }
     if obj.is_instance_of::<PyString>() {
         let text: String = obj.extract()?;
-        return Ok(animated_text(&text).unwrap_or(ParamValue::String(text)));
+        return Ok(form_text(&text).unwrap_or(ParamValue::String(text)));
     }
     if obj.is_instance_of::<PyTuple>() || obj.is_instance_of::<PyList>() {
         if depth >= MAX_DEPTH {
@@ -56,11 +56,11 @@ fn from_py_at(obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<ParamValue> {
     )))
 }
 
-/// A string written as an animated parameter, `keys([...])` or `expr(...)`, as in a graph file
-/// and on the command line.
-fn animated_text(text: &str) -> Option<ParamValue> {
+/// A string written as a form, as in a graph file and on the command line: an animated parameter,
+/// `keys([...])` or `expr(...)`, or a place in a point list, `face(3)`.
+fn form_text(text: &str) -> Option<ParamValue> {
     let t = text.trim();
-    if !(t.starts_with("keys(") || t.starts_with("expr(")) || !t.ends_with(')') {
+    if !["keys(", "expr(", "face("].iter().any(|f| t.starts_with(f)) || !t.ends_with(')') {
         return None;
     }
     Some(ParamValue::parse_cli(t)).filter(|v| matches!(v, ParamValue::Call(..)))

@@ -155,5 +155,7 @@ pub fn to_py<'py>(py: Python<'py>, v: &RustValue) -> PyResult<Bound<'py, PyAny>>
         RustValue::Anim(a) => a.summary().into_pyobject(py)?.into_any(),
         // A ramp as the list of (position, value) keys a graph file holds.
         RustValue::Ramp(r) => crate::param_values::to_py(py, &r.to_param())?,
+        // Points as the list a graph file holds (a face place reads as the text "face(F)").
+        RustValue::Points(p) => crate::param_values::to_py(py, &p.to_param())?,
     })
 }

@@ -168,3 +168,24 @@ def test_a_bad_expression_is_a_problem_naming_node_parameter_and_column():
     g.set_expr("calm.turbulence", "1 +* 2")
     problems = g.check()
     assert any("calm" in str(p) and "turbulence" in str(p) and "column 4" in str(p) for p in problems), problems
+
+
+def test_ignition_points_set_from_python_save_like_the_cli(cli, tmp_path):
+    path = ROOT / "graphs" / "burning-cube.ron"
+    g = pyrograph.Graph.load(path)
+    g.set("spread.ignite", [(0.5, 0.2, -0.15), (1.5, "face(3, (0.2, 0.3, 0.5))"), "face(1)"])
+    assert g.check() == [], g.check()
+    g.save(tmp_path / "python.ron")
+    subprocess.run(
+        [cli, "save", path, "-o", tmp_path / "cli.ron",
+         "--set", "spread.ignite=[(0.5, 0.2, -0.15), (1.5, face(3, (0.2, 0.3, 0.5))), face(1)]"],
+        check=True,
+        capture_output=True,
+    )
+    saved = (tmp_path / "python.ron").read_text()
+    assert saved == (tmp_path / "cli.ron").read_text()
+    assert "face(3, (0.2, 0.3, 0.5))" in saved and "face(1)" in saved, saved
+    # A point that is not a place is a problem naming the parameter and the point.
+    g.set("spread.ignite", [(0.5, 0.2, -0.15), (1.5, (0.2, 0.3))])
+    problems = g.check()
+    assert any("ignite" in str(p) and "point 2" in str(p) for p in problems), problems

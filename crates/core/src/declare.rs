@@ -15,7 +15,7 @@ use std::sync::Arc;
 use crate::ctx::CookCtx;
 use crate::error::NodeError;
 use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc};
-use crate::value::{Clip, Contours, Image, Mask, PortType, Value};
+use crate::value::{Clip, Contours, Image, Mask, Points, PortType, Value};
 
 mod anim_port;
 pub use anim_port::Anim;
@@ -393,7 +393,7 @@ macro_rules! shared_port {
         }
     )*};
 }
-shared_port!(Image, Mask, Contours);
+shared_port!(Image, Mask, Contours, Points);
 
 /// Every type a node crate declares with [`crate::value::ValueType`] is a port type as `Arc<T>`.
 impl<T: crate::value::ValueType> Port for Arc<T> {

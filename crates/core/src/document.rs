@@ -109,10 +109,11 @@ impl ParamValue {
         }
     }
 
-    /// Whether the value is, or holds, a form (an animated parameter).
+    /// Whether the value is, or holds, a form (an animated parameter). `face(…)`, a place in a
+    /// point list, is a form that does not animate.
     pub fn is_animated(&self) -> bool {
         match self {
-            ParamValue::Call(..) => true,
+            ParamValue::Call(name, _) => name != "face",
             ParamValue::List(items) => items.iter().any(ParamValue::is_animated),
             _ => false,
         }

@@ -27,8 +27,8 @@ fn peer_structural() -> ClothParams {
         shear: false,
         bend: false,
         drag: 0.5,
-        buoyancy: 0.5,
-        wind: [0.3, 0.0, 0.0],
+        buoyancy: 0.5.into(),
+        wind: [0.3, 0.0, 0.0].into(),
         dt: 1.0 / 120.0,
         fps: 24.0,
         ..ClothParams::default()

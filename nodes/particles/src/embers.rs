@@ -7,7 +7,7 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::declare::Cook;
+use pyrograph_core::declare::{Anim, Cook};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 
@@ -23,9 +23,9 @@ pyrograph_core::ports! {
     /// How sparks are born, move and look: the ports of `particles.embers` after roots and wind.
     #[derive(PartialEq)]
     pub struct EmberParams {
-        /// Sparks born per frame, over all roots.
+        /// Sparks born per frame, over all roots; sampled at every sub-step, so a keyed burst of sparks starts when its key does.
         #[range(0.0, 10_000.0)]
-        rate: f32 = 2.0,
+        rate: Anim<f32> = Anim::constant(2.0),
         /// Lifetime of a spark in frames.
         #[range(1, 10_000)]
         lifetime: u32 = 30,
@@ -83,6 +83,49 @@ fn spark_path(root: Vec3, dir: Vec3, birth: f64, until: f64, fps: f64, wind: &Wi
     out
 }
 
+/// The sparks that may be alive at `now` (frames), as (number, birth frame): spark j is born when
+/// the count of births, the integral of the rate from frame 0, reaches j. Before frame 0 the rate
+/// is frame 0's, so the first frame is already steady. A constant rate gives births at j / rate; an
+/// animated one is integrated at the sub-steps (the rate held over each), from frame 0 on every
+/// call, so a frame cooked alone sees the same births as in a full cook.
+fn births(rate: &Anim<f32>, fps: f64, now: f64, longest: f64) -> Result<Vec<(i64, f64)>, NodeError> {
+    let from = now - longest;
+    if !rate.is_animated() {
+        let r = *rate.value() as f64;
+        let first = (from * r).floor() as i64;
+        let last = (now * r).floor() as i64;
+        return Ok((first..=last).map(|j| (j, j as f64 / r)).collect());
+    }
+    let mut out = Vec::new();
+    let r0 = rate.at(0.0, fps)? as f64;
+    if from < 0.0 && r0 > 0.0 {
+        // Born before frame 0, at frame 0's rate: spark j (≤ 0) at j / r0.
+        let first = (from * r0).floor() as i64;
+        let last = (now.min(0.0) * r0).floor().min(-1.0) as i64;
+        out.extend((first..=last).map(|j| (j, j as f64 / r0)));
+    }
+    let h = 1.0 / SUBSTEPS as f64;
+    let mut count = 0.0f64;
+    let mut next = 0i64;
+    for k in 0..=(now * SUBSTEPS as f64).floor() as usize {
+        let t0 = k as f64 * h;
+        let r = rate.at(t0, fps)? as f64;
+        let end = count + r * h;
+        while r > 0.0 && (next as f64) <= end {
+            let birth = t0 + (next as f64 - count) / r;
+            if birth > now {
+                break;
+            }
+            if birth >= from {
+                out.push((next, birth));
+            }
+            next += 1;
+        }
+        count = end;
+    }
+    Ok(out)
+}
+
 /// Frame `frame` of sparks from `roots`: every spark alive at the frame, as a streak of
 /// `samples` particles along its last `shutter` frames (group = spark, `trails`).
 pub fn simulate_embers(
@@ -93,18 +136,13 @@ pub fn simulate_embers(
     frame: usize,
 ) -> Result<Particles, NodeError> {
     let mut particles = Vec::new();
-    if roots.is_empty() || p.rate <= 0.0 {
+    if roots.is_empty() || (!p.rate.is_animated() && *p.rate.value() <= 0.0) {
         return Ok(Particles { particles, sides: 8, time: frame as f32, trails: true });
     }
     let sampler = WindSampler::at_rate(wind, fps);
     let now = frame as f64;
     let longest = p.lifetime as f64 * (1.0 + p.lifetime_jitter.clamp(0.0, 1.0) as f64);
-    let rate = p.rate as f64;
-    // Spark j is born at frame j / rate: the ones born within the longest lifetime before now.
-    let first = ((now - longest) * rate).floor() as i64;
-    let last = (now * rate).floor() as i64;
-    for j in first..=last {
-        let birth = j as f64 / rate;
+    for (j, birth) in births(&p.rate, fps, now, longest)? {
         let key = j.rem_euclid(1 << 40) as usize;
         let jitter = p.lifetime_jitter.clamp(0.0, 1.0) * (2.0 * unit_random(p.seed, key, 31) - 1.0);
         let life = (p.lifetime as f64 * (1.0 + jitter as f64)).max(1.0);
@@ -227,7 +265,8 @@ mod tests {
     #[test]
     fn sparks_rise_stream_and_cool() {
         let roots = [(Vec3::ZERO, Vec3::Y)];
-        let p = EmberParams { rate: 3.0, lifetime: 20, lifetime_jitter: 0.0, spread: 0.0, ..EmberParams::default() };
+        let p =
+            EmberParams { rate: Anim::constant(3.0), lifetime: 20, lifetime_jitter: 0.0, spread: 0.0, ..EmberParams::default() };
         let frame = simulate_embers(&roots, &calm(), &p, 24.0, 40).unwrap();
         assert!(frame.trails);
         // Born every third of a frame, living 20 frames: about 60 alive, 5 streak particles each.
@@ -265,5 +304,24 @@ mod tests {
         let ratio = a.particles.len() as f32 / later.particles.len() as f32;
         assert!((0.6..1.6).contains(&ratio), "already burning at frame 0: {} vs {}", a.particles.len(), later.particles.len());
         assert!(simulate_embers(&[], &WindField::default(), &p, 24.0, 3).unwrap().particles.is_empty());
+    }
+
+    #[test]
+    fn a_keyed_rate_bursts_when_its_key_comes() {
+        use pyrograph_core::declare::Port;
+        let keyed = pyrograph_core::ParamValue::parse_cli("keys([(0, 2.0, constant), (20, 12.0, constant)])");
+        let animated = pyrograph_core::anim::from_param(&keyed, pyrograph_core::anim::Shape::Float).unwrap().unwrap();
+        let rate = Anim::<f32>::from_value(&Value::Anim(Arc::new(animated))).unwrap();
+        let roots = [(Vec3::ZERO, Vec3::Y)];
+        let steady = EmberParams::default();
+        let burst = EmberParams { rate, ..EmberParams::default() };
+        let frame = |p: &EmberParams, f| simulate_embers(&roots, &calm(), p, 24.0, f).unwrap();
+        // Up to frame 20 the keyed rate is the constant 2: the same sparks, bit for bit.
+        for f in [0, 7, 19, 20] {
+            assert_eq!(frame(&steady, f), frame(&burst, f), "frame {f}");
+        }
+        let (a, b) = (frame(&steady, 40).particles.len(), frame(&burst, 40).particles.len());
+        println!("particles at frame 40: {a} at rate 2, {b} with the rate keyed to 12 at frame 20");
+        assert!(b > 3 * a, "{b} vs {a}");
     }
 }

@@ -97,7 +97,7 @@ mod tests {
         let e = error("flat.mesh");
         assert!(e.contains("flat.obj") && e.contains("face 1 is degenerate"), "{e}");
         let e = error("spread.spread");
-        assert!(e.contains("port 'ignite'") && e.contains("ignition 2") && e.contains("off the mesh"), "{e}");
+        assert!(e.contains("port 'ignite'") && e.contains("point 2 at (3, 0, 0) is off the mesh"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -146,6 +146,19 @@ impl Editor {
         Ok(i)
     }
 
+    /// Gives key `index` the explicit slope `slope` on both sides (`tangent(slope)`). Changes of
+    /// one key's tangent coalesce into one undo step until [`Editor::seal`], as a drag is one step.
+    pub fn set_key_tangent(&mut self, node: &str, param: &str, index: usize, slope: f64) -> Result<(), String> {
+        let r = (|| {
+            let port = self.scalar_port(node, param)?;
+            let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
+            let new = keys::set_tangent(&current, index, slope, port.ty == PortType::Int)
+                .map_err(|e| format!("{node}.{param}: {e}"))?;
+            self.commit_keys(node, &port, new, Some(&format!("tangent:{node}.{param}")))
+        })();
+        self.report(r)
+    }
+
     /// Deletes key `index`; the last key deleted leaves the constant it held.
     pub fn delete_key(&mut self, node: &str, param: &str, index: usize) -> Result<(), String> {
         let r = self.delete_key_inner(node, param, index);
@@ -243,6 +256,18 @@ impl Editor {
         {
             let at = frame.map_or(String::new(), |f| format!(" at frame {}", frame_text(f)));
             return Err(format!("{node}.{name}: {}{at} is outside the range {lo}..={hi}; the key is not set", value_text(*v)));
+        }
+        // Between the keys, an explicit tangent can carry the curve past them.
+        if let (Some((lo, hi)), Ok(Some(a))) = (port.range, animated_param(new, &port.ty))
+            && let Some(Track::Keys(c)) = a.tracks().first()
+        {
+            let (min, max) = c.value_bounds();
+            if min < lo || max > hi {
+                return Err(format!(
+                    "{node}.{name}: the curve would reach {} between its keys, outside the range {lo}..={hi}; not changed",
+                    value_text(if min < lo { min } else { max })
+                ));
+            }
         }
         Ok(())
     }

@@ -102,7 +102,7 @@ class Graph:
     def disconnect(self, src: str, dst: str) -> None: ...
     def set(self, endpoint: str, value: Param) -> None:
         """Sets "node.param"; the next cook re-cooks only what depends on it. A string
-        "keys([...])" or "expr(...)" animates it."""
+        "keys([...])" or "expr(...)" animates it; in a point list, "face(3)" is a face."""
     def set_keys(self, endpoint: str, keys: Sequence[Tuple[Any, ...]], extrapolation: Optional[Union[str, Tuple[str, str]]] = None) -> None:
         """Keys "node.param": (frame, value) or (frame, value, interpolation) tuples."""
     def set_expr(self, endpoint: str, expression: str) -> None:

@@ -57,7 +57,7 @@ impl Raw {
 
 /// Names written bare (as RON identifiers) inside a form: the interpolation and extrapolation
 /// modes and the form names. Serde names variants with `&'static str`, so the set is closed.
-const IDENTIFIERS: &[&str] = &["constant", "linear", "smooth", "ease", "hold", "cycle", "keys", "expr", "tangent"];
+const IDENTIFIERS: &[&str] = &["constant", "linear", "smooth", "ease", "hold", "cycle", "keys", "expr", "tangent", "face"];
 
 fn identifier(name: &str) -> Option<&'static str> {
     IDENTIFIERS.iter().copied().find(|i| *i == name)

@@ -161,6 +161,14 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
             };
             keys.map(|k| Value::Ramp(std::sync::Arc::new(k))).map_err(|m| (DiagnosticKind::WrongKind, m))
         }
+        PortType::Points => {
+            // Older files hold the text form; it reads as it always did.
+            let points = match pv {
+                ParamValue::String(text) => crate::value::Points::parse_legacy(text),
+                other => crate::value::Points::from_param(other),
+            };
+            points.map(|p| Value::Points(std::sync::Arc::new(p))).map_err(|m| (DiagnosticKind::WrongKind, m))
+        }
         PortType::Vec2 => numbers::<2>(pv).map(Value::Vec2).ok_or_else(|| wrong("(x, y)")),
         PortType::Vec3 => numbers::<3>(pv).map(Value::Vec3).ok_or_else(|| wrong("(x, y, z)")),
         PortType::String => match pv {
@@ -248,6 +256,7 @@ pub fn value_to_param(v: &Value) -> Option<ParamValue> {
         Value::Path(p) => ParamValue::String(p.display().to_string()),
         Value::Anim(a) => a.written().clone(),
         Value::Ramp(r) => r.to_param(),
+        Value::Points(p) => p.to_param(),
         Value::Image(_) | Value::Mask(_) | Value::Contours(_) | Value::Custom(_) | Value::Clip(_) => {
             return None;
         }

@@ -9,6 +9,7 @@ mod animated;
 pub mod clip;
 mod compact;
 pub mod frame_cache;
+pub mod points;
 pub mod ramp;
 
 use crate::fingerprint::{Fingerprinter, hash_f32s};
@@ -17,6 +18,7 @@ mod custom;
 pub use animated::animated_param;
 pub use clip::{Clip, FrameSource};
 pub use custom::{CustomValue, TypeInfo, ValueType};
+pub use points::{Place, Points};
 pub use ramp::RampKeys;
 
 /// The closed set of types a port can carry.
@@ -43,6 +45,8 @@ pub enum PortType {
     /// Keys over a position in 0..1 with this many components each: a colour ramp (4) or a
     /// scalar curve (1), written `[(position, value), …]`.
     Ramp(usize),
+    /// Timed places on a surface (positions or faces), written `[(x, y, z), (seconds, face(F)), …]`.
+    Points,
     /// A file-system path; relative paths resolve against the graph file's folder.
     Path,
     /// One of a fixed list of names (the port description lists them).
@@ -299,6 +303,8 @@ pub enum Value {
     Path(PathBuf),
     /// See [`PortType::Ramp`].
     Ramp(Arc<RampKeys>),
+    /// See [`PortType::Points`].
+    Points(Arc<Points>),
     /// See [`PortType::Enum`]: the chosen option's name.
     Enum(String),
     /// See [`PortType::Image`].
@@ -329,6 +335,7 @@ impl Value {
             Value::String(_) => PortType::String,
             Value::Path(_) => PortType::Path,
             Value::Ramp(r) => PortType::Ramp(r.width()),
+            Value::Points(_) => PortType::Points,
             Value::Enum(_) => PortType::Enum,
             Value::Image(_) => PortType::Image,
             Value::Mask(_) => PortType::Mask,
@@ -380,6 +387,7 @@ impl Value {
             Value::String(s) | Value::Enum(s) => s.hash(h),
             Value::Path(p) => p.hash(h),
             Value::Ramp(r) => r.hash_into(h),
+            Value::Points(p) => p.hash_into(h),
             Value::Image(img) => {
                 (img.width, img.height, img.channels).hash(h);
                 hash_f32s(h, &img.data);
@@ -428,6 +436,7 @@ impl Value {
             Value::String(s) | Value::Enum(s) => s.clone(),
             Value::Path(p) => p.display().to_string(),
             Value::Ramp(r) => r.summary(),
+            Value::Points(p) => p.summary(),
             Value::Image(img) => format!("Image {}x{} {:?}", img.width, img.height, img.channels),
             Value::Mask(m) => format!("Mask {}x{}", m.width, m.height),
             Value::Contours(c) => format!("Contours {} in {}x{}", c.contours.len(), c.width, c.height),

@@ -2,6 +2,7 @@
 //! `cloth.mass_spring_flame` after its roots and frames) and the checks no port range can make.
 
 use glam::Vec3;
+use pyrograph_core::declare::Anim;
 use pyrograph_core::{NodeError, port};
 
 pyrograph_core::ports! {
@@ -46,11 +47,11 @@ pyrograph_core::ports! {
         /// Air drag: force −drag·v on every mass.
         #[range(0.0, 1e9)]
         drag: f32 = 0.004,
-        /// Upward force on every mass (§External Forces).
+        /// Upward force on every mass (§External Forces); sampled at every sub-step.
         #[range(-1e9, 1e9)]
-        buoyancy: f32 = 0.05,
-        /// Wind force on every mass during an impulse (flame-local: x across, y up, z toward the viewer).
-        wind: [f32; 3] = [0.03, 0.0, 0.01],
+        buoyancy: Anim<f32> = Anim::constant(0.05),
+        /// Wind force on every mass during an impulse (flame-local: x across, y up, z toward the viewer); sampled at every sub-step.
+        wind: Anim<[f32; 3]> = Anim::constant([0.03, 0.0, 0.01]),
         /// Seconds each wind impulse lasts (the project: 1 s).
         #[range(0.0, 1e6)]
         wind_on: f32 = 1.0,
@@ -92,7 +93,7 @@ pub fn validate(p: &ClothParams) -> Result<(), NodeError> {
         (port!(ClothParams, shear_stiffness), p.shear_stiffness),
         (port!(ClothParams, bend_stiffness), p.bend_stiffness),
         (port!(ClothParams, drag), p.drag),
-        (port!(ClothParams, buoyancy), p.buoyancy),
+        (port!(ClothParams, buoyancy), *p.buoyancy.value()),
         (port!(ClothParams, wind_on), p.wind_on),
         (port!(ClothParams, wind_off), p.wind_off),
         (port!(ClothParams, wind_jitter), p.wind_jitter),
@@ -104,7 +105,7 @@ pub fn validate(p: &ClothParams) -> Result<(), NodeError> {
             return Err(NodeError::port(name, format!("must be finite, got {v}")));
         }
     }
-    let wind = Vec3::from_array(p.wind);
+    let wind = Vec3::from_array(*p.wind.value());
     if !wind.is_finite() {
         return Err(NodeError::port(port!(ClothParams, wind), format!("must be finite, got {wind}")));
     }

@@ -64,17 +64,34 @@ impl Simulation {
     /// Advances every flame by `steps` sub-steps of length `h` (flames in parallel), without
     /// changing the frame counter; for benchmarks of raw stepping.
     pub fn substep(&mut self, h: f32, steps: usize) {
-        self.advance_flames(h, steps);
+        self.advance_flames(h, steps, None);
+    }
+
+    /// The buoyancy and wind at each of the next `steps` sub-steps of length `h`, sampled at the
+    /// sub-step's start, when either is animated (`None` when both are constant).
+    fn sampled_forces(&self, h: f32, steps: usize) -> Result<Option<Vec<(f32, Vec3)>>, NodeError> {
+        let p = &self.params;
+        if !p.buoyancy.is_animated() && !p.wind.is_animated() {
+            return Ok(None);
+        }
+        let fps = f64::from(p.fps);
+        (0..steps)
+            .map(|k| {
+                let frame = self.frame as f64 + k as f64 * f64::from(h) * fps;
+                Ok((p.buoyancy.at(frame, fps)?, Vec3::from_array(p.wind.at(frame, fps)?)))
+            })
+            .collect::<Result<Vec<_>, NodeError>>()
+            .map(Some)
     }
 
     /// Advances every flame by `steps` sub-steps of length `h`, each flame all its sub-steps at
     /// once while its masses are in cache; flames in parallel chunks when there is enough work.
     /// Returns the first flame whose state is no longer finite.
-    fn advance_flames(&mut self, h: f32, steps: usize) -> Option<usize> {
+    fn advance_flames(&mut self, h: f32, steps: usize, forces: Option<&[(f32, Vec3)]>) -> Option<usize> {
         let t0 = self.frame as f64 / self.params.fps as f64;
         let (topo, p) = (&*self.topo, &self.params);
         let work = |(i, f): (usize, &mut FlameState)| {
-            let ext = external(p, f.phase, f.wind_scale);
+            let ext = external(p, f.phase, f.wind_scale, forces.map(|s| (s, t0, h)));
             if f.advance_checked(topo, p.mass, p.drag, h, steps, t0, ext) { usize::MAX } else { i }
         };
         let flames = self.flames.len();
@@ -91,7 +108,8 @@ impl Simulation {
     /// error naming `dt`, never a NaN frame.
     pub fn step_frame(&mut self) -> Result<(), NodeError> {
         let (n, h) = self.substeps();
-        let bad = self.advance_flames(h, n);
+        let forces = self.sampled_forces(h, n)?;
+        let bad = self.advance_flames(h, n, forces.as_deref());
         self.frame += 1;
         if let Some(i) = bad {
             return Err(NodeError::port(
@@ -146,11 +164,26 @@ pub fn check_step(topo: &Topology, p: &ClothParams) -> Result<(), NodeError> {
 /// less work than this does not pay for waking the pool.
 const PARALLEL_WORK: usize = 16_384;
 
+/// Sub-step samples of an animated buoyancy and wind: the samples, the first sub-step's time
+/// (seconds) and the sub-step length.
+type Sampled<'a> = (&'a [(f32, Vec3)], f64, f32);
+
 /// The external force on every mass of a flame at time `t`: buoyancy, plus the flame's wind
-/// while an impulse is on (§External Forces).
-fn external(p: &ClothParams, phase: f32, wind_scale: f32) -> impl Fn(f64) -> Vec3 + use<> {
-    let (up, wind, on, off) = (Vec3::Y * p.buoyancy, Vec3::from_array(p.wind) * wind_scale, p.wind_on, p.wind_off);
-    move |t| if wind_active(t, phase, on, off) { up + wind } else { up }
+/// while an impulse is on (§External Forces). With `sampled`, the buoyancy and wind are those
+/// sampled for the sub-step starting at `t`.
+fn external<'a>(p: &ClothParams, phase: f32, wind_scale: f32, sampled: Option<Sampled<'a>>) -> impl Fn(f64) -> Vec3 + use<'a> {
+    let (up, wind) = (Vec3::Y * *p.buoyancy.value(), Vec3::from_array(*p.wind.value()));
+    let (on, off) = (p.wind_on, p.wind_off);
+    move |t| {
+        let (up, wind) = match sampled {
+            Some((s, t0, h)) => {
+                let k = (((t - t0) / f64::from(h)).round().max(0.0) as usize).min(s.len() - 1);
+                (Vec3::Y * s[k].0, s[k].1)
+            }
+            None => (up, wind),
+        };
+        if wind_active(t, phase, on, off) { up + wind * wind_scale } else { up }
+    }
 }
 
 /// `count` roots on a square-ish grid in the ground (x–z) plane, `spacing` apart, centred on the origin.

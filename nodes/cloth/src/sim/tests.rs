@@ -1,11 +1,11 @@
 use glam::Vec3;
-use pyrograph_core::declare::{Cook, Declared};
+use pyrograph_core::declare::{Anim, Cook, Declared};
 use pyrograph_core::{CookCtx, Inputs, NodeError, Value};
 
 use super::*;
 
 fn calm() -> ClothParams {
-    ClothParams { buoyancy: 0.0, wind: [0.0; 3], ..ClothParams::default() }
+    ClothParams { buoyancy: Anim::constant(0.0), wind: Anim::constant([0.0; 3]), ..ClothParams::default() }
 }
 
 #[test]
@@ -78,7 +78,7 @@ fn the_stencil_kernel_matches_the_spring_list() {
         let counted: usize = st.families.iter().map(|f| f.rest.len() - f.cut.len()).sum();
         assert_eq!(counted, topo.springs(), "shear {shear} bend {bend}: the families hold every spring");
         let (mut a, mut b) = (FlameState::at_rest(&topo, 0.0, 1.0, 0), FlameState::at_rest(&topo, 0.0, 1.0, 0));
-        let ext = |t: f64| Vec3::new(0.05 * (3.0 * t).sin() as f32, p.buoyancy, 0.02);
+        let ext = |t: f64| Vec3::new(0.05 * (3.0 * t).sin() as f32, *p.buoyancy.value(), 0.02);
         let h = 1.0 / 600.0;
         for k in 0..60 {
             a.advance(&topo, p.mass, p.drag, h, 10, k as f64 / 60.0, ext);
@@ -141,10 +141,10 @@ fn with_damping_energy_never_grows_after_the_impulse() {
     let p = ClothParams { wind_jitter: 0.0, damping: 0.05, drag: 0.01, ..ClothParams::default() };
     let topo = Topology::grid(&p);
     let mut f = FlameState::at_rest(&topo, 0.0, 1.0, 0);
-    let up = Vec3::Y * p.buoyancy;
+    let up = Vec3::Y * *p.buoyancy.value();
     let h = 1.0 / 600.0;
     // The impulse is on for the first second (phase 0), then off for five.
-    let wind = Vec3::from_array(p.wind);
+    let wind = Vec3::from_array(*p.wind.value());
     let ext = |t: f64| if wind_active(t, 0.0, p.wind_on, p.wind_off) { up + wind } else { up };
     f.advance(&topo, p.mass, p.drag, h, 600, 0.0, ext);
     let mut e = f.energy(&topo, p.mass, up);
@@ -211,4 +211,33 @@ fn the_node_refuses_a_small_grid_and_a_negative_mass() {
     let mut v = values;
     v[desc.input_index("dt").unwrap()] = Value::Float(1.0);
     assert_eq!(port_of(&v), "dt");
+}
+
+/// An animated parameter from its file form, as a port would hold it.
+fn animated<T: pyrograph_core::declare::Port + Clone>(text: &str, shape: pyrograph_core::anim::Shape) -> Anim<T> {
+    use pyrograph_core::declare::Port;
+    let a = pyrograph_core::anim::from_param(&pyrograph_core::ParamValue::parse_cli(text), shape).unwrap().unwrap();
+    Anim::<T>::from_value(&Value::Anim(std::sync::Arc::new(a))).unwrap()
+}
+
+#[test]
+fn a_keyed_buoyancy_and_wind_act_from_the_sub_step_of_their_key() {
+    use pyrograph_core::anim::Shape;
+    let p = ClothParams { wind_jitter: 0.0, wind_off: 0.0, ..ClothParams::default() };
+    let keyed = ClothParams {
+        buoyancy: animated("keys([(0, 0.05, constant), (10, 0.5)])", Shape::Float),
+        wind: animated("(keys([(0, 0.03, constant), (10, 0.3)]), 0, 0.01)", Shape::Vec3),
+        ..p.clone()
+    };
+    let roots = grid_roots(2, 1.5);
+    let (mut a, mut b) = (Simulation::new(&p, &roots).unwrap(), Simulation::new(&keyed, &roots).unwrap());
+    for frame in 1..=14 {
+        a.step_frame().unwrap();
+        b.step_frame().unwrap();
+        let same = a.snapshot().positions == b.snapshot().positions;
+        // Frames up to 10 are stepped before the keys' change: the same masses, bit for bit.
+        assert_eq!(same, frame <= 10, "frame {frame}");
+    }
+    let top = |s: &Simulation| s.snapshot().positions.iter().map(|q| q[1]).fold(f32::MIN, f32::max);
+    assert!(top(&b) > top(&a), "a stronger buoyancy lifts the cloth: {} vs {}", top(&b), top(&a));
 }

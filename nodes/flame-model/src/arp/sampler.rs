@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::declare::Cook;
+use pyrograph_core::declare::{Anim, Cook};
 use pyrograph_core::{CookCtx, NodeError, port};
 
 use super::rng::Rng;
@@ -156,24 +156,35 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
-/// A control value that moves linearly from `start` (first frame) to `end` (last frame).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A control value that moves linearly from `start` (first frame) to `end` (last frame), or,
+/// when `keyed`, follows keys or an expression over the output frames.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Ramp {
     /// Value at the first frame.
     pub start: f64,
     /// Value at the last frame.
     pub end: f64,
+    /// An animated control and the frame rate its `time` counts in: it replaces the ramp.
+    pub keyed: Option<(Anim<f64>, f64)>,
 }
 
 impl Ramp {
     /// The same value on every frame.
     pub fn constant(v: f64) -> Self {
-        Ramp { start: v, end: v }
+        Ramp { start: v, end: v, keyed: None }
     }
 
-    /// The value at frame `f` of `frames`.
-    pub fn at(&self, f: usize, frames: usize) -> f64 {
-        if frames <= 1 { self.start } else { self.start + (self.end - self.start) * f as f64 / (frames - 1) as f64 }
+    /// A linear ramp from `start` to `end`.
+    pub fn linear(start: f64, end: f64) -> Self {
+        Ramp { start, end, keyed: None }
+    }
+
+    /// The value at frame `f` of `frames`; a keyed control's errors name its port and the frame.
+    pub fn at(&self, f: usize, frames: usize) -> Result<f64, NodeError> {
+        if let Some((anim, fps)) = &self.keyed {
+            return anim.at(f as f64, *fps);
+        }
+        Ok(if frames <= 1 { self.start } else { self.start + (self.end - self.start) * f as f64 / (frames - 1) as f64 })
     }
 }
 
@@ -203,7 +214,7 @@ impl BendShape {
 /// The §5.1 controls, each a per-frame ramp: `bend` is added to the path parameters, `height`
 /// multiplies the height, `width` the width parameters and `scale` all three (path, width and
 /// height: the whole flame grows about its base).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Controls {
     /// Offset on the path parameters.
     pub bend: Ramp,
@@ -273,10 +284,10 @@ pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls
             s.step(row);
         }
         let (bend, hf, wf, sf) = (
-            controls.bend.at(f, frames),
-            controls.height.at(f, frames),
-            controls.width.at(f, frames),
-            controls.scale.at(f, frames),
+            controls.bend.at(f, frames)?,
+            controls.height.at(f, frames)?,
+            controls.width.at(f, frames)?,
+            controls.scale.at(f, frames)?,
         );
         for (j, &c) in r.path.iter().enumerate() {
             row[c] = (row[c] + bend * bend_w[j]) * sf;
@@ -296,20 +307,20 @@ pyrograph_core::ports! {
     /// `_end` value on the last frame when `ramp` is on. [`ControlPorts::controls`] gives the
     /// [`Controls`] of a cook.
     pub struct ControlPorts {
-        /// Offset added to the path parameters (§5.1: a bent flame, e.g. wind).
+        /// Offset added to the path parameters (§5.1: a bent flame, e.g. wind); keys or an expression are sampled at every output frame.
         #[range(-1.0e6, 1.0e6)]
-        bend: f64 = 0.0,
+        bend: Anim<f64> = Anim::constant(0.0),
         /// How the bend offset grows from path_0 (base) to the last path sample: same everywhere, linearly or quadratically.
         bend_shape: BendShape = BendShape::Quadratic,
         /// Factor on the flame height (§5.1).
         #[range(0.0, 100.0)]
-        height: f64 = 1.0,
+        height: Anim<f64> = Anim::constant(1.0),
         /// Factor on the width parameters (§5.1).
         #[range(0.0, 100.0)]
-        width: f64 = 1.0,
+        width: Anim<f64> = Anim::constant(1.0),
         /// Factor on the whole flame: path, width and height (§5.1).
         #[range(0.0, 100.0)]
-        scale: f64 = 1.0,
+        scale: Anim<f64> = Anim::constant(1.0),
         /// Add the learned observation noise to each frame (the footage's flicker, and its statistics); off: the smooth process x_t.
         observation_noise: bool = true,
         /// Ramp every control linearly from its value to its `_end` value over the frames.
@@ -330,23 +341,33 @@ pyrograph_core::ports! {
 }
 
 impl ControlPorts {
-    /// The [`Controls`] these ports describe; a value that is not finite is an error naming its port.
-    pub fn controls(&self) -> Result<Controls, NodeError> {
+    /// The [`Controls`] these ports describe, for a series at `fps`; a value that is not finite is
+    /// an error naming its port, and so is a keyed control with `ramp` on (the keys are the ramp).
+    pub fn controls(&self, fps: f64) -> Result<Controls, NodeError> {
         let finite = |v: f64, port: &str| {
             if v.is_finite() { Ok(v) } else { Err(NodeError::port(port, format!("must be finite, got {v}"))) }
         };
         // The `_end` value is read only when ramping: otherwise the control is constant.
-        let pair = |start: (f64, &str), end: (f64, &str)| -> Result<Ramp, NodeError> {
-            let start = finite(start.0, start.1)?;
+        let pair = |start: (&Anim<f64>, &str), end: (f64, &str)| -> Result<Ramp, NodeError> {
+            if start.0.is_animated() {
+                if self.ramp {
+                    return Err(NodeError::port(
+                        start.1,
+                        format!("is keyed, and ramp is on: the keys already move it; turn ramp off or remove {}", end.1),
+                    ));
+                }
+                return Ok(Ramp { keyed: Some((start.0.clone(), fps)), ..Ramp::constant(*start.0.value()) });
+            }
+            let start = finite(*start.0.value(), start.1)?;
             let end = if self.ramp { finite(end.0, end.1)? } else { start };
-            Ok(Ramp { start, end })
+            Ok(Ramp::linear(start, end))
         };
         Ok(Controls {
-            bend: pair((self.bend, port!(ControlPorts, bend)), (self.bend_end, port!(ControlPorts, bend_end)))?,
+            bend: pair((&self.bend, port!(ControlPorts, bend)), (self.bend_end, port!(ControlPorts, bend_end)))?,
             bend_shape: self.bend_shape,
-            height: pair((self.height, port!(ControlPorts, height)), (self.height_end, port!(ControlPorts, height_end)))?,
-            width: pair((self.width, port!(ControlPorts, width)), (self.width_end, port!(ControlPorts, width_end)))?,
-            scale: pair((self.scale, port!(ControlPorts, scale)), (self.scale_end, port!(ControlPorts, scale_end)))?,
+            height: pair((&self.height, port!(ControlPorts, height)), (self.height_end, port!(ControlPorts, height_end)))?,
+            width: pair((&self.width, port!(ControlPorts, width)), (self.width_end, port!(ControlPorts, width_end)))?,
+            scale: pair((&self.scale, port!(ControlPorts, scale)), (self.scale_end, port!(ControlPorts, scale_end)))?,
             observation_noise: self.observation_noise,
         })
     }
@@ -382,7 +403,7 @@ pyrograph_core::node! {
 
 impl Cook for ArpSample {
     fn cook(self, ctx: &CookCtx) -> Result<ArpSampleOut, NodeError> {
-        let controls = self.controls.controls()?;
+        let controls = self.controls.controls(self.model.fps)?;
         ctx.check_cancel()?;
         let out = sample(&self.model, self.frames, self.warmup, self.seed, &controls)?;
         Ok(ArpSampleOut { params: Arc::new(out) })

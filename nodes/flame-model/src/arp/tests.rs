@@ -196,9 +196,9 @@ fn controls_bend_the_path_and_scale_height_and_width() {
     let plain = sample(&m, 5, 0, 1, &Controls::default()).unwrap();
     assert!(plain.data.chunks(5).all(|r| r == [0.0, 0.0, 0.0, 2.0, 10.0]), "{:?}", plain.data);
     let c = Controls {
-        bend: Ramp { start: 0.0, end: 4.0 },
+        bend: Ramp::linear(0.0, 4.0),
         height: Ramp::constant(2.0),
-        width: Ramp { start: 1.0, end: 3.0 },
+        width: Ramp::linear(1.0, 3.0),
         ..Controls::default()
     };
     let out = sample(&m, 5, 0, 1, &c).unwrap();
@@ -208,6 +208,35 @@ fn controls_bend_the_path_and_scale_height_and_width() {
     let c =
         Controls { scale: Ramp::constant(0.5), bend: Ramp::constant(2.0), bend_shape: BendShape::Uniform, ..Controls::default() };
     assert_eq!(sample(&m, 1, 0, 1, &c).unwrap().data, [1.0, 1.0, 1.0, 1.0, 5.0]);
+}
+
+#[test]
+fn a_keyed_bend_follows_its_keys_frame_by_frame() {
+    use pyrograph_core::declare::{Anim, Port};
+    let mut m = diagonal_model(&[0.5, 0.5, 0.5, 0.5, 0.5]);
+    m.names = ["path_0", "path_1", "path_2", "width_0", "height"].iter().map(|s| s.to_string()).collect();
+    m.b = vec![0.0; 25];
+    let keys = pyrograph_core::ParamValue::parse_cli("keys([(0, 0.0, constant), (3, 4.0, constant)])");
+    let animated = pyrograph_core::anim::from_param(&keys, pyrograph_core::anim::Shape::Float).unwrap().unwrap();
+    let bend = Anim::<f64>::from_value(&Value::Anim(Arc::new(animated))).unwrap();
+    let keyed = Controls {
+        bend: Ramp { keyed: Some((bend.clone(), 24.0)), ..Ramp::constant(0.0) },
+        bend_shape: BendShape::Uniform,
+        ..Controls::default()
+    };
+    let (plain, out) = (sample(&m, 6, 0, 1, &Controls::default()).unwrap(), sample(&m, 6, 0, 1, &keyed).unwrap());
+    for f in 0..6 {
+        let (a, b) = (plain.row(f).unwrap(), out.row(f).unwrap());
+        let want = if f < 3 { 0.0 } else { 4.0 };
+        for c in 0..3 {
+            assert_eq!(b[c] - a[c], want, "frame {f}, path_{c}");
+        }
+        assert_eq!(a[3..], b[3..], "frame {f}: width and height are not bent");
+    }
+    // Keys and the linear ramp both move the control: asking for both is an error naming it.
+    let ports = ControlPorts { bend, ramp: true, ..ControlPorts::default() };
+    let e = ports.controls(24.0).unwrap_err().to_string();
+    assert!(e.contains("'bend'") && e.contains("ramp is on"), "{e}");
 }
 
 fn cook_values(desc: &NodeDesc, set: &[(&str, Value)]) -> Vec<Value> {
@@ -262,8 +291,8 @@ proptest! {
 
     #[test]
     fn ramps_hit_their_ends(start in -10.0f64..10.0, end in -10.0f64..10.0, frames in 2usize..500) {
-        let r = Ramp { start, end };
-        prop_assert_eq!(r.at(0, frames), start);
-        prop_assert!((r.at(frames - 1, frames) - end).abs() < 1e-12);
+        let r = Ramp::linear(start, end);
+        prop_assert_eq!(r.at(0, frames).unwrap(), start);
+        prop_assert!((r.at(frames - 1, frames).unwrap() - end).abs() < 1e-12);
     }
 }

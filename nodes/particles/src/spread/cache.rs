@@ -37,11 +37,20 @@ impl SpreadSource {
 
     /// `finish` of the simulation at frame `index`.
     fn with_spread<R>(&self, index: usize, ctx: &CookCtx, finish: impl FnOnce(&Spread) -> R) -> Result<R, NodeError> {
-        let wind = spread_wind(&self.wind);
-        let dt = 1.0 / (self.fps * self.substeps as f32);
-        let step = |sim: &mut Spread, _| {
-            for _ in 0..self.substeps {
-                sim.step(dt, &wind);
+        let still = spread_wind(&self.wind);
+        let (fps, substeps) = (f64::from(self.fps), self.substeps);
+        let dt = 1.0 / (self.fps * substeps as f32);
+        // Stepping to frame `frame` covers (frame − 1, frame]; each sub-step samples the animated
+        // K and wind at its start, so a gust or a change of K reaches the front when it happens.
+        let step = |sim: &mut Spread, frame: usize| {
+            for s in 0..substeps {
+                let t = frame as f64 - 1.0 + s as f64 / substeps as f64;
+                sim.follow(t, fps)?;
+                if self.wind.animation.is_some() {
+                    sim.step(dt, &spread_wind(&self.wind.at_frame(t, fps)?));
+                } else {
+                    sim.step(dt, &still);
+                }
             }
             Ok(())
         };

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
-use pyrograph_core::port;
+use pyrograph_core::{NodeError, port};
 use rayon::prelude::*;
 
 use super::spread_params::SpreadParams;
@@ -61,6 +61,8 @@ pub struct Spread {
     d_t: f32,
     /// The flame lifetime l_f in seconds.
     lifetime: f32,
+    /// The global time scale K in use: the constant, or the animated K at the current step.
+    k: f32,
     pending: Vec<Ignition>,
     loops: Vec<Vec<ControlPoint>>,
     roots: Vec<FlameRoot>,
@@ -102,7 +104,7 @@ pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), SpreadE
     for (name, v) in [
         (port!(SpreadParams, q_o), p.q_o),
         (port!(SpreadParams, q_c), p.q_c),
-        (port_k, p.K),
+        (port_k, *p.K.value()),
         (port!(SpreadParams, d_t), d_t),
         (port_s, p.d_s),
         (port_d, p.d_d),
@@ -112,7 +114,7 @@ pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), SpreadE
             return Err(param_error(name, format!("must be a finite number ≥ 0, got {v}")));
         }
     }
-    if p.K <= 0.0 {
+    if *p.K.value() <= 0.0 {
         return Err(param_error(port_k, "the global time scale K must be positive"));
     }
     for (name, v) in [(port_s, p.d_s), (port_d, p.d_d)] {
@@ -153,11 +155,13 @@ impl Spread {
         }
         let mut pending = ignitions;
         pending.sort_by(|a, b| b.time.total_cmp(&a.time));
+        let k = *params.K.value();
         let mut s = Spread {
             surface,
             params,
             d_t,
             lifetime,
+            k,
             pending,
             loops: Vec::new(),
             roots: Vec::new(),
@@ -228,7 +232,16 @@ impl Spread {
         let tangential = (wind - n * wind.dot(n)).normalize_or_zero();
         let a_c = h.dot(tangential).max(0.0);
         let q = self.params.q_o + a_c * self.params.q_c;
-        self.surface.curvature(face, p, self.d_t) * q / self.params.K
+        self.surface.curvature(face, p, self.d_t) * q / self.k
+    }
+
+    /// Samples the animated parameters (K) at `frame` (fractional for a sub-step) of a clip at
+    /// `fps`, for the steps that follow. Errors name the port and the frame.
+    pub fn follow(&mut self, frame: f64, fps: f64) -> Result<(), NodeError> {
+        if self.params.K.is_animated() {
+            self.k = self.params.K.at(frame, fps)?;
+        }
+        Ok(())
     }
 
     /// Advances the spread by `dt` seconds in the wind `wind(p)` (the external wind u∞).

@@ -1,5 +1,5 @@
 //! The `particles.fire_spread` node: its ports (the [`SpreadParams`] group is the spread's
-//! parameters), the `ignite` text, and the spread's errors mapped to the ports they are about.
+//! parameters), the `ignite` points, and the spread's errors mapped to the ports they are about.
 
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
@@ -7,6 +7,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
+use pyrograph_core::value::{Place, Points};
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::SpreadSource;
@@ -32,8 +33,8 @@ pyrograph_core::node! {
         mesh: Arc<Mesh>,
         /// External wind: convection −k_g g plus w_L (particles.wind_field).
         wind: Arc<WindField> = Arc::new(WindField::default()),
-        /// Ignition points separated by ';': 'x y z' (nearest surface point) or 'face F [b0 b1 b2]', optional '@ seconds'.
-        ignite: String = "face 0".to_string(),
+        /// Ignition points: `(x, y, z)` (the nearest surface point) or `face(F[, (b0, b1, b2)])`, each at time 0 or as `(seconds, point)`.
+        ignite: Arc<Points> = Arc::new(Points::face(0)),
         /// Largest distance from an ignition position to the surface.
         #[range(0.0, 1e6)]
         snap: f32 = 0.05,
@@ -79,77 +80,38 @@ fn port_error(e: SpreadError) -> NodeError {
     }
 }
 
-/// Parses the `ignite` text: entries separated by `;`, each `x y z` (the nearest surface point)
-/// or `face F b0 b1 b2` (a face and barycentric point), optionally followed by `@ T` (seconds).
-/// A position farther than `snap` from the surface is an error.
-pub fn parse_ignitions(text: &str, surface: &Surface, snap: f32) -> Result<Vec<Ignition>, NodeError> {
+/// Resolves the `ignite` points on the surface: a position snaps to the nearest surface point
+/// (an error farther than `snap`), a face must exist. Errors name the point, counted from 1.
+pub fn parse_ignitions(points: &Points, surface: &Surface, snap: f32) -> Result<Vec<Ignition>, NodeError> {
     let err = |m: String| NodeError::port(port!(FireSpread, ignite), m);
-    let mut out = Vec::new();
-    for (k, entry) in text.split(';').map(str::trim).filter(|s| !s.is_empty()).enumerate() {
-        let (body, time) = match entry.split_once('@') {
-            Some((b, t)) => {
-                let t: f32 = t
-                    .trim()
-                    .parse()
-                    .map_err(|_| err(format!("ignition {} ('{entry}'): time '{}' is not a number", k + 1, t.trim())))?;
-                if !t.is_finite() || t < 0.0 {
-                    return Err(err(format!("ignition {} ('{entry}'): time must be ≥ 0", k + 1)));
+    let mut out = Vec::with_capacity(points.points().len());
+    for (k, (time, place)) in points.points().iter().enumerate() {
+        // The spread computes in f32; the document holds f64.
+        let time = *time as f32;
+        match place {
+            Place::Face(face, bary) => {
+                if *face as usize >= surface.len() {
+                    return Err(err(format!("point {}: face {face} is past the mesh's {} faces", k + 1, surface.len())));
                 }
-                (b.trim(), t)
+                let bary = bary.map_or([1.0 / 3.0; 3], |b| b.map(|c| c as f32));
+                out.push(Ignition { face: *face, bary, time });
             }
-            None => (entry, 0.0),
-        };
-        let words: Vec<&str> = body.split([' ', ',', '\t']).filter(|w| !w.is_empty()).collect();
-        let nums = |ws: &[&str]| -> Result<Vec<f32>, NodeError> {
-            ws.iter()
-                .map(|w| {
-                    w.parse::<f32>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| err(format!("ignition {} ('{entry}'): '{w}' is not a finite number", k + 1)))
-                })
-                .collect()
-        };
-        if words.first() == Some(&"face") {
-            let face: u32 = words
-                .get(1)
-                .and_then(|w| w.parse().ok())
-                .ok_or_else(|| err(format!("ignition {} ('{entry}'): 'face' needs a face index", k + 1)))?;
-            let b = nums(&words[2..])?;
-            let bary = match b.len() {
-                0 => [1.0 / 3.0; 3],
-                2 => [1.0 - b[0] - b[1], b[0], b[1]],
-                3 => [b[0], b[1], b[2]],
-                m => {
-                    return Err(err(format!("ignition {} ('{entry}'): needs 0, 2 or 3 barycentric coordinates, got {m}", k + 1)));
+            Place::At(p) => {
+                let p = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+                let (face, bary, dist) = surface.nearest(p);
+                if dist > snap {
+                    return Err(err(format!(
+                        "point {} at ({}, {}, {}) is off the mesh: the nearest surface point (face {face}) is {dist:.4} away, \
+                         more than snap = {snap}; move it onto the surface or raise snap",
+                        k + 1,
+                        p.x,
+                        p.y,
+                        p.z
+                    )));
                 }
-            };
-            if face as usize >= surface.len() {
-                return Err(err(format!("ignition {}: face {face} is past the mesh's {} faces", k + 1, surface.len())));
+                out.push(Ignition { face, bary, time });
             }
-            out.push(Ignition { face, bary, time });
-        } else {
-            let p = nums(&words)?;
-            if p.len() != 3 {
-                return Err(err(format!("ignition {} ('{entry}'): needs 'x y z' or 'face F [b0 b1 b2]'", k + 1)));
-            }
-            let p = Vec3::new(p[0], p[1], p[2]);
-            let (face, bary, dist) = surface.nearest(p);
-            if dist > snap {
-                return Err(err(format!(
-                    "ignition {} at ({}, {}, {}) is off the mesh: the nearest surface point (face {face}) is {dist:.4} away, \
-                     more than snap = {snap}; move it onto the surface or raise snap",
-                    k + 1,
-                    p.x,
-                    p.y,
-                    p.z
-                )));
-            }
-            out.push(Ignition { face, bary, time });
         }
-    }
-    if out.is_empty() {
-        return Err(err("no ignition point: give 'x y z' or 'face F b0 b1 b2' (several separated by ';')".into()));
     }
     Ok(out)
 }

@@ -4,6 +4,8 @@
 // The port `K` is Perry's global time scale K; the field carries its name.
 #![allow(non_snake_case)]
 
+use pyrograph_core::declare::Anim;
+
 pyrograph_core::ports! {
     /// Parameters of the spread (Perry 1994 §3.3–3.4, Table 3.1): the ports of
     /// `particles.fire_spread` after its inputs, frames, fps and substeps.
@@ -15,9 +17,9 @@ pyrograph_core::ports! {
         /// Concurrent-flow heat flux q_c (footnote 10: 0.13).
         #[range(0.0, 10.0)]
         q_c: f32 = 0.13,
-        /// Global time scale K of eq. 3.4 (Table 3.1).
+        /// Global time scale K of eq. 3.4 (Table 3.1): lower spreads faster; sampled at every step.
         #[range(0.004, 0.4)]
-        K: f32 = 0.4,
+        K: Anim<f32> = Anim::constant(0.4),
         /// Curvature distance d_t (Table 3.1).
         #[range(0.01, 0.5)]
         d_t: f32 = 0.05,

@@ -3,6 +3,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use pyrograph_core::NodeError;
 use pyrograph_core::declare::Declared;
+use pyrograph_core::value::Points;
 
 use super::*;
 use crate::mesh::{build_mesh, cube, cylinder, plane};
@@ -36,7 +37,7 @@ fn run(s: &mut Spread, seconds: f32, dt: f32, wind: &(dyn Fn(Vec3) -> Vec3 + Syn
 fn on_a_flat_plane_without_wind_the_boundary_is_a_circle_growing_linearly() {
     let surf = surface(&plane(4.0, 16));
     let p = SpreadParams { d_s: 0.05, double_burn: false, ..SpreadParams::default() };
-    let v = p.q_o / p.K;
+    let v = p.q_o / p.K.value();
     let mut s = Spread::new(surf.clone(), vec![at(&surf, Vec3::new(0.1, 0.0, -0.07))], p, FPS).unwrap();
     let centre = Vec3::new(0.1, 0.0, -0.07);
     let mut radii = Vec::new();
@@ -286,15 +287,21 @@ fn dead_flames_leave_char_and_the_state_is_deterministic() {
 #[test]
 fn ignitions_parse_snap_and_report_errors_naming_the_port() {
     let surf = surface(&cube(1.0, 1));
-    let ig = parse_ignitions("0.5 0 0; face 3 0.2 0.3 0.5 @ 1.5", &surf, 0.01).unwrap();
+    let points = |text: &str| Points::from_param(&pyrograph_core::ParamValue::parse_cli(text)).unwrap();
+    let ig = parse_ignitions(&points("[(0.5, 0, 0), (1.5, face(3, (0.2, 0.3, 0.5)))]"), &surf, 0.01).unwrap();
     assert_eq!(ig.len(), 2);
     assert!((surf.point(ig[0].face, ig[0].bary) - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-5);
-    assert_eq!((ig[1].face, ig[1].time), (3, 1.5));
-    let e = parse_ignitions("3 0 0", &surf, 0.05).unwrap_err();
-    assert!(matches!(&e, NodeError::Port { port, message } if port == "ignite" && message.contains("off the mesh")), "{e}");
-    assert!(parse_ignitions("face 99", &surf, 0.05).is_err());
-    assert!(parse_ignitions("1 x 2", &surf, 0.05).is_err());
-    assert!(parse_ignitions(" ; ", &surf, 0.05).is_err());
+    assert_eq!((ig[1].face, ig[1].time, ig[1].bary), (3, 1.5, [0.2, 0.3, 0.5]));
+    let e = parse_ignitions(&points("[(0.5, 0, 0), (3, 0, 0)]"), &surf, 0.05).unwrap_err();
+    assert!(
+        matches!(&e, NodeError::Port { port, message } if port == "ignite" && message.contains("point 2 at (3, 0, 0) is off the mesh")),
+        "{e}"
+    );
+    let e = parse_ignitions(&points("[face(99)]"), &surf, 0.05).unwrap_err();
+    assert!(e.to_string().contains("point 1: face 99 is past the mesh's 12 faces"), "{e}");
+    // The centre of a face, when no coordinates are given.
+    let centre = parse_ignitions(&Points::face(2), &surf, 0.05).unwrap();
+    assert_eq!(centre[0].bary, [1.0 / 3.0; 3]);
     // A delayed ignition starts its own ring when its time comes.
     let mut s = Spread::new(surf, ig, SpreadParams::default(), FPS).unwrap();
     assert_eq!(s.loops().len(), 1);
@@ -378,4 +385,47 @@ fn table_3_1_ranges_are_the_port_ranges() {
     assert_eq!(range("d_t"), Some((0.01, 0.5)));
     assert_eq!(range("lifetime"), Some((1.0, 1000.0)));
     assert_eq!(range("points").map(|r| r.0), Some(8.0));
+}
+
+/// The spread states of frames `0..frames` of a cube ignited on its side, with `k` as K and
+/// `wind` as the wind field's parameters.
+fn spread_clip(k: &str, wind: &str, frames: usize) -> Vec<Arc<crate::types::SpreadState>> {
+    use pyrograph_core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, Registry, Value};
+    let mut registry = Registry::with_builtins();
+    crate::register(&mut registry);
+    let doc = GraphDoc::from_ron(&format!(
+        r#"(version: 4, nodes: {{
+            "cube": (type: "particles.mesh_load", params: {{"source": "cube"}}),
+            "wind": (type: "particles.wind_field", params: {{{wind}}}),
+            "spread": (type: "particles.fire_spread", params: {{"ignite": [(0.5, 0.1, 0.0)], "frames": {frames}, "K": {k}, "d_s": 0.05}}),
+        }}, edges: [("cube.mesh", "spread.mesh"), ("wind.wind", "spread.wind")])"#
+    ))
+    .unwrap();
+    let graph =
+        Graph::build(&doc, &registry, std::path::Path::new("."), &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let ctx = CookCtx::new();
+    let Value::Clip(clip) = Evaluator::new().output(&graph, "spread.spread", &ctx).unwrap() else { panic!("a clip") };
+    (0..frames).map(|i| clip.get(i, &ctx).unwrap().downcast::<crate::types::SpreadState>().unwrap()).collect()
+}
+
+#[test]
+fn an_animated_k_and_wind_reach_the_front_at_the_step_they_change() {
+    let wind = r#""large_scale": "constant", "wind": (0.0, 0.0, 0.0)"#;
+    let steady = spread_clip("0.4", wind, 30);
+    // K drops to a quarter (four times the speed) from frame 12 on.
+    let faster = spread_clip("keys([(0, 0.4, constant), (12, 0.1)])", wind, 30);
+    // Stepping to frame f samples at f − 1: frames up to 12 are the steady spread's, bit for bit.
+    for f in 0..=12 {
+        assert!(steady[f] == faster[f], "frame {f}, before K changes");
+    }
+    assert!(steady[13] != faster[13], "frame 13 follows the new K");
+    let burnt = |s: &crate::types::SpreadState| s.flames_dropped;
+    println!("flames dropped by frame 29: {} steady, {} with K keyed down", burnt(&steady[29]), burnt(&faster[29]));
+    assert!(burnt(&faster[29]) > burnt(&steady[29]) * 3 / 2, "{} vs {}", burnt(&faster[29]), burnt(&steady[29]));
+    // A wind keyed to blow from frame 12 changes nothing before it blows.
+    let gust = spread_clip("0.4", r#""large_scale": "constant", "wind": (0, 0, keys([(0, 0.0, constant), (12, 3.0)]))"#, 16);
+    for f in 0..=12 {
+        assert!(steady[f] == gust[f], "frame {f}, before the gust");
+    }
+    assert!(steady[14] != gust[14], "the gust moves the front");
 }

@@ -1,5 +1,5 @@
-//! Keyframing in the inspector and under the preview: the key toggle beside Float, Int, Vec2,
-//! Vec3 and Color parameters (filled diamond: a key at the current frame; hollow: animated, no key here; dim
+//! Keyframing in the inspector and under the preview: the key toggle beside Float, Int, Bool,
+//! Vec2, Vec3 and Color parameters (filled diamond: a key at the current frame; hollow: animated, no key here; dim
 //! hollow: constant), the row of an animated parameter (its value at the current frame and its
 //! keys or expression as text), and the strip of key ticks under the frame scrubber.
 
@@ -165,7 +165,7 @@ impl EditorApp {
                 return;
             }
             let sampled = self.editor.scalar_at(node, port, frame).ok();
-            let sampled = sampled.map(|v| if port.ty == PortType::Int { v.round() } else { v });
+            let sampled = sampled.map(|v| if matches!(port.ty, PortType::Int | PortType::Bool) { v.round() } else { v });
             if state == KeyState::Constant {
                 if ui.button("Animate with an expression").clicked() {
                     let text = sampled.map_or("0".into(), value_text);
@@ -180,7 +180,11 @@ impl EditorApp {
             } else if let Some(v) = sampled
                 && ui.button(format!("Stop animating (keep {} from frame {})", value_text(v), frame_text(frame))).clicked()
             {
-                let constant = if port.ty == PortType::Int { ParamValue::Int(v as i64) } else { ParamValue::Float(v) };
+                let constant = match port.ty {
+                    PortType::Int => ParamValue::Int(v as i64),
+                    PortType::Bool => ParamValue::Bool(v > 0.5),
+                    _ => ParamValue::Float(v),
+                };
                 let _ = self.editor.set_param(node, &port.name, constant);
                 self.editor.seal();
                 ui.close();
@@ -210,7 +214,7 @@ impl EditorApp {
                         scalar: Vec::new(),
                     });
                     t.lines.push(format!("{name} @ {} = {}", frame_text(k.frame), value_text(k.value)));
-                    if p.is_scalar() {
+                    if p.is_scalar() || p.port.ty == PortType::Bool {
                         t.scalar.push((p.port.name.clone(), k.frame));
                     }
                 }

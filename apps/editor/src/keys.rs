@@ -71,9 +71,12 @@ fn as_f64(pv: &ParamValue) -> Option<f64> {
     }
 }
 
-/// The value of a constant scalar parameter.
+/// The value of a constant scalar parameter (true/false as 1 and 0).
 pub fn constant(pv: &ParamValue) -> Option<f64> {
-    as_f64(pv)
+    match pv {
+        ParamValue::Bool(b) => Some(if *b { 1.0 } else { 0.0 }),
+        other => as_f64(other),
+    }
 }
 
 /// Whether `pv` is an expression, `expr("…")`.
@@ -263,10 +266,15 @@ pub fn set_tangent(pv: &ParamValue, index: usize, slope: f64, int: bool) -> Resu
     if !slope.is_finite() {
         return Err(format!("a tangent's slope must be a finite number, got {slope}"));
     }
+    set_interp(pv, index, ParamValue::Call("tangent".into(), Box::new(ParamValue::Float(slope))), int)
+}
+
+/// `pv` with key `index` given the interpolation `interp` (`constant`, `tangent(0.1)`, …).
+pub fn set_interp(pv: &ParamValue, index: usize, interp: ParamValue, int: bool) -> Result<ParamValue, String> {
     let mut list = KeyList::read(pv).ok_or("the parameter has no keys")?;
     let n = list.keys.len();
     let key = list.keys.get_mut(index).ok_or_else(|| format!("there is no key {} (the curve has {n})", index + 1))?;
-    key.interp = Some(ParamValue::Call("tangent".into(), Box::new(ParamValue::Float(slope))));
+    key.interp = Some(interp);
     key.written = None;
     Ok(list.to_param(int))
 }

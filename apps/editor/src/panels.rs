@@ -76,7 +76,7 @@ impl EditorApp {
                 }
                 let set = nd.params.get(&port.name).cloned();
                 use pyrograph_frontend::core::PortType as T;
-                if matches!(port.ty, T::Float | T::Int | T::Vec2 | T::Vec3 | T::Color) {
+                if matches!(port.ty, T::Float | T::Int | T::Bool | T::Vec2 | T::Vec3 | T::Color) {
                     self.key_toggle_cell(ui, &id, port, set.as_ref());
                 } else {
                     ui.label("");

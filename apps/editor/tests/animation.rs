@@ -94,7 +94,7 @@ fn key_edits_are_single_undo_steps_and_out_of_range_values_are_refused() {
     assert_eq!(ed.copy_keys("bloom", "strength", &[0, 1]), 2);
     ed.paste_keys("bloom", "strength", 20.0).unwrap();
     assert_eq!(keys(&ed), [(0.0, 0.4), (10.0, 1.5), (20.0, 0.4), (30.0, 1.5)]);
-    assert!(ed.toggle_key("bloom", "tint", 0.0).unwrap_err().contains("Float and Int"));
+    assert!(ed.toggle_key("bloom", "tint_color", 0.0).unwrap_err().contains("keys are set on Float, Int and Bool"));
     ed.set_param("bloom", "strength", ParamValue::parse_cli("expr(0.5 + 0.1 * sin(time))")).unwrap();
     assert!(ed.toggle_key("bloom", "strength", 0.0).unwrap_err().contains("expression"));
     assert!(ed.validation().diagnostics.is_empty(), "an expression checks too: {:?}", ed.validation().diagnostics);
@@ -329,4 +329,25 @@ fn a_selected_keys_tangent_handle_drags_its_slope_in_one_undo_step() {
     h.state_mut().editor.seal();
     let e = h.state_mut().editor.set_key_tangent("bloom", "strength", 1, 5.0).unwrap_err();
     assert!(e.contains("outside the range 0..=4"), "{e}");
+}
+
+#[test]
+fn a_switch_is_keyed_in_steps_and_its_last_key_deleted_leaves_true_or_false() {
+    let mut ed = editor();
+    ed.auto_cook = false;
+    let tint = |ed: &Editor| ed.doc().node("bloom").unwrap().params.get("tint").cloned();
+    assert!(ed.toggle_key("bloom", "tint", 0.0).unwrap());
+    assert_eq!(tint(&ed).unwrap().to_string().replace(' ', ""), "keys([(0,0,constant)])");
+    assert!(ed.undo(), "one step");
+    assert_eq!(tint(&ed), None);
+    assert!(ed.redo());
+    assert_eq!(ed.set_key("bloom", "tint", 12.0, 1.0).unwrap(), 1);
+    assert!(ed.validation().diagnostics.is_empty(), "{:?}", ed.validation().diagnostics);
+    // Off until 12, on from 12: the constant interpolation steps.
+    let port = ed.scalar_port("bloom", "tint").unwrap();
+    assert_eq!((ed.scalar_at("bloom", &port, 11.0).unwrap(), ed.scalar_at("bloom", &port, 12.0).unwrap()), (0.0, 1.0));
+    ed.delete_key("bloom", "tint", 0).unwrap();
+    ed.delete_key("bloom", "tint", 0).unwrap();
+    assert_eq!(tint(&ed), Some(ParamValue::Bool(true)), "the last key held true");
+    assert!(ed.validation().diagnostics.is_empty(), "{:?}", ed.validation().diagnostics);
 }

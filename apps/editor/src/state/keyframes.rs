@@ -1,4 +1,4 @@
-//! Keyframe edits of Float and Int parameters: setting, toggling, moving, deleting, copying and
+//! Keyframe edits of Float, Int and Bool parameters: setting, toggling, moving, deleting, copying and
 //! pasting keys, each one undo step (a drag of a key, many moves, is one step until sealed).
 //! The document edits themselves are [`crate::keys`]; here they are checked against the port
 //! (its range, and that the keys still make a curve) before they reach the document.
@@ -30,6 +30,19 @@ impl AnimParam {
     /// Its keys, for a keyed Float or Int parameter.
     pub fn keys(&self) -> Option<KeyList> {
         if self.is_scalar() { KeyList::read(&self.value) } else { None }
+    }
+}
+
+/// Whether key values of `port` are whole numbers (Int, and Bool as 0 and 1).
+fn whole(port: &PortDesc) -> bool {
+    matches!(port.ty, PortType::Int | PortType::Bool)
+}
+
+/// A constant left by deleting the last key, in the port's kind (a Bool's 0 or 1 as false or true).
+fn as_port_constant(port: &PortDesc, value: ParamValue) -> ParamValue {
+    match (&port.ty, keys::constant(&value)) {
+        (PortType::Bool, Some(v)) if !value.is_animated() => ParamValue::Bool(v > 0.5),
+        _ => value,
     }
 }
 
@@ -69,8 +82,8 @@ impl Editor {
         let desc = self.desc(node).ok_or_else(|| format!("node '{node}' has no known parameters"))?;
         let port = desc.inputs.iter().find(|p| p.name == param).ok_or_else(|| format!("'{node}' has no parameter '{param}'"))?;
         match port.ty {
-            PortType::Float | PortType::Int => Ok(port.clone()),
-            ref other => Err(format!("{node}.{param} is a {other} parameter: keys are set on Float and Int parameters")),
+            PortType::Float | PortType::Int | PortType::Bool => Ok(port.clone()),
+            ref other => Err(format!("{node}.{param} is a {other} parameter: keys are set on Float, Int and Bool parameters")),
         }
     }
 
@@ -106,8 +119,16 @@ impl Editor {
             return Err(format!("{node}.{param}: an expression drives it; stop animating it before setting keys"));
         }
         let mut value = self.scalar_at(node, &port, frame)?;
-        if port.ty == PortType::Int {
+        if whole(&port) {
             value = value.round();
+        }
+        if port.ty == PortType::Bool {
+            // A switch steps from key to key, as Houdini's toggles do: one edit, one undo step.
+            let at = |e: String| format!("{node}.{param}: {e}");
+            let (keyed, i) = keys::set_key(&current, frame, value, true).map_err(at)?;
+            let stepped = keys::set_interp(&keyed, i, ParamValue::String("constant".into()), true).map_err(at)?;
+            self.commit_keys(node, &port, stepped, None)?;
+            return Ok(true);
         }
         self.set_key_inner(node, param, frame, value)?;
         Ok(true)
@@ -122,8 +143,7 @@ impl Editor {
     fn set_key_inner(&mut self, node: &str, param: &str, frame: f64, value: f64) -> Result<usize, String> {
         let port = self.scalar_port(node, param)?;
         let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
-        let (new, i) =
-            keys::set_key(&current, frame, value, port.ty == PortType::Int).map_err(|e| format!("{node}.{param}: {e}"))?;
+        let (new, i) = keys::set_key(&current, frame, value, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
         self.commit_keys(node, &port, new, None)?;
         self.set_status(format!("key {}: {node}.{param} @ {} = {}", i + 1, frame_text(frame), value_text(value)), false);
         Ok(i)
@@ -140,8 +160,7 @@ impl Editor {
     fn move_key_inner(&mut self, node: &str, param: &str, index: usize, frame: f64, value: f64) -> Result<usize, String> {
         let port = self.scalar_port(node, param)?;
         let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
-        let (new, i) = keys::move_key(&current, index, frame, value, port.ty == PortType::Int)
-            .map_err(|e| format!("{node}.{param}: {e}"))?;
+        let (new, i) = keys::move_key(&current, index, frame, value, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
         self.commit_keys(node, &port, new, Some(&format!("keys:{node}.{param}")))?;
         Ok(i)
     }
@@ -152,8 +171,7 @@ impl Editor {
         let r = (|| {
             let port = self.scalar_port(node, param)?;
             let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
-            let new = keys::set_tangent(&current, index, slope, port.ty == PortType::Int)
-                .map_err(|e| format!("{node}.{param}: {e}"))?;
+            let new = keys::set_tangent(&current, index, slope, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
             self.commit_keys(node, &port, new, Some(&format!("tangent:{node}.{param}")))
         })();
         self.report(r)
@@ -168,7 +186,8 @@ impl Editor {
     fn delete_key_inner(&mut self, node: &str, param: &str, index: usize) -> Result<(), String> {
         let port = self.scalar_port(node, param)?;
         let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
-        let new = keys::remove_key(&current, index, port.ty == PortType::Int).map_err(|e| format!("{node}.{param}: {e}"))?;
+        let new = keys::remove_key(&current, index, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
+        let new = as_port_constant(&port, new);
         self.commit_keys(node, &port, new, None)?;
         self.set_status(format!("deleted key {} of {node}.{param}", index + 1), false);
         Ok(())
@@ -190,7 +209,8 @@ impl Editor {
                 None => self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?,
             };
             let Some(i) = KeyList::read(&current).and_then(|l| l.find(*frame)) else { continue };
-            let new = keys::remove_key(&current, i, port.ty == PortType::Int).map_err(|e| format!("{node}.{param}: {e}"))?;
+            let new = keys::remove_key(&current, i, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
+            let new = as_port_constant(&port, new);
             self.check_keys(node, &port, &new)?;
             changed.push((param.clone(), new));
         }
@@ -220,8 +240,7 @@ impl Editor {
             let port = self.scalar_port(node, param)?;
             let current = self.param_value(node, &port).ok_or_else(|| format!("{node}.{param} has no value"))?;
             let copied = self.key_clipboard.clone();
-            let new = keys::paste_keys(&current, &copied, frame, port.ty == PortType::Int)
-                .map_err(|e| format!("{node}.{param}: {e}"))?;
+            let new = keys::paste_keys(&current, &copied, frame, whole(&port)).map_err(|e| format!("{node}.{param}: {e}"))?;
             self.commit_keys(node, &port, new, None)?;
             self.set_status(format!("pasted {} key(s) into {node}.{param} at frame {}", copied.len(), frame_text(frame)), false);
             Ok(())

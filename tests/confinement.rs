@@ -108,3 +108,38 @@ fn allow_outside_out_lets_a_writer_out() {
     let o = run(&["check", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--allow-outside-out"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
 }
+
+#[cfg(unix)]
+#[test]
+fn a_symbolic_link_inside_out_does_not_lead_writers_outside() {
+    let (dir, graphs, out) = setup();
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    std::fs::create_dir_all(out.join("sub")).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("link")).unwrap();
+    std::os::unix::fs::symlink(out.join("sub"), out.join("inner")).unwrap();
+    let out_s = out.to_str().unwrap();
+    for (ty, port, name) in WRITERS {
+        let file = graphs.join("g.ron");
+        std::fs::write(&file, graph(ty, port, &format!("link/deeper/{name}"))).unwrap();
+        let file = file.to_str().unwrap();
+        for args in [vec!["check", file, "--out", out_s], vec!["render", file, "--out", out_s]] {
+            let o = run(&args);
+            let all = text(&o);
+            assert_eq!(o.status.code(), Some(1), "{ty} {args:?}:\n{all}");
+            assert!(all.contains(&format!("node 'w', port '{port}'")) && all.contains("outside the output folder"), "{all}");
+        }
+    }
+    assert_eq!(files_under(&elsewhere), 0, "nothing was written through the link");
+    // A link that stays inside is a folder like any other.
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", "inner/x.png")).unwrap();
+    let o = run(&["render", file.to_str().unwrap(), "--out", out_s]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(out.join("sub/x.png").is_file());
+    // And --allow-outside-out lets a write through the outward link, as it lets any.
+    std::fs::write(&file, graph("imaging.write_image", "path", "link/x.png")).unwrap();
+    let o = run(&["render", file.to_str().unwrap(), "--out", out_s, "--allow-outside-out"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(elsewhere.join("x.png").is_file());
+}

@@ -19,19 +19,42 @@ use crate::errors::{from_diagnostics, from_node_error, graph_error};
 use crate::registry;
 
 /// A pyrograph graph: load or build it, edit it, cook outputs into numpy, render its writers.
+///
+/// Every method takes `&self`: a graph shared by Python threads serializes their calls on its
+/// locks (they take turns, each completes) instead of failing with a borrow error. Python values
+/// are converted before a lock is taken (a conversion can run Python code, which can switch
+/// threads), and no lock on the document is held while the GIL is released.
 #[pyclass(module = "pyrograph")]
 pub struct Graph {
-    doc: GraphDoc,
-    /// The file the document belongs to (relative paths resolve against its folder).
-    file: Option<PathBuf>,
-    /// The folder relative paths resolve against.
-    dir: PathBuf,
+    state: Mutex<Doc>,
     /// The graph built from `doc` for cooking, until the next edit.
     built: Mutex<Option<Arc<RustGraph>>>,
     eval: Mutex<Evaluator>,
     last_cooked: Mutex<Vec<String>>,
     /// `(node, message)` of every warning of the last cook or render.
     last_warnings: Mutex<Vec<(String, String)>>,
+}
+
+/// The document and where it belongs.
+struct Doc {
+    doc: GraphDoc,
+    /// The file the document belongs to (relative paths resolve against its folder).
+    file: Option<PathBuf>,
+    /// The folder relative paths resolve against.
+    dir: PathBuf,
+}
+
+impl Doc {
+    fn build(&self, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
+        match &self.file {
+            Some(f) => RustGraph::build_file(&self.doc, f, registry(), options),
+            None => RustGraph::build(&self.doc, registry(), &self.dir, options),
+        }
+    }
+
+    fn node_mut(&mut self, py: Python<'_>, id: &str) -> PyResult<&mut NodeDoc> {
+        self.doc.node_mut(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))
+    }
 }
 
 /// What a cook produced before it is handed to Python.
@@ -52,9 +75,7 @@ fn endpoint<'a>(py: Python<'_>, text: &'a str) -> PyResult<(&'a str, &'a str)> {
 impl Graph {
     fn with_doc(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Graph {
         Graph {
-            doc,
-            file,
-            dir,
+            state: Mutex::new(Doc { doc, file, dir }),
             built: Mutex::new(None),
             eval: Mutex::new(Evaluator::new()),
             last_cooked: Mutex::new(Vec::new()),
@@ -62,30 +83,30 @@ impl Graph {
         }
     }
 
+    /// The document, locked. Locks are always taken in the order state, built.
+    fn state(&self) -> std::sync::MutexGuard<'_, Doc> {
+        lock(&self.state)
+    }
+
     fn build_with(&self, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
-        match &self.file {
-            Some(f) => RustGraph::build_file(&self.doc, f, registry(), options),
-            None => RustGraph::build(&self.doc, registry(), &self.dir, options),
-        }
+        self.state().build(options)
     }
 
     /// The graph for cooking outputs, built once per edit.
     fn cooking_graph(&self, py: Python<'_>) -> PyResult<Arc<RustGraph>> {
+        let st = self.state();
         let mut slot = lock(&self.built);
         if let Some(g) = &*slot {
             return Ok(g.clone());
         }
-        let g = Arc::new(self.build_with(&BuildOptions::default()).map_err(|d| from_diagnostics(py, &d))?);
+        let g = Arc::new(st.build(&BuildOptions::default()).map_err(|d| from_diagnostics(py, &d))?);
         *slot = Some(g.clone());
         Ok(g)
     }
 
-    fn edited(&mut self) {
+    /// Forgets the built graph after an edit (called with the state locked).
+    fn edited(&self) {
         *lock(&self.built) = None;
-    }
-
-    fn node_doc(&mut self, py: Python<'_>, id: &str) -> PyResult<&mut NodeDoc> {
-        self.doc.node_mut(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))
     }
 }
 
@@ -125,18 +146,19 @@ impl Graph {
 
     /// The document as RON text, exactly what `save` writes.
     fn to_ron(&self) -> String {
-        self.doc.to_ron()
+        self.state().doc.to_ron()
     }
 
     /// Writes the graph atomically (the same bytes as `pyrograph save` and the editor). An
     /// existing file is replaced only with `overwrite=True` (else `FileExistsError`). The graph
     /// then belongs to `path`: its relative paths resolve against that folder.
     #[pyo3(signature = (path, overwrite=false))]
-    fn save(&mut self, path: PathBuf, overwrite: bool) -> PyResult<()> {
-        self.doc.save(&path, overwrite)?;
+    fn save(&self, path: PathBuf, overwrite: bool) -> PyResult<()> {
+        let mut st = self.state();
+        st.doc.save(&path, overwrite)?;
         let path = std::path::absolute(&path)?;
-        self.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        self.file = Some(path);
+        st.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        st.file = Some(path);
         self.edited();
         Ok(())
     }
@@ -154,18 +176,18 @@ impl Graph {
     /// The file the graph was loaded from or last saved to.
     #[getter]
     fn file(&self) -> Option<PathBuf> {
-        self.file.clone()
+        self.state().file.clone()
     }
 
     /// The one-line description.
     #[getter]
     fn get_description(&self) -> Option<String> {
-        self.doc.description.clone()
+        self.state().doc.description.clone()
     }
 
     #[setter]
-    fn set_description(&mut self, text: Option<String>) {
-        self.doc.description = text;
+    fn set_description(&self, text: Option<String>) {
+        self.state().doc.description = text;
     }
 
     /// A snapshot of the nodes: id → {"type", "params", "pos"}. Edit with `set`, `add_node`
@@ -173,7 +195,8 @@ impl Graph {
     #[getter]
     fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
-        for (id, n) in &self.doc.nodes.0 {
+        let st = self.state();
+        for (id, n) in &st.doc.nodes.0 {
             let d = PyDict::new(py);
             d.set_item("type", &n.type_name)?;
             let params = PyDict::new(py);
@@ -190,14 +213,15 @@ impl Graph {
     /// The edges as `("from.output", "to.input")` tuples.
     #[getter]
     fn edges(&self) -> Vec<(String, String)> {
-        self.doc.edges.clone()
+        self.state().doc.edges.clone()
     }
 
     /// What the graph exposes as a preset: {"inputs", "outputs", "params"} (name → inner
     /// port), or None.
     #[getter]
     fn interface<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(i) = &self.doc.interface else { return Ok(None) };
+        let st = self.state();
+        let Some(i) = &st.doc.interface else { return Ok(None) };
         let d = PyDict::new(py);
         d.set_item("inputs", i.inputs.clone())?;
         d.set_item("outputs", i.outputs.clone())?;
@@ -223,10 +247,7 @@ impl Graph {
     /// Adds node `id` of type `type` (see `pyrograph.nodes()`; `graph.include` for a preset)
     /// with parameters given as keywords.
     #[pyo3(signature = (id, r#type, **params))]
-    fn add_node(&mut self, py: Python<'_>, id: &str, r#type: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-        if self.doc.node(id).is_some() {
-            return Err(graph_error(py, Some(id), None, &format!("a node '{id}' already exists")));
-        }
+    fn add_node(&self, py: Python<'_>, id: &str, r#type: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         if id.is_empty() || id.contains(['.', '/']) {
             return Err(graph_error(py, Some(id), None, &format!("node id '{id}' must be non-empty, without '.' or '/'")));
         }
@@ -243,42 +264,49 @@ impl Graph {
                 node.params.insert(name, crate::param_values::from_py(&v)?);
             }
         }
-        self.doc.add_node(id, node);
+        let mut st = self.state();
+        if st.doc.node(id).is_some() {
+            return Err(graph_error(py, Some(id), None, &format!("a node '{id}' already exists")));
+        }
+        st.doc.add_node(id, node);
         self.edited();
         Ok(())
     }
 
     /// Removes node `id` and every edge touching it.
-    fn remove_node(&mut self, py: Python<'_>, id: &str) -> PyResult<()> {
-        let before = self.doc.nodes.0.len();
-        self.doc.nodes.0.retain(|(k, _)| k != id);
-        if self.doc.nodes.0.len() == before {
+    fn remove_node(&self, py: Python<'_>, id: &str) -> PyResult<()> {
+        let mut st = self.state();
+        let before = st.doc.nodes.0.len();
+        st.doc.nodes.0.retain(|(k, _)| k != id);
+        if st.doc.nodes.0.len() == before {
             return Err(graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")));
         }
         let touches = |e: &str| split_endpoint(e).is_some_and(|(n, _)| n == id);
-        self.doc.edges.retain(|(a, b)| !touches(a) && !touches(b));
-        self.doc.ungroup_node(id);
+        st.doc.edges.retain(|(a, b)| !touches(a) && !touches(b));
+        st.doc.ungroup_node(id);
         self.edited();
         Ok(())
     }
 
     /// Connects output `src` ("node.output") to input `dst` ("node.input"). Types are checked
     /// when the graph is checked or cooked.
-    fn connect(&mut self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
+    fn connect(&self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
+        let mut st = self.state();
         for e in [src, dst] {
             let (n, _) = endpoint(py, e)?;
-            self.node_doc(py, n)?;
+            st.node_mut(py, n)?;
         }
-        self.doc.connect(src, dst);
+        st.doc.connect(src, dst);
         self.edited();
         Ok(())
     }
 
     /// Removes the edge `src` → `dst`.
-    fn disconnect(&mut self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
-        let before = self.doc.edges.len();
-        self.doc.edges.retain(|(a, b)| !(a == src && b == dst));
-        if self.doc.edges.len() == before {
+    fn disconnect(&self, py: Python<'_>, src: &str, dst: &str) -> PyResult<()> {
+        let mut st = self.state();
+        let before = st.doc.edges.len();
+        st.doc.edges.retain(|(a, b)| !(a == src && b == dst));
+        if st.doc.edges.len() == before {
             return Err(graph_error(py, None, None, &format!("no edge {src} -> {dst}")));
         }
         self.edited();
@@ -288,7 +316,7 @@ impl Graph {
     /// Sets parameter `endpoint` ("node.param") to `value` (bool, int, float, str, path or a
     /// tuple for colours and vectors; `"keys([(0, 1.0), (40, 2.0)])"` or `"expr(sin(time))"` to
     /// animate it); the next cook re-cooks only what depends on it.
-    fn set(&mut self, py: Python<'_>, endpoint: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+    fn set(&self, py: Python<'_>, endpoint: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let v = crate::param_values::from_py(value)?;
         self.set_param(py, endpoint, v)
     }
@@ -298,7 +326,7 @@ impl Graph {
     /// is "hold", "cycle" or "linear" on both sides, or a `(before, after)` pair.
     #[pyo3(signature = (endpoint, keys, extrapolation=None))]
     fn set_keys(
-        &mut self,
+        &self,
         py: Python<'_>,
         endpoint: &str,
         keys: &Bound<'_, PyAny>,
@@ -315,7 +343,7 @@ impl Graph {
 
     /// Sets parameter `endpoint` to an expression of `frame`, `time` and `fps`, e.g.
     /// `"0.5 + 0.2 * sin(time * 3)"`.
-    fn set_expr(&mut self, py: Python<'_>, endpoint: &str, expression: &str) -> PyResult<()> {
+    fn set_expr(&self, py: Python<'_>, endpoint: &str, expression: &str) -> PyResult<()> {
         let form = ParamValue::Call("expr".into(), Box::new(ParamValue::String(expression.to_string())));
         self.set_param(py, endpoint, form)
     }
@@ -324,7 +352,8 @@ impl Graph {
     /// a preset's parameter that is not written).
     fn get<'py>(&self, py: Python<'py>, endpoint: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
         let (id, param) = self::endpoint(py, endpoint)?;
-        let node = self.doc.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
+        let st = self.state();
+        let node = st.doc.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
         if let Some(v) = node.params.get(param) {
             return crate::param_values::to_py(py, v).map(Some);
         }
@@ -437,30 +466,40 @@ impl Graph {
     }
 
     fn __eq__(&self, other: PyRef<'_, Graph>) -> bool {
-        self.doc == other.doc
+        if std::ptr::eq(self, &*other) {
+            return true;
+        }
+        // One lock at a time: `a == b` and `b == a` in two threads must not wait on each other.
+        let mine = self.state().doc.clone();
+        mine == other.state().doc
     }
 
     fn __repr__(&self) -> String {
-        let from = self.file.as_ref().map(|f| format!(" from {}", f.display())).unwrap_or_default();
-        format!("<pyrograph.Graph{from}: {} nodes, {} edges>", self.doc.nodes.0.len(), self.doc.edges.len())
+        let st = self.state();
+        let from = st.file.as_ref().map(|f| format!(" from {}", f.display())).unwrap_or_default();
+        format!("<pyrograph.Graph{from}: {} nodes, {} edges>", st.doc.nodes.0.len(), st.doc.edges.len())
     }
 
     /// Pickles as its RON text and folder (for multiprocessing); the cache is not carried.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         let from_ron = py.get_type::<Graph>().getattr("from_ron")?;
-        let args =
-            PyTuple::new(py, [self.doc.to_ron().into_pyobject(py)?.into_any(), self.dir.clone().into_pyobject(py)?.into_any()])?;
+        let (text, dir) = {
+            let st = self.state();
+            (st.doc.to_ron(), st.dir.clone())
+        };
+        let args = PyTuple::new(py, [text.into_pyobject(py)?.into_any(), dir.into_pyobject(py)?.into_any()])?;
         PyTuple::new(py, [from_ron, args.into_any()])
     }
 }
 
 /// Refuses a parameter the node type does not have (includes are checked when built).
 impl Graph {
-    fn set_param(&mut self, py: Python<'_>, endpoint: &str, v: ParamValue) -> PyResult<()> {
+    fn set_param(&self, py: Python<'_>, endpoint: &str, v: ParamValue) -> PyResult<()> {
         let (id, param) = self::endpoint(py, endpoint)?;
-        let ty = self.node_doc(py, id)?.type_name.clone();
-        check_param(py, id, &ty, param)?;
-        self.node_doc(py, id)?.params.insert(param.to_string(), v);
+        let mut st = self.state();
+        let node = st.node_mut(py, id)?;
+        check_param(py, id, &node.type_name.clone(), param)?;
+        node.params.insert(param.to_string(), v);
         self.edited();
         Ok(())
     }

@@ -320,3 +320,40 @@ def test_warnings_of_the_last_cook_name_their_node(tmp_path):
     # Served from the cache, the node does not cook, so it does not warn again.
     g.cook("crop.width")
     assert g.last_warnings == []
+
+
+def test_one_graph_used_from_eight_threads_serializes_their_calls():
+    g = pyrograph.Graph()
+    g.add_node("a", "math.add", a=1.0, b=0.0)
+    g.add_node("b", "math.add", b=1.0)
+    g.connect("a.value", "b.a")
+    errors, results = [], {}
+    start = threading.Barrier(8)
+
+    def worker(k):
+        try:
+            start.wait()
+            for i in range(50):
+                # Each thread edits, reads back, cooks and compares the same graph.
+                g.set("a.b", float(k))
+                g.get("a.b")
+                value = g.cook("b.value")
+                assert value in {1.0 + j + 1.0 for j in range(8)}, value
+                g == g
+                repr(g)
+                g.to_ron()
+            results[k] = value
+        except Exception as e:  # noqa: BLE001 - every failure is reported below
+            errors.append(repr(e))
+
+    threads = [threading.Thread(target=worker, args=(k,)) for k in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not any(t.is_alive() for t in threads), "a thread hung"
+    assert errors == [], errors
+    assert len(results) == 8
+    # After the threads, one more edit and cook see a consistent graph.
+    g.set("a.b", 5.0)
+    assert g.cook("b.value") == 7.0

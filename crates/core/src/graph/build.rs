@@ -4,7 +4,7 @@
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
-use petgraph::algo::{tarjan_scc, toposort};
+use petgraph::algo::{kosaraju_scc, toposort};
 use petgraph::stable_graph::{NodeIndex, StableDiGraph};
 use petgraph::visit::EdgeRef;
 
@@ -282,20 +282,25 @@ fn resolve_edge(
 /// Reports every cycle, naming its nodes; returns whether the graph is acyclic.
 fn check_cycles(g: &StableDiGraph<GraphNode, (usize, usize)>, diags: &mut Vec<Diagnostic>) -> bool {
     let mut acyclic = true;
-    for scc in tarjan_scc(g) {
+    // Kosaraju, not Tarjan: petgraph's Tarjan recurses once per node of a chain (a 100,000-node
+    // chain overflowed the stack); its Kosaraju walks with explicit stacks.
+    for scc in kosaraju_scc(g) {
         let self_loop = scc.len() == 1 && g.contains_edge(scc[0], scc[0]);
         if scc.len() > 1 || self_loop {
             acyclic = false;
             let mut names: Vec<&str> = scc.iter().map(|i| &*g[*i].id).collect();
             names.sort_unstable();
             let first = names[0].to_string();
+            // A cycle through a huge graph names a few of its nodes, not all of them.
+            const NAMED: usize = 8;
+            let mut listed = names.iter().take(NAMED).map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
+            if names.len() > NAMED {
+                listed = format!("{} nodes ({listed}, …)", names.len());
+            }
             diags.push(diag(
                 DiagnosticKind::Cycle,
                 Location::Node(first),
-                format!(
-                    "cycle through nodes {}: a graph must not feed a node's output back into itself",
-                    names.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
-                ),
+                format!("cycle through nodes {listed}: a graph must not feed a node's output back into itself"),
             ));
         }
     }

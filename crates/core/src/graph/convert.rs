@@ -48,11 +48,33 @@ fn lexical(path: &Path) -> PathBuf {
 }
 
 /// Whether `path` stays inside folder `root`, judged by names (`out/a/../b.png` is inside
-/// `out`; `out/../b.png` and `/tmp/b.png` are not, unless `root` is `/tmp`). A relative `root`
-/// is taken from the current folder, as the writer will take it.
+/// `out`; `out/../b.png` and `/tmp/b.png` are not, unless `root` is `/tmp`) and by where the file
+/// system takes them: a symbolic link inside `root` to a folder elsewhere (`out/link/b.png`)
+/// leads outside. A relative `root` is taken from the current folder, as the writer will take it.
 pub(crate) fn inside(path: &Path, root: &Path) -> bool {
     let abs = |p: &Path| if p.is_absolute() { lexical(p) } else { lexical(&std::env::current_dir().unwrap_or_default().join(p)) };
-    abs(path).starts_with(abs(root))
+    let (path, root) = (abs(path), abs(root));
+    path.starts_with(&root) && real(&path).starts_with(real(&root))
+}
+
+/// Where a write to the absolute, lexically clean `path` lands: its longest existing ancestor
+/// resolved through symbolic links, the names that do not exist yet appended (a writer creates
+/// them as folders and a file, which follow no link).
+fn real(path: &Path) -> PathBuf {
+    let mut existing = path;
+    let mut missing = Vec::new();
+    loop {
+        if let Ok(resolved) = existing.canonicalize() {
+            return missing.iter().rev().fold(resolved, |p, name| p.join(name));
+        }
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                missing.push(name.to_os_string());
+                existing = parent;
+            }
+            _ => return path.to_path_buf(),
+        }
+    }
 }
 
 /// Expands `${NAME}` from the environment; an unset variable is an error naming it.

@@ -76,8 +76,16 @@ impl From<RustProblem> for Problem {
 
 #[pymethods]
 impl Problem {
-    fn __repr__(&self) -> String {
-        format!("Problem(kind={:?}, node={:?}, port={:?}, message={:?})", self.kind, self.node, self.port, self.message)
+    /// As Python writes the values: `Problem(kind='Cycle', node='p', port=None, message='…')`.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let r = |v: Bound<'_, PyAny>| -> PyResult<String> { Ok(v.repr()?.to_string()) };
+        Ok(format!(
+            "Problem(kind={}, node={}, port={}, message={})",
+            r(self.kind.clone().into_pyobject(py)?.into_any())?,
+            r(self.node.clone().into_pyobject(py)?.into_any())?,
+            r(self.port.clone().into_pyobject(py)?.into_any())?,
+            r(self.message.clone().into_pyobject(py)?.into_any())?,
+        ))
     }
     fn __str__(&self) -> String {
         self.message.clone()

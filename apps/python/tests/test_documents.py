@@ -127,6 +127,10 @@ def test_check_reports_problems_as_objects(tmp_path):
     assert len(problems) == 1
     p = problems[0]
     assert p.kind == "Cook" and p.node == "load" and "missing.png" in p.message
+    # The repr writes Python values, never Rust's Some("load") and None.
+    r = repr(p)
+    assert r.startswith("Problem(kind='Cook', node='load', port=") and "Some(" not in r, r
+    assert eval(r.replace("Problem(", "dict(")) == {"kind": p.kind, "node": p.node, "port": p.port, "message": p.message}
 
 
 def test_describe_is_the_node_reference_section(root):

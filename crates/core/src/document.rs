@@ -455,7 +455,27 @@ struct VersionProbe {
 
 fn syntax_error(e: ron::error::SpannedError) -> Diagnostics {
     let location = Location::Text { line: e.span.start.line, column: e.span.start.col };
-    Diagnostics::one(Diagnostic::new(DiagnosticKind::Syntax, location, format!("malformed graph: {}", e.code)))
+    let message = in_user_terms(e.code.to_string());
+    Diagnostics::one(Diagnostic::new(DiagnosticKind::Syntax, location, format!("malformed graph: {message}")))
+}
+
+/// The reader's message with the document's internal type names (which RON quotes: "Expected
+/// opening `(` for struct `VersionProbe`") replaced by what the file should hold there.
+fn in_user_terms(message: String) -> String {
+    const TERMS: &[(&str, &str)] = &[
+        ("VersionProbe", "a graph, (version: 4, nodes: {...}, edges: [...])"),
+        ("GraphDocV0", "a graph, (version: 4, nodes: {...}, edges: [...])"),
+        ("GraphDoc", "a graph, (version: 4, nodes: {...}, edges: [...])"),
+        ("NodeV0", "a node, (type: \"...\", params: {...})"),
+        ("NodeDoc", "a node, (type: \"...\", params: {...})"),
+        ("NodeList", "the nodes, {\"id\": (type: \"...\"), ...}"),
+        ("LinkV0", "a link"),
+        ("InterfaceDoc", "the interface"),
+        ("GroupDoc", "a group, (title: \"...\", nodes: [...])"),
+        ("CommentDoc", "a comment, (text: \"...\", pos: (x, y))"),
+        ("PresetDoc", "the preset's metadata"),
+    ];
+    TERMS.iter().fold(message, |m, (name, term)| m.replace(&format!("struct `{name}`"), term).replace(&format!("`{name}`"), term))
 }
 
 /// The pre-release (unversioned) document shape, kept so old files still open.
@@ -616,6 +636,18 @@ mod tests {
         match &err.0[0].location {
             Location::Text { line, .. } => assert_eq!(*line, 2),
             other => panic!("expected a text location, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_malformed_graph_is_described_in_the_files_terms_not_the_readers() {
+        for text in
+            ["42", "[]", "Graph(version: 1)", "", "(version: 1, nodes: {\"a\": 3})", "(version: 1, nodes: {\"a\": (kind: 1)})"]
+        {
+            let message = GraphDoc::from_ron(text).unwrap_err().0[0].message.clone();
+            let internal = ["VersionProbe", "GraphDoc", "NodeDoc", "NodeV0", "struct"];
+            assert!(!internal.iter().any(|n| message.contains(n)), "{text:?}: {message}");
+            assert!(message.contains("a graph, (version") || message.contains("a node, (type"), "{text:?}: {message}");
         }
     }
 

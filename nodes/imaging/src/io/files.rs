@@ -40,8 +40,36 @@ fn is_exr(path: &Path) -> bool {
     has_extension(path, &["exr"])
 }
 
-/// Width and height from the file's header, without decoding the pixels.
+/// Pixels an image file may declare and still be decoded: 16384 × 16384 unless the environment
+/// variable `PYROGRAPH_MAX_PIXELS` says otherwise. A header is checked against it before any
+/// pixel is allocated, so a small file declaring an enormous image (a decompression bomb) is an
+/// error naming the file and its size, not an exhausted machine.
+pub fn pixel_budget() -> u64 {
+    std::env::var("PYROGRAPH_MAX_PIXELS").ok().and_then(|v| v.trim().replace('_', "").parse().ok()).unwrap_or(1 << 28)
+}
+
+/// Refuses a header that declares more pixels than [`pixel_budget`].
+fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), NodeError> {
+    let (pixels, budget) = (u64::from(w) * u64::from(h), pixel_budget());
+    if pixels <= budget {
+        return Ok((w, h));
+    }
+    Err(NodeError::msg(format!(
+        "{}: the file declares {w} × {h} pixels ({:.1} megapixels), more than the {:.1} megapixels pyrograph \
+         decodes; if it is a real image, raise the limit with the environment variable PYROGRAPH_MAX_PIXELS={pixels}",
+        path.display(),
+        pixels as f64 / 1e6,
+        budget as f64 / 1e6
+    )))
+}
+
+/// Width and height from the file's header, without decoding the pixels; a size over the
+/// [`pixel_budget`] is an error.
 pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
+    header_dimensions(path).and_then(|size| check_budget(path, size))
+}
+
+fn header_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     if is_exr(path) {
         // The exr crate, not `image`, so gray (`Y`) files written by the writer read back too.
@@ -62,23 +90,29 @@ fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
     u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
 }
 
-/// Decodes one image file: colour files become RGBA, gray files gray.
+/// Decodes one image file: colour files become RGBA, gray files gray. Its header is checked
+/// against the [`pixel_budget`] first.
 pub fn decode_image(path: &Path) -> Result<Image, NodeError> {
     if is_exr(path) {
         return decode_exr(path);
     }
+    let (w, h) = image_dimensions(path)?;
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
-    let img = image::ImageReader::open(path)
-        .map_err(|e| named(&e))?
-        .with_guessed_format()
-        .map_err(|e| named(&e))?
-        .decode()
-        .map_err(|e| named(&e))?;
+    let mut reader = image::ImageReader::open(path).map_err(|e| named(&e))?.with_guessed_format().map_err(|e| named(&e))?;
+    // The image crate's own allocation limit (512 MiB by default) would refuse a plate within
+    // the budget (16-bit RGBA at 8192 × 8192 is 512 MiB): allow what the budget allows.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some((u64::from(w) * u64::from(h) * 8).max(512 << 20));
+    reader.limits(limits);
+    let img = reader.decode().map_err(|e| named(&e))?;
     Ok(convert::from_dynamic(img))
 }
 
 /// Decodes the first layer of an OpenEXR file: `Y` only → gray, else R, G, B (and A, default 1).
+/// Its header is checked against the [`pixel_budget`] first (the exr crate allocates what a
+/// header declares).
 pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
+    image_dimensions(path)?;
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     let file = exr::prelude::read_first_flat_layer_from_file(path).map_err(|e| named(&e))?;
     let layer = &file.layer_data;
@@ -111,7 +145,6 @@ pub fn read_image_file(path: &Path) -> Result<Image, IoError> {
     if !path.is_file() {
         return Err(no_such(path));
     }
-    image_dimensions(path).map_err(|e| IoError::Path(e.to_string()))?;
     decode_image(path).map_err(|e| IoError::Path(e.to_string()))
 }
 

@@ -59,3 +59,60 @@ fn a_cycle_through_a_long_chain_is_one_error_naming_a_few_of_its_nodes() {
     let message = &cycles[0].message;
     assert!(message.contains("20000 nodes") && message.contains("'n0'") && message.len() < 400, "{message}");
 }
+
+/// Files f0 … f{levels}: each includes the next twice and adds their values; the last is one
+/// node (`broken`: one with an unknown type). f0 flattens to 2^(levels + 1) − 1 nodes.
+fn include_bomb(dir: &std::path::Path, levels: usize, broken: bool) -> std::path::PathBuf {
+    for k in 0..=levels {
+        let text = if k == levels {
+            let ty = if broken { "math.nope" } else { "math.add" };
+            format!(
+                r#"(version: 1, interface: (outputs: {{"value": "x.value"}}), nodes: {{"x": (type: "{ty}", params: {{"a": 1.0}})}}, edges: [])"#
+            )
+        } else {
+            let inc = |id: &str| format!(r#""{id}": (type: "graph.include", params: {{"path": "f{}.ron"}})"#, k + 1);
+            format!(
+                r#"(version: 1, interface: (outputs: {{"value": "s.value"}}), nodes: {{{}, {}, "s": (type: "math.add")}},
+                    edges: [("a.value", "s.a"), ("b.value", "s.b")])"#,
+                inc("a"),
+                inc("b")
+            )
+        };
+        std::fs::write(dir.join(format!("f{k}.ron")), text).unwrap();
+    }
+    dir.join("f0.ron")
+}
+
+fn load(path: &std::path::Path) -> Result<Graph, pyrograph_core::Diagnostics> {
+    let doc = GraphDoc::load(path)?;
+    Graph::build_file(&doc, path, &Registry::with_builtins(), &BuildOptions::default())
+}
+
+#[test]
+fn an_include_bomb_is_refused_before_it_is_built_naming_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    // 31 files: 2^31 − 1 nodes flattened. Refused at once, from the files' sizes alone.
+    let start = std::time::Instant::now();
+    let e = load(&include_bomb(dir.path(), 30, false)).err().expect("refused").to_string();
+    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
+    assert!(e.contains("would have 2147483647 nodes, more than the 1000000"), "{e}");
+    assert!(e.contains("f1.ron (1073741823 nodes each, included 2×) → f2.ron"), "{e}");
+    assert!(e.contains("PYROGRAPH_MAX_NODES"), "{e}");
+}
+
+#[test]
+fn a_file_included_many_times_is_built_once_and_its_problem_reported_once() {
+    let dir = tempfile::tempdir().unwrap();
+    // 12 levels: 8191 nodes, every file built once; it cooks to 2^12.
+    let graph = load(&include_bomb(dir.path(), 12, false)).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(graph.node_count(), 8191);
+    let v = Evaluator::new().output(&graph, "s.value", &CookCtx::new()).unwrap();
+    assert!(matches!(v, Value::Float(x) if x == 4096.0), "{v:?}");
+    // A broken leaf under 2^12 instances: its problem is told once in full, each other
+    // include of a broken file says where to look in one line.
+    let dir = tempfile::tempdir().unwrap();
+    let e = load(&include_bomb(dir.path(), 12, true)).err().expect("the leaf is broken");
+    let full = e.0.iter().filter(|d| d.message.contains("math.nope")).count();
+    assert_eq!(full, 1, "{e}");
+    assert!(e.0.len() <= 2 * 13, "{} diagnostics:\n{e}", e.0.len());
+}

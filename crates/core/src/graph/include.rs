@@ -3,6 +3,7 @@
 //! like any other node; the include keeps only its description and the inner ports behind it.
 
 use std::path::Path;
+use std::rc::Rc;
 use std::sync::Arc;
 
 use super::build::{Parts, build, diag, node_inputs};
@@ -18,8 +19,10 @@ fn include_diag(id: &str, message: String) -> Diagnostic {
     diag(DiagnosticKind::Include, Location::Port { node: id.to_string(), port: INCLUDE_PATH.into() }, message)
 }
 
-/// Loads and builds the file include `id` names, with its description.
-fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<Diagnostic>> {
+/// Loads and builds the file include `id` names, with its description: once per file and load
+/// (later includes of the same file share the build, or get a one-line error pointing at the
+/// first one's report).
+fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Rc<(Graph, NodeDesc)>, Vec<Diagnostic>> {
     let raw = match nd.params.get(INCLUDE_PATH) {
         Some(ParamValue::String(s)) => s,
         Some(other) => return Err(vec![include_diag(id, format!("needs a path string, got {other}"))]),
@@ -33,19 +36,38 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<
         let chain: Vec<String> = ctx.include_stack.iter().chain([&canon]).map(|p| short(p)).collect();
         return Err(vec![include_diag(id, format!("include cycle: {}", chain.join(" -> ")))]);
     }
+    let cached = ctx.includes.built.borrow().get(&canon).cloned();
+    match cached {
+        Some(Ok(built)) => return Ok(built),
+        Some(Err(first)) => {
+            return Err(vec![include_diag(
+                id,
+                format!("{} does not build: see the problems reported for '{first}'", short(&canon)),
+            )]);
+        }
+        None => {}
+    }
+    let built = load_file(id, &canon, ctx).map(Rc::new);
+    let entry = built.as_ref().map(Rc::clone).map_err(|_| id.to_string());
+    ctx.includes.built.borrow_mut().insert(canon, entry);
+    built
+}
+
+/// Reads, parses and builds included file `canon`.
+fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<Diagnostic>> {
     let text =
-        std::fs::read_to_string(&canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
-    let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, &canon, d.0))?;
+        std::fs::read_to_string(canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
+    let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, canon, d.0))?;
     let mut stack = ctx.include_stack.clone();
-    stack.push(canon.clone());
+    stack.push(canon.to_path_buf());
     let child = LoadCtx {
         dir: canon.parent().map(Path::to_path_buf).unwrap_or_default(),
         include_stack: stack,
         nested: true,
         ..ctx.clone()
     };
-    let mut sub = build(&doc, &child).map_err(|d| nested(id, &canon, d.0))?;
-    sub.file = Some(canon.clone());
+    let mut sub = build(&doc, &child).map_err(|d| nested(id, canon, d.0))?;
+    sub.file = Some(canon.to_path_buf());
     let desc = describe(&doc, &sub).map_err(|m| vec![include_diag(id, format!("{}: {m}", canon.display()))])?;
     Ok((sub, desc))
 }
@@ -53,9 +75,10 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<
 /// Adds the nodes of the file include `id` names to `parts` as `id/<inner id>`, sets the inner
 /// ports its parameters stand for, and records the include's port map.
 pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) -> Result<(), Vec<Diagnostic>> {
-    let (sub, desc) = load(id, nd, ctx)?;
+    let built = load(id, nd, ctx)?;
+    let (sub, desc) = (&built.0, &built.1);
     let mut diags = Vec::new();
-    let sources = node_inputs(id, nd, &desc, ctx, &mut diags);
+    let sources = node_inputs(id, nd, desc, ctx, &mut diags);
     if !diags.is_empty() {
         return Err(diags);
     }
@@ -91,7 +114,7 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
             parts.g[*idx].inputs[*port] = source;
         }
     }
-    parts.includes.insert(Arc::from(id), Included { desc: Arc::new(desc), inputs, outputs });
+    parts.includes.insert(Arc::from(id), Included { desc: Arc::new(desc.clone()), inputs, outputs });
     Ok(())
 }
 
@@ -100,10 +123,18 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
 pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
     let options = BuildOptions { describe_only: true, ..BuildOptions::default() };
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let ctx = LoadCtx { registry, root: dir.clone(), dir, options: &options, include_stack: Vec::new(), nested: false };
+    let ctx = LoadCtx {
+        registry,
+        root: dir.clone(),
+        dir,
+        options: &options,
+        include_stack: Vec::new(),
+        nested: false,
+        includes: Default::default(),
+    };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(name));
-    load("preset", &nd, &ctx).map(|(_, desc)| desc).map_err(|d| Diagnostics(d).in_file(path))
+    load("preset", &nd, &ctx).map(|built| built.1.clone()).map_err(|d| Diagnostics(d).in_file(path))
 }
 
 fn short(p: &Path) -> String {

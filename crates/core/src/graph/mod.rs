@@ -8,6 +8,7 @@
 mod build;
 mod convert;
 mod include;
+mod include_limit;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -132,7 +133,20 @@ pub(crate) struct LoadCtx<'a> {
     /// Whether this builds an included file (checks that depend on how the includer connects
     /// it, such as where animated parameters are sampled, wait for the whole graph).
     pub nested: bool,
+    /// The included files built so far in this load, shared by every level.
+    pub includes: std::rc::Rc<IncludeCache>,
 }
+
+/// Each included file's build, by canonical path: a file included many times (at any depth) is
+/// read, parsed and built once per load, and a broken one reported in full once.
+#[derive(Default)]
+pub(crate) struct IncludeCache {
+    pub built: std::cell::RefCell<HashMap<PathBuf, IncludeBuild>>,
+}
+
+/// An included file's build and description, or the id of the include whose report has its
+/// problems.
+pub(crate) type IncludeBuild = Result<std::rc::Rc<(Graph, NodeDesc)>, String>;
 
 impl Graph {
     /// Loads, migrates, validates and type-checks a graph file.
@@ -149,7 +163,8 @@ impl Graph {
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let stack = vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())];
         let root = options.output_dir.clone().unwrap_or_else(|| dir.clone());
-        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root, nested: false };
+        include_limit::check(doc, &dir).map_err(|d| d.in_file(path))?;
+        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root, nested: false, includes: Default::default() };
         let mut graph = build(doc, &ctx).map_err(|d| d.in_file(path))?;
         graph.file = Some(path.to_path_buf());
         Ok(graph)
@@ -158,7 +173,16 @@ impl Graph {
     /// Validates and type-checks a document whose relative paths resolve against `dir`.
     pub fn build(doc: &GraphDoc, registry: &Registry, dir: &Path, options: &BuildOptions) -> Result<Graph, Diagnostics> {
         let root = options.output_dir.clone().unwrap_or_else(|| dir.to_path_buf());
-        let ctx = LoadCtx { registry, dir: dir.to_path_buf(), options, include_stack: Vec::new(), root, nested: false };
+        include_limit::check(doc, dir)?;
+        let ctx = LoadCtx {
+            registry,
+            dir: dir.to_path_buf(),
+            options,
+            include_stack: Vec::new(),
+            root,
+            nested: false,
+            includes: Default::default(),
+        };
         build(doc, &ctx)
     }
 

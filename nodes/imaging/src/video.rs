@@ -91,6 +91,10 @@ pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
     let entries = "stream=width,height,avg_frame_rate,r_frame_rate,nb_frames,start_time";
     let text = ffprobe_fields(ffprobe, path, &[], entries)?;
     let mut info = parse_probe(&text).ok_or_else(|| path_error(format!("{}: no video stream found", path.display())))?;
+    // Frames are decoded at the size the header states: refuse one over the budget first.
+    if let Some(m) = crate::io::files::over_budget(path, info.width, info.height) {
+        return Err(path_error(m));
+    }
     match info.frames {
         None => {
             let text = ffprobe_fields(ffprobe, path, &["-count_packets"], "stream=nb_read_packets")?;

@@ -50,17 +50,28 @@ pub fn pixel_budget() -> u64 {
 
 /// Refuses a header that declares more pixels than [`pixel_budget`].
 fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), NodeError> {
+    match over_budget(path, w, h) {
+        Some(m) => Err(NodeError::msg(m)),
+        None => Ok((w, h)),
+    }
+}
+
+/// The error for a file (an image, or a video's frames) declaring `w` × `h` pixels, when that is
+/// more than [`pixel_budget`].
+pub fn over_budget(path: &Path, w: u32, h: u32) -> Option<String> {
     let (pixels, budget) = (u64::from(w) * u64::from(h), pixel_budget());
     if pixels <= budget {
-        return Ok((w, h));
+        return None;
     }
-    Err(NodeError::msg(format!(
-        "{}: the file declares {w} × {h} pixels ({:.1} megapixels), more than the {:.1} megapixels pyrograph \
-         decodes; if it is a real image, raise the limit with the environment variable PYROGRAPH_MAX_PIXELS={pixels}",
+    // Megapixels, except for a budget set below one (a test's, or a tight service's).
+    let amount = |px: u64| if px >= 1_000_000 { format!("{:.1} megapixels", px as f64 / 1e6) } else { format!("{px} pixels") };
+    Some(format!(
+        "{}: the file declares {w} × {h} pixels ({}), more than the {} pyrograph decodes; if it is a real \
+         image, raise the limit with the environment variable PYROGRAPH_MAX_PIXELS={pixels}",
         path.display(),
-        pixels as f64 / 1e6,
-        budget as f64 / 1e6
-    )))
+        amount(pixels),
+        amount(budget)
+    ))
 }
 
 /// Width and height from the file's header, without decoding the pixels; a size over the

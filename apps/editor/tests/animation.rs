@@ -131,6 +131,17 @@ fn drag(h: &mut Harness<'_, EditorApp>, from: Pos2, to: Pos2) {
     h.run_steps(3);
 }
 
+/// The editor with bloom.strength set to `keys` and bloom selected, cooked.
+fn keyed(keys: &str) -> Harness<'static, EditorApp> {
+    let mut ed = editor();
+    ed.set_param("bloom", "strength", ParamValue::parse_cli(keys)).unwrap();
+    ed.seal();
+    ed.select("bloom");
+    let mut h = harness(EditorApp::new(ed));
+    settle(&mut h);
+    h
+}
+
 #[test]
 fn keys_set_with_the_toggle_move_in_the_curve_editor_and_undo() {
     let mut h = harness(EditorApp::new(editor()));
@@ -208,12 +219,7 @@ fn keys_set_with_the_toggle_move_in_the_curve_editor_and_undo() {
 
 #[test]
 fn a_drag_above_the_range_stops_at_its_end_and_an_expression_is_typed_in_the_row() {
-    let mut ed = editor();
-    ed.set_param("bloom", "strength", ParamValue::parse_cli("keys([(0, 3.5), (10, 3.9, ease)])")).unwrap();
-    ed.seal();
-    ed.select("bloom");
-    let mut h = harness(EditorApp::new(ed));
-    settle(&mut h);
+    let mut h = keyed("keys([(0, 3.5), (10, 3.9, ease)])");
     let handle = h.get_by_label("key 2 of strength").rect().center();
     drag(&mut h, handle, handle - egui::vec2(0.0, 300.0));
     let ks = keys(&h.state().editor);
@@ -296,12 +302,7 @@ fn a_colour_is_keyed_per_component_by_its_toggle_and_one_undo_takes_a_toggle_bac
 
 #[test]
 fn a_selected_keys_tangent_handle_drags_its_slope_in_one_undo_step() {
-    let mut ed = editor();
-    ed.set_param("bloom", "strength", ParamValue::parse_cli("keys([(0, 0.4), (12, 1.2), (24, 0.8)])")).unwrap();
-    ed.seal();
-    ed.select("bloom");
-    let mut h = harness(EditorApp::new(ed));
-    settle(&mut h);
+    let mut h = keyed("keys([(0, 0.4), (12, 1.2), (24, 0.8)])");
     assert!(h.query_by_label("tangent out of key 2 of strength").is_none(), "no tangent handles before a key is selected");
     let key = h.get_by_label("key 2 of strength").rect().center();
     click(&mut h, key);

@@ -142,21 +142,27 @@ def test_describe_is_the_node_reference_section(root):
         pyrograph.describe("imaging.blom")
 
 
+def saved_like_the_cli(g, cli, path, tmp_path, *sets):
+    """Saves `g`, and `path` through `pyrograph save --set` for each of `sets`; asserts the two
+    files are byte-identical and returns the text."""
+    g.save(tmp_path / "python.ron")
+    args = [arg for s in sets for arg in ("--set", s)]
+    subprocess.run([cli, "save", path, "-o", tmp_path / "cli.ron", *args], check=True, capture_output=True)
+    saved = (tmp_path / "python.ron").read_text()
+    assert saved == (tmp_path / "cli.ron").read_text()
+    return saved
+
+
 def test_keys_and_expressions_set_from_python_save_like_the_cli(cli, tmp_path):
     path = ROOT / "graphs" / "flame-cards.ron"
     g = pyrograph.Graph.load(path)
     g.set_keys("calm.turbulence", [(0, 0.3), (11, 1.5, "ease")], extrapolation="cycle")
     g.set_expr("wild.turbulence", "2 + sin(time * 3)")
-    g.save(tmp_path / "python.ron")
-    subprocess.run(
-        [cli, "save", path, "-o", tmp_path / "cli.ron",
-         "--set", "calm.turbulence=keys([(0, 0.3), (11, 1.5, ease)], cycle)",
-         "--set", "wild.turbulence=expr(2 + sin(time * 3))"],
-        check=True,
-        capture_output=True,
+    saved = saved_like_the_cli(
+        g, cli, path, tmp_path,
+        "calm.turbulence=keys([(0, 0.3), (11, 1.5, ease)], cycle)",
+        "wild.turbulence=expr(2 + sin(time * 3))",
     )
-    saved = (tmp_path / "python.ron").read_text()
-    assert saved == (tmp_path / "cli.ron").read_text()
     assert "version: 4," in saved and "keys([(0, 0.3), (11, 1.5, ease)], cycle)" in saved, saved
     # What get() returns sets the same value again.
     written = g.get("calm.turbulence")
@@ -179,15 +185,9 @@ def test_ignition_points_set_from_python_save_like_the_cli(cli, tmp_path):
     g = pyrograph.Graph.load(path)
     g.set("spread.ignite", [(0.5, 0.2, -0.15), (1.5, "face(3, (0.2, 0.3, 0.5))"), "face(1)"])
     assert g.check() == [], g.check()
-    g.save(tmp_path / "python.ron")
-    subprocess.run(
-        [cli, "save", path, "-o", tmp_path / "cli.ron",
-         "--set", "spread.ignite=[(0.5, 0.2, -0.15), (1.5, face(3, (0.2, 0.3, 0.5))), face(1)]"],
-        check=True,
-        capture_output=True,
+    saved = saved_like_the_cli(
+        g, cli, path, tmp_path, "spread.ignite=[(0.5, 0.2, -0.15), (1.5, face(3, (0.2, 0.3, 0.5))), face(1)]"
     )
-    saved = (tmp_path / "python.ron").read_text()
-    assert saved == (tmp_path / "cli.ron").read_text()
     assert "face(3, (0.2, 0.3, 0.5))" in saved and "face(1)" in saved, saved
     # A point that is not a place is a problem naming the parameter and the point.
     g.set("spread.ignite", [(0.5, 0.2, -0.15), (1.5, (0.2, 0.3))])

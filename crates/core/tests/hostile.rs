@@ -98,6 +98,11 @@ fn an_include_bomb_is_refused_before_it_is_built_naming_the_chain() {
     assert!(e.contains("would have 2147483647 nodes, more than the 1000000"), "{e}");
     assert!(e.contains("f1.ron (1073741823 nodes each, included 2×) → f2.ron"), "{e}");
     assert!(e.contains("PYROGRAPH_MAX_NODES"), "{e}");
+    // Listed as a preset, the same file is refused the same way.
+    let Err(e) = pyrograph_core::graph::preset_desc(&dir.path().join("f0.ron"), &Registry::with_builtins()) else {
+        panic!("a preset listing built the bomb")
+    };
+    assert!(e.to_string().contains("would have 2147483647 nodes"), "{e}");
 }
 
 #[test]

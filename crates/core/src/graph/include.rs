@@ -123,6 +123,11 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
 pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnostics> {
     let options = BuildOptions { describe_only: true, ..BuildOptions::default() };
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    // A preset listing builds the file as an include: refuse an include bomb before that, as a
+    // graph's load does (a file that does not parse is reported by the build below).
+    if let Ok(doc) = GraphDoc::load(path) {
+        super::include_limit::check(&doc, &dir).map_err(|d| d.in_file(path))?;
+    }
     let ctx = LoadCtx {
         registry,
         root: dir.clone(),

@@ -60,6 +60,8 @@ pub struct JobArgs {
     pub wedge: Vec<String>,
     pub wedge_zip: Vec<String>,
     pub task_chunking: bool,
+    /// The limits given to `job` (as command-line arguments), for every task.
+    pub limits: Vec<String>,
 }
 
 /// Checks the graph as the tasks will load it, then writes the bundle.
@@ -92,6 +94,7 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
         wedge_zip: a.wedge_zip.clone(),
         variants: variants.len(),
         task_chunking: a.task_chunking,
+        limits: a.limits.clone(),
     };
     std::fs::create_dir_all(job_dir).map_err(|e| Failure(format!("error: cannot create {}: {e}", job_dir.display())))?;
     let bundle = spec.bundle();
@@ -109,6 +112,29 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
     println!("job bundle {}: {tasks} tasks of up to {} frames ({})", job_dir.display(), a.chunk, a.frames);
     println!("run it here:  openjd run {0}/template.yaml --step Render -p file://{0}/job_params.yaml", abs(job_dir)?.display());
     println!("submit it:    deadline bundle submit {} (AWS Deadline Cloud)", job_dir.display());
+    Ok(())
+}
+
+/// Refuses a manifest path before anything is cooked: outside `out` (names or symbolic links)
+/// unless `--allow-outside-out`, or naming a file that is not a manifest unless `--overwrite`
+/// (a re-run replaces its own manifest, never a graph or a frame given by mistake).
+pub fn check_manifest_target(file: &Path, out: &Path, o: &RenderOpts) -> Result<(), Failure> {
+    if !o.allow_outside_out && !pyrograph_frontend::core::limits::inside(file, out) {
+        return Err(Failure(format!(
+            "error: --manifest {}: outside the output folder {}; write it inside, or render with --allow-outside-out",
+            file.display(),
+            out.display()
+        )));
+    }
+    if file.is_dir() {
+        return Err(Failure(format!("error: --manifest {}: is a folder; name a file", file.display())));
+    }
+    if file.exists() && !o.overwrite && !pyrograph::manifest::is_manifest(file) {
+        return Err(Failure(format!(
+            "error: --manifest {}: exists and is not a pyrograph manifest; refusing to replace it (add --overwrite to)",
+            file.display()
+        )));
+    }
     Ok(())
 }
 
@@ -189,6 +215,9 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
         None => all.clone(),
     };
     let out_root = o.out.clone().unwrap_or_else(|| path.parent().map(Path::to_path_buf).unwrap_or_default());
+    if let Some(file) = &o.manifest {
+        check_manifest_target(file, &out_root, o)?;
+    }
     let started = std::time::Instant::now();
     let built: Vec<(Graph, PathBuf)> = chosen
         .iter()

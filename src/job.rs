@@ -43,6 +43,9 @@ pub struct JobSpec {
     /// Use the TASK_CHUNKING extension (`CHUNK[INT]`); without it the chunks are listed as a
     /// STRING task parameter, for schedulers that lack the extension.
     pub task_chunking: bool,
+    /// The limits the job was written under (`--read-root DIR`, `--max-nodes N`, …), passed to
+    /// every task so that a farm renders under the same confinement as the check.
+    pub limits: Vec<String>,
 }
 
 /// The files of a job bundle, by name.
@@ -143,6 +146,7 @@ impl JobSpec {
             args.push(q("--wedge-index"));
             args.push(q("{{Task.Param.Wedge}}"));
         }
+        args.extend(self.limits.iter().map(|a| q(a)));
         t += "  script:\n    actions:\n      onRun:\n        command: \"{{Param.Pyrograph}}\"\n";
         t += &format!("        args: [{}]\n", args.join(", "));
         t
@@ -191,6 +195,7 @@ mod tests {
             wedge_zip: Vec::new(),
             variants: 0,
             task_chunking: chunking,
+            limits: vec!["--read-root".into(), "/studio/footage".into()],
         }
     }
 
@@ -201,6 +206,7 @@ mod tests {
         assert!(t.contains("type: CHUNK[INT]") && t.contains("defaultTaskCount: 8") && t.contains("CONTIGUOUS"), "{t}");
         assert!(t.contains(r#"name: "cube \"test\"""#), "names are quoted: {t}");
         assert!(t.contains(r#""--set", "spread.fps=12""#), "{t}");
+        assert!(t.contains(r#""--read-root", "/studio/footage""#), "tasks read under the job's confinement: {t}");
         assert!(spec("0-47:2", true).template().contains("NONCONTIGUOUS"));
     }
 

@@ -28,6 +28,51 @@ use pyrograph_frontend::core::{
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    #[command(flatten)]
+    limits: Limits,
+}
+
+/// What the process may read and how big a graph or image it builds (for services that cook
+/// graphs their users submit; every command obeys them).
+#[derive(clap::Args)]
+struct Limits {
+    /// Read only inside this folder (repeat for several): includes, presets, footage, meshes
+    /// and databases elsewhere are refused, symbolic links followed to where they lead. The
+    /// graph file named on the command line is read wherever it is.
+    #[arg(long = "read-root", value_name = "DIR", global = true)]
+    read_roots: Vec<PathBuf>,
+    /// Refuse a graph that has more nodes than this once its includes are flattened (default
+    /// 1,000,000, or PYROGRAPH_MAX_NODES).
+    #[arg(long, value_name = "N", global = true)]
+    max_nodes: Option<u64>,
+    /// Refuse an image or video whose header declares more pixels a frame than this (default
+    /// 268,435,456 = 16384 × 16384, or PYROGRAPH_MAX_PIXELS).
+    #[arg(long, value_name = "N", global = true)]
+    max_pixels: Option<u64>,
+}
+
+impl Limits {
+    /// The limits as arguments again (read roots made absolute), for a job's tasks.
+    fn args(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for r in &self.read_roots {
+            out.push("--read-root".to_string());
+            out.push(std::path::absolute(r).unwrap_or_else(|_| r.clone()).display().to_string());
+        }
+        for (flag, n) in [("--max-nodes", self.max_nodes), ("--max-pixels", self.max_pixels)] {
+            if let Some(n) = n {
+                out.extend([flag.to_string(), n.to_string()]);
+            }
+        }
+        out
+    }
+
+    fn apply(&self) -> Result<(), Failure> {
+        use pyrograph_frontend::core::limits;
+        limits::set_max_nodes(self.max_nodes);
+        limits::set_max_pixels(self.max_pixels);
+        limits::set_read_roots(&self.read_roots).map_err(|e| Failure(format!("error: --read-root {e}")))
+    }
 }
 
 #[derive(Subcommand)]
@@ -211,6 +256,10 @@ impl From<Diagnostics> for Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let registry = pyrograph_frontend::registry();
+    if let Err(Failure(msg)) = cli.limits.apply() {
+        eprintln!("{msg}");
+        return ExitCode::FAILURE;
+    }
     let result = match cli.command {
         None => demo(&registry, Path::new(pyrograph::demo::DEMO_OUT)),
         Some(Command::Demo { out }) => demo(&registry, &out),
@@ -234,7 +283,9 @@ fn main() -> ExitCode {
             overwrite,
         }) => match (graph, out, frames, job_dir) {
             (Some(graph), Some(out), Some(frames), Some(job_dir)) => {
-                let spec = JobArgs { graph, out, frames, chunk, sets: set, wedge, wedge_zip, task_chunking: !no_chunking };
+                let limits = cli.limits.args();
+                let spec =
+                    JobArgs { graph, out, frames, chunk, sets: set, wedge, wedge_zip, task_chunking: !no_chunking, limits };
                 job(&registry, &spec, &job_dir, overwrite)
             }
             _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
@@ -404,6 +455,9 @@ fn cook_graph(graph: &Graph, path: &Path, o: &RenderOpts, targets: &[String]) ->
         && !dir.is_dir()
     {
         return Err(Failure(format!("error: --cache-dir {}: not a folder", dir.display())));
+    }
+    if let Some(file) = &o.manifest {
+        cli_farm::check_manifest_target(file, o.out.as_deref().unwrap_or(&graph.dir), o)?;
     }
     let mut ctx = CookCtx::new().with_settings(o.settings());
     if let Some(p) = progress_bars(!o.json) {

@@ -13,6 +13,14 @@ use sha2::{Digest, Sha256};
 /// Where a job's tasks leave their manifests, inside the job's output folder.
 pub const TASK_DIR: &str = ".pyrograph-job";
 
+/// Whether `file` holds a manifest as `render --manifest` writes it (so a re-run may replace
+/// it); anything else, or a file too big to be one, is not.
+pub fn is_manifest(file: &Path) -> bool {
+    const LARGEST: u64 = 256 << 20;
+    std::fs::metadata(file).is_ok_and(|m| m.len() <= LARGEST)
+        && std::fs::read(file).is_ok_and(|bytes| serde_json::from_slice::<Manifest>(&bytes).is_ok())
+}
+
 /// One file written.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FileRecord {

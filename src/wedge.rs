@@ -21,6 +21,9 @@ pub struct WedgeParam {
     pub values: Vec<String>,
 }
 
+/// Most variants one wedge may have (all its axes' values multiplied).
+pub const MAX_VARIANTS: usize = 10_000;
+
 /// The axes of a wedge: parameters on one axis vary together; axes multiply.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Wedges {
@@ -92,6 +95,18 @@ impl Wedges {
         let mut seen = std::collections::HashSet::new();
         if let Some(p) = axes.iter().flatten().find(|p| !seen.insert(p.target.clone())) {
             return Err(format!("--wedge: {} is wedged twice", p.target));
+        }
+        // Axes multiply: a few long ones would be more variants than any farm renders (or than a
+        // machine word counts), listed before the first is cooked.
+        let counts: Vec<usize> = axes.iter().map(|a| a[0].values.len()).collect();
+        let total = counts.iter().try_fold(1usize, |t, n| t.checked_mul(*n).filter(|t| *t <= MAX_VARIANTS));
+        if total.is_none() {
+            let shape: Vec<String> = counts.iter().map(usize::to_string).collect();
+            return Err(format!(
+                "--wedge: {} values multiply to more than the {MAX_VARIANTS} variants one command renders; split the \
+                 wedge into several commands, or vary fewer parameters together",
+                shape.join(" × ")
+            ));
         }
         Ok(Wedges { axes })
     }
@@ -274,6 +289,19 @@ mod tests {
     fn w(wedge: &[&str], zip: &[&str]) -> Result<Wedges, String> {
         let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
         Wedges::parse(&s(wedge), &s(zip))
+    }
+
+    #[test]
+    fn a_wedge_of_too_many_variants_is_refused_before_any_is_listed() {
+        let hundred: Vec<String> = (0..100).map(|i| i.to_string()).collect();
+        let axis = |name: &str| format!("{name}.x={}", hundred.join(","));
+        let axes: Vec<String> = ["a", "b", "c", "d", "e", "f", "g", "h", "i", "j"].iter().map(|n| axis(n)).collect();
+        // 100^10 overflows a machine word; 100 × 100 × 100 is just over the limit.
+        for n in [10, 3] {
+            let e = Wedges::parse(&axes[..n], &[]).unwrap_err();
+            assert!(e.contains("100 × 100 × 100") && e.contains("10000 variants"), "{e}");
+        }
+        assert_eq!(Wedges::parse(&axes[..2], &[]).unwrap().variants().len(), 10_000);
     }
 
     #[test]

@@ -143,3 +143,87 @@ fn a_symbolic_link_inside_out_does_not_lead_writers_outside() {
     assert!(o.status.success(), "{}", text(&o));
     assert!(elsewhere.join("x.png").is_file());
 }
+
+/// The manifest obeys the writers' rule: inside `--out` (links followed) unless
+/// `--allow-outside-out`, checked before anything cooks; and it replaces only a manifest.
+#[cfg(unix)]
+#[test]
+fn the_manifest_stays_inside_out_and_replaces_only_a_manifest() {
+    let (dir, graphs, out) = setup();
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("link")).unwrap();
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", "x.png")).unwrap();
+    let render = |manifest: &Path, extra: &[&str]| {
+        let base = ["render", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--manifest", manifest.to_str().unwrap()];
+        run(&[&base[..], extra].concat())
+    };
+    for outside in [elsewhere.join("m.json"), out.join("link/m.json"), out.join("../m.json")] {
+        let o = render(&outside, &[]);
+        assert_eq!(o.status.code(), Some(1), "{outside:?}: {}", text(&o));
+        assert!(text(&o).contains("--manifest") && text(&o).contains("outside the output folder"), "{}", text(&o));
+    }
+    assert_eq!(files_under(&out) + files_under(&elsewhere), 0, "refused before cooking: nothing was written");
+    // A user's file under the manifest's name is not replaced; a manifest is.
+    let m = out.join("m.json");
+    std::fs::write(&m, "my notes").unwrap();
+    let o = render(&m, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("is not a pyrograph manifest"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&m).unwrap(), "my notes");
+    std::fs::remove_file(&m).unwrap();
+    for run in 0..2 {
+        let _ = std::fs::remove_file(out.join("x.png"));
+        let o = render(&m, &[]);
+        assert!(o.status.success(), "run {run} (the second replaces its own manifest): {}", text(&o));
+    }
+    assert!(std::fs::read_to_string(&m).unwrap().contains("\"files\""));
+    let o = render(&elsewhere.join("m.json"), &["--overwrite", "--allow-outside-out"]);
+    assert!(o.status.success() && elsewhere.join("m.json").is_file(), "{}", text(&o));
+}
+
+/// Files are written through a fresh temporary and a rename: a symbolic link already standing
+/// under an output's name is replaced, never written through, and a job bundle's files too.
+#[cfg(unix)]
+#[test]
+fn a_link_under_an_outputs_name_is_replaced_not_followed() {
+    let (dir, graphs, out) = setup();
+    let victim = dir.path().join("victim.txt");
+    std::fs::write(&victim, "precious").unwrap();
+    std::os::unix::fs::symlink(&victim, out.join("x.png")).unwrap();
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", "x.png")).unwrap();
+    let o = run(&["render", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--overwrite"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(!out.join("x.png").is_symlink() && out.join("x.png").is_file());
+
+    let job = dir.path().join("job");
+    std::fs::create_dir_all(&job).unwrap();
+    std::os::unix::fs::symlink(&victim, job.join("template.yaml")).unwrap();
+    let args = ["job", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--frames", "0-3", "-o", job.to_str().unwrap()];
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(1), "an existing bundle file is not replaced unasked: {}", text(&o));
+    let o = run(&[&args[..], &["--overwrite"]].concat());
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(std::fs::read_to_string(job.join("template.yaml")).unwrap().contains("specificationVersion"));
+}
+
+/// Files written through a temporary get the permissions any new file gets (0666 less the umask),
+/// not the temporary's private 0600: a farm's frames are read by other users.
+#[cfg(unix)]
+#[test]
+fn written_files_are_as_readable_as_any_new_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let (_dir, graphs, out) = setup();
+    let file = graphs.join("g.ron");
+    std::fs::write(&file, graph("imaging.write_image", "path", "x.png")).unwrap();
+    let o = run(&["render", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let plain = out.join("plain");
+    std::fs::File::create(&plain).unwrap();
+    let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode(&out.join("x.png")), mode(&plain));
+}

@@ -23,7 +23,7 @@ impl Editor {
     /// Puts `ids` into a new group titled `title` (taking them out of any group they were in);
     /// returns its index, or `None` when no id names a node.
     pub fn group_nodes(&mut self, ids: &[String], title: &str) -> Option<usize> {
-        let ids: Vec<String> = ids.iter().filter(|id| self.doc().node(id).is_some()).cloned().collect();
+        let ids: Vec<String> = ids.iter().filter(|id| self.node_doc(id).is_some()).cloned().collect();
         if ids.is_empty() {
             self.set_status("select the nodes to group first", true);
             return None;

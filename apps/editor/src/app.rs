@@ -14,6 +14,8 @@ use crate::key_ui::KeyUi;
 use crate::palette::palette_ui;
 use crate::state::{Editor, diagnostic_nodes};
 
+mod dump;
+
 /// Which file dialog is open (a plain path field: no native dialogs needed).
 #[derive(Clone, Debug, PartialEq)]
 enum FileDialog {
@@ -40,6 +42,10 @@ pub struct EditorApp {
     show_problems: bool,
     /// Milliseconds of the latest frames' UI pass (tests check the UI stays responsive).
     pub frame_times: Vec<f64>,
+    /// Frames drawn since the window opened.
+    pub frames_drawn: u64,
+    /// A node to select when the file being opened arrives (`--select NODE`).
+    pub select_on_open: Option<String>,
     /// Where to write the state dump (`--state-dump FILE`), for tests that drive a real window.
     pub state_dump: Option<PathBuf>,
     /// The preset browser, when open.
@@ -69,6 +75,8 @@ impl EditorApp {
             first_frame: true,
             show_problems: true,
             frame_times: Vec::new(),
+            frames_drawn: 0,
+            select_on_open: None,
             state_dump: None,
             last_dump: String::new(),
             browser: None,
@@ -92,6 +100,17 @@ impl EditorApp {
             self.notify_set = true;
         }
         self.editor.poll();
+        if self.editor.poll_open().is_some() {
+            self.canvas.frame_all();
+            self.texture = None;
+            self.playing = false;
+            if let Some(id) = self.select_on_open.take() {
+                self.editor.select(&id);
+            }
+        }
+        if self.editor.opening().is_some() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(30));
+        }
         self.key_ui.sync(self.editor.current());
         self.handle_keys(&ctx);
         self.key_ui.panel_rect = None;
@@ -137,57 +156,9 @@ impl EditorApp {
         }
         self.write_state_dump(&ctx);
         self.frame_times.push(start.elapsed().as_secs_f64() * 1000.0);
+        self.frames_drawn += 1;
         if self.frame_times.len() > 1000 {
             self.frame_times.drain(..500);
-        }
-    }
-
-    /// The editor's state as JSON: the selection, where each node and each key toggle of the
-    /// inspector is on screen (points from the window's top-left), the current node's
-    /// parameters as written and the playhead's frame. A test driving the real window with
-    /// synthetic mouse events reads it to know where to click and what the click did.
-    pub fn state_json(&self, ctx: &egui::Context) -> serde_json::Value {
-        let nodes: serde_json::Map<String, serde_json::Value> = self
-            .editor
-            .doc()
-            .nodes
-            .0
-            .iter()
-            .filter_map(|(id, _)| {
-                let r = self.canvas.node_screen_rect(id)?;
-                Some((id.clone(), serde_json::json!({"x": r.min.x, "y": r.min.y, "w": r.width(), "h": r.height()})))
-            })
-            .collect();
-        let rect = |r: &egui::Rect| serde_json::json!({"x": r.min.x, "y": r.min.y, "w": r.width(), "h": r.height()});
-        let toggles: serde_json::Map<String, serde_json::Value> =
-            self.key_ui.toggle_rects.iter().map(|(k, r)| (k.clone(), rect(r))).collect();
-        let params: serde_json::Map<String, serde_json::Value> = self
-            .editor
-            .current()
-            .and_then(|id| self.editor.doc().node(id))
-            .map(|n| n.params.iter().map(|(k, v)| (k.clone(), v.to_string().into())).collect())
-            .unwrap_or_default();
-        serde_json::json!({
-            "frame": self.editor.frame(),
-            "key_toggles": toggles,
-            "params": params,
-            "selection": self.editor.selection(),
-            "annotation": self.canvas.annotation.map(|a| format!("{a:?}")),
-            "groups": self.editor.doc().groups.len(),
-            "comments": self.editor.doc().comments.len(),
-            "pixels_per_point": ctx.pixels_per_point(),
-            "nodes": nodes,
-        })
-    }
-
-    fn write_state_dump(&mut self, ctx: &egui::Context) {
-        let Some(path) = &self.state_dump else { return };
-        let text = self.state_json(ctx).to_string();
-        if text != self.last_dump {
-            let tmp = path.with_extension("tmp");
-            if std::fs::write(&tmp, &text).and_then(|()| std::fs::rename(&tmp, path)).is_ok() {
-                self.last_dump = text;
-            }
         }
     }
 
@@ -491,11 +462,9 @@ impl EditorApp {
         }
     }
 
+    /// Opens `path` on a loader thread; the canvas frames it when it arrives (see `ui`).
     fn open_file(&mut self, path: PathBuf) {
-        let _ = self.editor.open(&path);
-        self.canvas.frame_all();
-        self.texture = None;
-        self.playing = false;
+        self.editor.begin_open(&path);
     }
 
     fn menu_bar(&mut self, ui: &mut egui::Ui) {
@@ -643,7 +612,10 @@ impl EditorApp {
             if self.editor.is_dirty() {
                 ui.label(RichText::new("● modified").color(Color32::from_rgb(240, 190, 80)));
             }
-            if let Some(s) = self.editor.status() {
+            if let Some((path, elapsed)) = self.editor.opening() {
+                ui.spinner();
+                ui.label(format!("opening {}… {:.1} s", path.display(), elapsed.as_secs_f64()));
+            } else if let Some(s) = self.editor.status() {
                 let color = if s.error { Color32::from_rgb(255, 110, 110) } else { ui.visuals().text_color() };
                 ui.label(RichText::new(&s.text).color(color));
             }
@@ -671,7 +643,7 @@ impl EditorApp {
                         .sense(egui::Sense::click()),
                 );
                 if r.clicked()
-                    && let Some(n) = nodes.iter().find(|n| self.editor.doc().node(n).is_some())
+                    && let Some(n) = nodes.iter().find(|n| self.editor.node_doc(n).is_some())
                 {
                     self.editor.select(n);
                     self.canvas.focus_node(n);

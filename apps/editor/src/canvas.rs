@@ -7,6 +7,7 @@
 //! editor; the canvas's own gestures ([`crate::gesture`]) change it, not egui-snarl's.
 
 use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
 
 use eframe::egui::{self, Color32, Modifiers, Pos2, Rect, Ui, emath::TSTransform};
 use egui_snarl::ui::{SnarlStyle, SnarlWidget};
@@ -15,9 +16,10 @@ use pyrograph_frontend::core::GraphDoc;
 use pyrograph_frontend::core::document::split_endpoint;
 
 use crate::annotate::Annotation;
+use crate::culling::{CULL_ABOVE, Positions, held};
 use crate::gesture::{Gesture, Target, after_click, after_rect, on_node_drag};
 use crate::overlay::{AnnotationRects, MINIMAP_SIZE, annotation_colors, minimap};
-use crate::state::{Editor, auto_layout};
+use crate::state::Editor;
 use crate::viewer::{FrameTarget, SELECTED, Viewer};
 
 // Part of the canvas's interface, defined below it because its viewer uses them too (the viewer
@@ -50,6 +52,12 @@ pub struct Canvas {
     /// Whether the minimap is shown (M toggles it).
     pub show_minimap: bool,
     minimap_rect: Option<Rect>,
+    /// Every node's position, for culling and the minimap of a big graph.
+    positions: Arc<Positions>,
+    /// The region (canvas units) a culled canvas chose its nodes for.
+    held_region: Option<Rect>,
+    /// When the canvas is culled: how many nodes it holds, of how many.
+    pub culled: Option<(usize, usize)>,
 }
 
 impl Default for Canvas {
@@ -85,6 +93,9 @@ impl Canvas {
             annotation: None,
             show_minimap: true,
             minimap_rect: None,
+            positions: Arc::new(Positions::default()),
+            held_region: None,
+            culled: None,
         }
     }
 
@@ -170,16 +181,30 @@ impl Canvas {
         self.snarl.nodes().cloned().collect()
     }
 
-    /// Brings the snarl in line with the document.
+    /// Brings the snarl in line with the document (for a big one, the part near the view).
     pub fn sync(&mut self, editor: &Editor) {
-        if self.synced == editor.revision() && !self.pins_changed {
+        let doc = editor.doc();
+        let culling = doc.nodes.0.len() > CULL_ABOVE;
+        let view = self.visible();
+        let left_region = culling && !self.held_region.is_some_and(|r| !view.is_finite() || r.contains_rect(view));
+        if self.synced == editor.revision() && !self.pins_changed && !left_region {
             return;
         }
         self.synced = editor.revision();
         self.pins_changed = false;
-        let doc = editor.doc();
-        let layout = auto_layout(doc);
-        let present: HashSet<&str> = doc.nodes.0.iter().map(|(id, _)| id.as_str()).collect();
+        if !self.positions.is_of(editor.revision()) {
+            self.positions = editor.prepared_positions().unwrap_or_else(|| Arc::new(Positions::build(doc, editor.revision())));
+        }
+        let positions = self.positions.clone();
+        let (kept, region) = if culling {
+            let (kept, region) = held(&positions, view, editor.selection());
+            (kept, Some(region))
+        } else {
+            (positions.all.iter().map(|(id, p)| (id.as_str(), *p)).collect(), None)
+        };
+        self.held_region = region;
+        self.culled = culling.then_some((kept.len(), doc.nodes.0.len()));
+        let present: HashSet<&str> = kept.iter().map(|(id, _)| *id).collect();
         let stale: Vec<String> = self.ids.keys().filter(|k| !present.contains(k.as_str())).cloned().collect();
         for id in stale {
             if let Some(nid) = self.ids.remove(&id)
@@ -191,56 +216,11 @@ impl Canvas {
             self.pins.remove(&id);
             self.node_rects.remove(&id);
         }
-        self.param_pins.retain(|id| present.contains(id.as_str()));
-        for (id, nd) in &doc.nodes.0 {
-            let (x, y) = nd.pos.or_else(|| layout.get(id).copied()).unwrap_or((0.0, 0.0));
-            let pos = Pos2::new(x, y);
-            match self.ids.get(id) {
-                Some(&nid) => {
-                    if self.shown_pos.get(id) != Some(&pos)
-                        && let Some(info) = self.snarl.get_node_info_mut(nid)
-                    {
-                        info.pos = pos;
-                    }
-                }
-                None => {
-                    let nid = self.snarl.insert_node(pos, id.clone());
-                    self.ids.insert(id.clone(), nid);
-                }
-            }
-            self.shown_pos.insert(id.clone(), pos);
-            // Pins: data inputs always, parameters when connected or asked for.
-            let pins = match editor.desc(id) {
-                Some(desc) => NodePins {
-                    inputs: desc
-                        .inputs
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, p)| {
-                            !p.ty.is_parameter() || self.param_pins.contains(id) || editor.incoming(id, &p.name).is_some()
-                        })
-                        .map(|(i, _)| i)
-                        .collect(),
-                    outputs: (0..desc.outputs.len()).collect(),
-                },
-                None => NodePins::default(),
-            };
-            self.pins.insert(id.clone(), pins);
+        self.param_pins.retain(|id| editor.node_doc(id).is_some());
+        for &(id, pos) in &kept {
+            self.hold_node(editor, id, pos);
         }
-        // Wires.
-        let mut want: HashSet<(OutPinId, InPinId)> = HashSet::new();
-        for (a, b) in &doc.edges {
-            let (Some((na, pa)), Some((nb, pb))) = (split_endpoint(a), split_endpoint(b)) else { continue };
-            let (Some(&ia), Some(&ib)) = (self.ids.get(na), self.ids.get(nb)) else { continue };
-            let (Some(da), Some(db)) = (editor.desc(na), editor.desc(nb)) else { continue };
-            let (Some(oa), Some(ob)) = (da.output_index(pa), db.input_index(pb)) else { continue };
-            let (Some(pa), Some(pb)) = (self.pins.get(na), self.pins.get(nb)) else { continue };
-            let (Some(out), Some(inp)) = (pa.outputs.iter().position(|&i| i == oa), pb.inputs.iter().position(|&i| i == ob))
-            else {
-                continue;
-            };
-            want.insert((OutPinId { node: ia, output: out }, InPinId { node: ib, input: inp }));
-        }
+        let want = if culling { self.wires_between(editor, &kept) } else { self.wires(editor) };
         let have: Vec<(OutPinId, InPinId)> = self.snarl.wires().collect();
         for w in &have {
             if !want.contains(w) {
@@ -252,6 +232,73 @@ impl Canvas {
         }
     }
 
+    /// Puts node `id` in the snarl at `pos` (or moves it there) with the pins it shows.
+    fn hold_node(&mut self, editor: &Editor, id: &str, pos: Pos2) {
+        match self.ids.get(id) {
+            Some(&nid) => {
+                if self.shown_pos.get(id) != Some(&pos)
+                    && let Some(info) = self.snarl.get_node_info_mut(nid)
+                {
+                    info.pos = pos;
+                }
+            }
+            None => {
+                let nid = self.snarl.insert_node(pos, id.to_string());
+                self.ids.insert(id.to_string(), nid);
+            }
+        }
+        self.shown_pos.insert(id.to_string(), pos);
+        // Pins: data inputs always, parameters when connected or asked for.
+        let pins = match editor.desc(id) {
+            Some(desc) => NodePins {
+                inputs: desc
+                    .inputs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| {
+                        !p.ty.is_parameter() || self.param_pins.contains(id) || editor.incoming(id, &p.name).is_some()
+                    })
+                    .map(|(i, _)| i)
+                    .collect(),
+                outputs: (0..desc.outputs.len()).collect(),
+            },
+            None => NodePins::default(),
+        };
+        self.pins.insert(id.to_string(), pins);
+    }
+
+    /// The wire of edge `a` → `b`, when both ends are held and show the pins.
+    fn wire(&self, editor: &Editor, a: &str, b: &str) -> Option<(OutPinId, InPinId)> {
+        let ((na, pa), (nb, pb)) = (split_endpoint(a)?, split_endpoint(b)?);
+        let (ia, ib) = (*self.ids.get(na)?, *self.ids.get(nb)?);
+        let (oa, ob) = (editor.desc(na)?.output_index(pa)?, editor.desc(nb)?.input_index(pb)?);
+        let out = self.pins.get(na)?.outputs.iter().position(|&i| i == oa)?;
+        let inp = self.pins.get(nb)?.inputs.iter().position(|&i| i == ob)?;
+        Some((OutPinId { node: ia, output: out }, InPinId { node: ib, input: inp }))
+    }
+
+    /// Every edge's wire.
+    fn wires(&self, editor: &Editor) -> HashSet<(OutPinId, InPinId)> {
+        editor.doc().edges.iter().filter_map(|(a, b)| self.wire(editor, a, b)).collect()
+    }
+
+    /// The wires between held nodes, found from their inputs (a culled canvas must not walk
+    /// every edge of a big graph each time the view moves).
+    fn wires_between(&self, editor: &Editor, kept: &[(&str, Pos2)]) -> HashSet<(OutPinId, InPinId)> {
+        let mut out = HashSet::new();
+        for (id, _) in kept {
+            let Some(desc) = editor.desc(id) else { continue };
+            for port in &desc.inputs {
+                if let Some(src) = editor.incoming(id, &port.name)
+                    && let Some(w) = self.wire(editor, src, &format!("{id}.{}", port.name))
+                {
+                    out.insert(w);
+                }
+            }
+        }
+        out
+    }
+
     /// Shows the canvas; returns the gestures to apply.
     pub fn show(&mut self, ui: &mut Ui, editor: &Editor) -> Vec<Action> {
         self.sync(editor);
@@ -259,6 +306,10 @@ impl Canvas {
         if self.frame_all_frames > 0 {
             self.frame_all_frames -= 1;
             self.pending_transform = Some(FrameTarget::All);
+        }
+        // A culled canvas holds only some nodes: "all" is every node's position.
+        if self.culled.is_some() && matches!(self.pending_transform, Some(FrameTarget::All)) {
+            self.pending_transform = Some(FrameTarget::Rect(self.positions.bounds.expand(60.0)));
         }
         let ctx = ui.ctx().clone();
         let mut actions = Vec::new();
@@ -300,6 +351,11 @@ impl Canvas {
         self.follow_node_drag(&before, editor, &mut actions);
         self.end_gesture(&ctx, editor, &mut actions);
         self.show_minimap_ui(&ctx, &selected, editor.doc());
+        if let Some((held, total)) = self.culled {
+            let at = self.rect.left_top() + egui::vec2(12.0, 10.0);
+            let text = format!("showing the {held} nodes nearest the view of {total}: pan or zoom to see others");
+            ui.painter().text(at, egui::Align2::LEFT_TOP, text, egui::FontId::proportional(13.0), Color32::from_gray(200));
+        }
         actions
     }
 
@@ -454,7 +510,11 @@ impl Canvas {
         if !self.show_minimap || !self.rect.is_finite() || self.rect.width() < 2.0 * MINIMAP_SIZE.x {
             return;
         }
-        let nodes: Vec<(Rect, bool)> = self.node_rects.iter().map(|(id, r)| (*r, selected.contains(id))).collect();
+        let nodes: Vec<(Rect, bool)> = if self.culled.is_some() {
+            self.positions.cells.iter().map(|r| (*r, false)).collect()
+        } else {
+            self.node_rects.iter().map(|(id, r)| (*r, selected.contains(id))).collect()
+        };
         let at = Rect::from_min_size(self.rect.max - MINIMAP_SIZE - egui::vec2(12.0, 12.0), MINIMAP_SIZE);
         self.minimap_rect = Some(at);
         let (group_colors, comment_colors) = annotation_colors(doc);

@@ -35,7 +35,7 @@ pub(crate) fn is_anchored(path: &str) -> bool {
 impl Editor {
     /// The clipboard text for nodes `ids` (unknown ids are skipped); `None` when none is known.
     pub fn copy_text(&self, ids: &[String]) -> Option<String> {
-        let chosen: HashSet<&str> = ids.iter().map(String::as_str).filter(|id| self.doc().node(id).is_some()).collect();
+        let chosen: HashSet<&str> = ids.iter().map(String::as_str).filter(|id| self.node_doc(id).is_some()).collect();
         if chosen.is_empty() {
             return None;
         }

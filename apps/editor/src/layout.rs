@@ -17,7 +17,7 @@ pub fn relative_path(file: &Path, base: &Path) -> String {
 }
 
 /// Positions for nodes that have none: columns by depth along the edges.
-pub fn auto_layout(doc: &GraphDoc) -> HashMap<String, (f32, f32)> {
+pub fn auto_layout(doc: &GraphDoc) -> Layout {
     let mut depth: HashMap<&str, usize> = doc.nodes.0.iter().map(|(id, _)| (id.as_str(), 0)).collect();
     // Longest-path depth by relaxation (bounded, so cycles in a broken file cannot loop forever).
     for _ in 0..doc.nodes.0.len().min(64) {
@@ -45,6 +45,9 @@ pub fn auto_layout(doc: &GraphDoc) -> HashMap<String, (f32, f32)> {
     }
     out
 }
+
+/// Node id → canvas position (x, y).
+pub type Layout = HashMap<String, (f32, f32)>;
 
 /// A generated graph of `n` nodes for stress tests and benchmarks of the canvas: chains of
 /// `value.float → math.add → math.multiply` laid out on a grid, every node positioned, every

@@ -21,6 +21,7 @@ pub mod browser;
 pub mod canvas;
 pub mod clipboard;
 pub mod cook;
+pub mod culling;
 pub mod curves;
 pub mod gesture;
 pub mod gradient;

@@ -52,13 +52,13 @@ fn main() {
         if let Some(dir) = g.parent().map(|d| d.join("presets")) {
             editor.add_preset_dir(dir);
         }
-        // Problems are shown in the window; the editor opens either way.
-        let _ = editor.open(g);
-    }
-    if let Some(id) = &select {
-        editor.select(id);
+        // Read and validated on a loader thread while the window opens; problems are shown
+        // in it, and the editor opens either way.
+        editor.begin_open(g);
     }
     let mut app = EditorApp::new(editor);
+    // The file opens on a loader thread: the node is selected once it is there.
+    app.select_on_open = select;
     app.state_dump = dump;
     app.canvas.frame_all();
     let options = eframe::NativeOptions {

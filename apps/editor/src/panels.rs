@@ -22,7 +22,7 @@ impl EditorApp {
             ui.weak("Click a node to edit its parameters.");
             return;
         };
-        let Some(nd) = self.editor.doc().node(&id).cloned() else { return };
+        let Some(nd) = self.editor.node_doc(&id).cloned() else { return };
         ui.horizontal(|ui| {
             ui.heading(&id);
             ui.weak(&nd.type_name);

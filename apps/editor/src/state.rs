@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use pyrograph_frontend::core::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
 use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::graph::preset_desc;
-use pyrograph_frontend::core::graph::{expand_vars, value_to_param};
+use pyrograph_frontend::core::graph::value_to_param;
 use pyrograph_frontend::core::{
     BuildOptions, CookSettings, Diagnostic, DiagnosticKind, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc,
     Registry, TimeDep,
@@ -24,6 +24,7 @@ use crate::layout::relative_path;
 
 mod files;
 mod keyframes;
+mod opening;
 mod preset_lib;
 pub mod vector_keys;
 
@@ -98,6 +99,16 @@ pub struct Editor {
     key_clipboard: Vec<crate::keys::KeyDoc>,
     /// Whether preview cooks are requested automatically after edits.
     pub auto_cook: bool,
+    /// A file being read and validated on a loader thread.
+    opening: Option<opening::Opening>,
+    /// Lookups by id into `doc`, as of a revision.
+    index: opening::DocIndex,
+    /// Where every node is drawn, as the loader prepared it, and the revision it is of.
+    positions: Option<Arc<crate::culling::Positions>>,
+    /// Whether the document differs from the saved one, as of (revision, saves).
+    dirty: std::cell::Cell<Option<(u64, u64, bool)>>,
+    /// Saves so far (a save changes what "dirty" compares with, not the revision).
+    saves: u64,
 }
 
 impl Editor {
@@ -140,6 +151,11 @@ impl Editor {
             received: Vec::new(),
             key_clipboard: Vec::new(),
             auto_cook: true,
+            opening: None,
+            index: opening::DocIndex::default(),
+            positions: None,
+            dirty: std::cell::Cell::new(None),
+            saves: 0,
         };
         ed.revalidate();
         ed
@@ -164,7 +180,17 @@ impl Editor {
 
     /// Whether the document differs from the file.
     pub fn is_dirty(&self) -> bool {
-        self.doc != self.saved
+        // Asked every frame (title, status line): compared once per change, since comparing a
+        // big document costs milliseconds.
+        let key = (self.revision, self.saves);
+        match self.dirty.get() {
+            Some((r, s, dirty)) if (r, s) == key => dirty,
+            _ => {
+                let dirty = self.doc != self.saved;
+                self.dirty.set(Some((key.0, key.1, dirty)));
+                dirty
+            }
+        }
     }
 
     /// The window title: file name, a `*` when dirty.
@@ -340,8 +366,10 @@ impl Editor {
 
     fn after_change(&mut self, before: &GraphDoc) {
         self.revision += 1;
-        self.selection.retain(|id| self.doc.node(id).is_some());
-        if self.preview_req.as_ref().is_some_and(|p| self.doc.node(&p.node).is_none()) {
+        self.reindex();
+        let (index, doc, revision) = (&self.index, &self.doc, self.revision);
+        self.selection.retain(|id| index.node(doc, revision, id).is_some());
+        if self.preview_req.as_ref().is_some_and(|p| self.node_doc(&p.node).is_none()) {
             self.preview_req = None;
             self.preview = None;
         }
@@ -478,8 +506,7 @@ impl Editor {
 
     /// The edge feeding input `port` of `node`, as `"from.port"`.
     pub fn incoming(&self, node: &str, port: &str) -> Option<&str> {
-        let target = format!("{node}.{port}");
-        self.doc.edges.iter().find(|(_, b)| *b == target).map(|(a, _)| a.as_str())
+        self.index.incoming(&self.doc, self.revision, node, port)
     }
 
     /// Checks whether `from_node.from_port -> to_node.to_port` may be made, with the type checker
@@ -700,9 +727,13 @@ impl Editor {
 
     /// Rebuilds the graph from the document and maps every problem to its node.
     pub fn revalidate(&mut self) {
-        let dir = self.base_dir();
-        let result = Graph::build(&self.doc, &self.registry, &dir, &BuildOptions::default());
-        let (graph, diagnostics) = match result {
+        let checked = opening::check(&self.doc, &self.registry, &self.base_dir());
+        self.apply_validation(checked);
+    }
+
+    /// Adopts a validation of the current document (made here or by the loader thread).
+    fn apply_validation(&mut self, checked: opening::Checked) {
+        let (graph, diagnostics) = match checked.graph {
             Ok(g) => (Some(Arc::new(g)), Vec::new()),
             Err(d) => (None, d.0),
         };
@@ -716,35 +747,25 @@ impl Editor {
                 by_node.entry(node).or_default().push(text);
             }
         }
-        self.descs = self.resolve_descs(graph.as_deref());
+        self.descs = checked.descs;
         self.validation = Validation { graph, diagnostics, by_node };
-        self.cook_errors.retain(|k, _| self.doc.node(k).is_some());
-        let doc = &self.doc;
-        self.cook_warnings.retain(|k, _| doc.node(k.split('/').next().unwrap_or(k)).is_some());
+        self.reindex();
+        let index = &self.index;
+        let (doc, revision) = (&self.doc, self.revision);
+        self.cook_errors.retain(|k, _| index.node(doc, revision, k).is_some());
+        self.cook_warnings.retain(|k, _| index.node(doc, revision, k.split('/').next().unwrap_or(k)).is_some());
     }
 
-    fn resolve_descs(&self, graph: Option<&Graph>) -> HashMap<String, Arc<NodeDesc>> {
-        let mut out = HashMap::new();
-        let dir = self.base_dir();
-        for (id, nd) in &self.doc.nodes.0 {
-            let desc = if nd.type_name == INCLUDE_TYPE {
-                match graph.and_then(|g| g.desc(id).cloned()) {
-                    Some(d) => Some(d),
-                    None => match nd.params.get(INCLUDE_PATH) {
-                        Some(ParamValue::String(p)) => {
-                            expand_vars(p).ok().and_then(|p| preset_desc(&dir.join(p), &self.registry).ok())
-                        }
-                        _ => None,
-                    },
-                }
-            } else {
-                self.registry.get(&nd.type_name).map(|n| n.desc().clone())
-            };
-            if let Some(d) = desc {
-                out.insert(id.clone(), Arc::new(d));
-            }
+    /// Rebuilds the lookups by id, unless they are of the current revision.
+    fn reindex(&mut self) {
+        if !self.index.is_of(self.revision) {
+            self.index = opening::DocIndex::build(&self.doc, self.revision);
         }
-        out
+    }
+
+    /// Node `id` of the document (found through the index: the document is a list).
+    pub fn node_doc(&self, id: &str) -> Option<&NodeDoc> {
+        self.index.node(&self.doc, self.revision, id)
     }
 }
 

@@ -147,7 +147,7 @@ impl SnarlViewer<String> for Viewer<'_> {
 
     fn show_header(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
         let Some(id) = snarl.get_node(node).cloned() else { return };
-        let type_name = self.editor.doc().node(&id).map(|n| n.type_name.clone()).unwrap_or_default();
+        let type_name = self.editor.node_doc(&id).map(|n| n.type_name.clone()).unwrap_or_default();
         let problems = self.editor.node_problems(&id);
         let warnings = self.editor.node_warnings(&id);
         ui.horizontal(|ui| {

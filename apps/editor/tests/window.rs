@@ -214,3 +214,35 @@ fn a_click_on_the_key_toggle_in_a_real_window_sets_a_key_and_ctrl_z_takes_it_bac
     xdotool(&display, &["key", "ctrl+z"]);
     wait_for(&dump, "the key undone", |v| v["params"]["strength"] == "0.4");
 }
+
+/// A chain of 100,000 nodes given on the command line: the window comes up and keeps drawing
+/// while a loader thread reads and validates the file (the frame count in the state dump goes on
+/// rising while it says "opening"), then it shows a bounded part of the chain. The slowest frame
+/// is printed (TESTING.md records it for a release build).
+#[test]
+#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
+fn a_100000_node_chain_opens_in_a_real_window_without_freezing_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("chain.ron");
+    std::fs::write(&graph, pyrograph_testing::chain_ron(100_000)).unwrap();
+    let (_procs, _display, dump) = start_editor(&graph, &[], dir.path());
+    let opening = wait_for(&dump, "the window while opening", |v| v["frames"].as_u64().is_some());
+    let frames_then = opening["frames"].as_u64().unwrap_or(0);
+    let opened = wait_for(&dump, "the chain opened", |v| {
+        v["opening"] == false && v["status"].as_str().is_some_and(|s| s.starts_with("opened"))
+    });
+    let status = opened["status"].as_str().unwrap_or_default();
+    assert!(!status.contains("problem"), "{status}");
+    let culled = &opened["culled"];
+    assert_eq!(culled[1].as_u64(), Some(100_000), "{opened}");
+    assert!(culled[0].as_u64().is_some_and(|held| held > 0 && held <= 600), "{culled}");
+    if opening["opening"] == true {
+        assert!(opened["frames"].as_u64().unwrap_or(0) > frames_then + 1, "the window kept drawing while it opened");
+    }
+    eprintln!(
+        "100,000-node chain in a real window: {} frames, slowest {:.1} ms, {} of 100000 nodes held",
+        opened["frames"],
+        opened["slowest_frame_ms"].as_f64().unwrap_or(-1.0),
+        culled[0]
+    );
+}

@@ -3,6 +3,7 @@
 //! inputs did not change since the last cook, so a `set` followed by a cook re-cooks only what
 //! is downstream of the edit (`graph.last_cooked` lists what actually ran).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, PoisonError};
 
@@ -42,6 +43,10 @@ struct Doc {
     file: Option<PathBuf>,
     /// The folder relative paths resolve against.
     dir: PathBuf,
+    /// Where each node id is in `doc.nodes` (the first of a duplicated id, as the document's own
+    /// lookup finds it): a script building a big graph calls add_node, connect and set once per
+    /// node, and a scan of the list each time made that quadratic.
+    index: HashMap<String, usize>,
 }
 
 impl Doc {
@@ -52,8 +57,39 @@ impl Doc {
         }
     }
 
+    fn new(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Doc {
+        let mut d = Doc { doc, file, dir, index: HashMap::new() };
+        d.reindex();
+        d
+    }
+
+    fn reindex(&mut self) {
+        self.index.clear();
+        for (i, (id, _)) in self.doc.nodes.0.iter().enumerate() {
+            self.index.entry(id.clone()).or_insert(i);
+        }
+    }
+
+    /// Where node `id` is in the document's list.
+    fn position(&self, id: &str) -> Option<usize> {
+        self.index.get(id).copied().filter(|&i| self.doc.nodes.0.get(i).is_some_and(|(k, _)| k == id))
+    }
+
+    fn node(&self, id: &str) -> Option<&NodeDoc> {
+        self.position(id).map(|i| &self.doc.nodes.0[i].1)
+    }
+
     fn node_mut(&mut self, py: Python<'_>, id: &str) -> PyResult<&mut NodeDoc> {
-        self.doc.node_mut(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))
+        match self.position(id) {
+            Some(i) => Ok(&mut self.doc.nodes.0[i].1),
+            None => Err(graph_error(py, Some(id), None, &format!("no node '{id}' in the graph"))),
+        }
+    }
+
+    /// Appends node `id`, which must be new.
+    fn push_node(&mut self, id: &str, node: NodeDoc) {
+        self.index.insert(id.to_string(), self.doc.nodes.0.len());
+        self.doc.nodes.0.push((id.to_string(), node));
     }
 }
 
@@ -75,7 +111,7 @@ fn endpoint<'a>(py: Python<'_>, text: &'a str) -> PyResult<(&'a str, &'a str)> {
 impl Graph {
     fn with_doc(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Graph {
         Graph {
-            state: Mutex::new(Doc { doc, file, dir }),
+            state: Mutex::new(Doc::new(doc, file, dir)),
             built: Mutex::new(None),
             eval: Mutex::new(Evaluator::new()),
             last_cooked: Mutex::new(Vec::new()),
@@ -254,7 +290,12 @@ impl Graph {
         let reg = registry();
         if reg.desc(r#type).is_none() {
             let hint = reg.suggest(r#type).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
-            return Err(graph_error(py, Some(id), None, &format!("unknown node type '{}'{hint}", r#type)));
+            return Err(graph_error(
+                py,
+                Some(id),
+                None,
+                &format!("unknown node type '{}'{hint}", pyrograph_frontend::core::error::shortened(r#type)),
+            ));
         }
         let mut node = NodeDoc::new(r#type);
         if let Some(params) = params {
@@ -265,10 +306,10 @@ impl Graph {
             }
         }
         let mut st = self.state();
-        if st.doc.node(id).is_some() {
+        if st.node(id).is_some() {
             return Err(graph_error(py, Some(id), None, &format!("a node '{id}' already exists")));
         }
-        st.doc.add_node(id, node);
+        st.push_node(id, node);
         self.edited();
         Ok(())
     }
@@ -278,6 +319,7 @@ impl Graph {
         let mut st = self.state();
         let before = st.doc.nodes.0.len();
         st.doc.nodes.0.retain(|(k, _)| k != id);
+        st.reindex();
         if st.doc.nodes.0.len() == before {
             return Err(graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")));
         }
@@ -353,7 +395,7 @@ impl Graph {
     fn get<'py>(&self, py: Python<'py>, endpoint: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
         let (id, param) = self::endpoint(py, endpoint)?;
         let st = self.state();
-        let node = st.doc.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
+        let node = st.node(id).ok_or_else(|| graph_error(py, Some(id), None, &format!("no node '{id}' in the graph")))?;
         if let Some(v) = node.params.get(param) {
             return crate::param_values::to_py(py, v).map(Some);
         }

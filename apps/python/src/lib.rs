@@ -40,9 +40,49 @@ fn describe(py: Python<'_>, r#type: &str) -> PyResult<String> {
         Some(d) => Ok(pyrograph_frontend::reference::node_markdown(d)),
         None => {
             let hint = reg.suggest(type_name).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
-            Err(errors::graph_error(py, None, None, &format!("unknown node type '{type_name}'{hint}")))
+            Err(errors::graph_error(
+                py,
+                None,
+                None,
+                &format!("unknown node type '{}'{hint}", pyrograph_frontend::core::error::shortened(type_name)),
+            ))
         }
     }
+}
+
+/// Confines and bounds what this process reads and builds, as the command line's
+/// `--read-root`, `--max-nodes` and `--max-pixels` do (for a service cooking graphs its users
+/// submit). `read_roots`: folders every include, preset, footage, mesh or database must lie
+/// in, symbolic links followed (an empty list lifts the confinement; the graph file given to
+/// `Graph.load` is read wherever it is). `max_nodes`, `max_pixels`: the limits (0 restores the
+/// default or the environment's). Arguments left out keep their setting. Process-wide: every
+/// `Graph` and thread obeys them from the next build or read.
+#[pyfunction]
+#[pyo3(signature = (*, read_roots=None, max_nodes=None, max_pixels=None))]
+fn set_limits(read_roots: Option<Vec<std::path::PathBuf>>, max_nodes: Option<u64>, max_pixels: Option<u64>) -> PyResult<()> {
+    use pyrograph_frontend::core::limits;
+    if let Some(roots) = read_roots {
+        limits::set_read_roots(&roots).map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("read_roots: {e}")))?;
+    }
+    if let Some(n) = max_nodes {
+        limits::set_max_nodes((n > 0).then_some(n));
+    }
+    if let Some(n) = max_pixels {
+        limits::set_max_pixels((n > 0).then_some(n));
+    }
+    Ok(())
+}
+
+/// The limits in force: `{"read_roots": [...], "max_nodes": N, "max_pixels": N}`.
+#[pyfunction]
+fn limits(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
+    use pyrograph_frontend::core::limits as l;
+    let d = pyo3::types::PyDict::new(py);
+    let roots: Vec<String> = l::read_roots().iter().map(|p| p.display().to_string()).collect();
+    d.set_item("read_roots", roots)?;
+    d.set_item("max_nodes", l::max_nodes())?;
+    d.set_item("max_pixels", l::max_pixels())?;
+    Ok(d)
 }
 
 /// The Python module.
@@ -61,5 +101,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<values::FrameMemory>()?;
     m.add_function(wrap_pyfunction!(nodes, m)?)?;
     m.add_function(wrap_pyfunction!(describe, m)?)?;
+    m.add_function(wrap_pyfunction!(set_limits, m)?)?;
+    m.add_function(wrap_pyfunction!(limits, m)?)?;
     Ok(())
 }

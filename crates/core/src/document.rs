@@ -455,7 +455,13 @@ struct VersionProbe {
 
 fn syntax_error(e: ron::error::SpannedError) -> Diagnostics {
     let location = Location::Text { line: e.span.start.line, column: e.span.start.col };
-    let message = in_user_terms(e.code.to_string());
+    let message = match e.code {
+        // RON's own words name its options and a stack overflow it just prevented.
+        ron::Error::ExceededRecursionLimit => {
+            "brackets nested too deep (a graph's values nest a few levels; this nests over 128)".to_string()
+        }
+        code => in_user_terms(code.to_string()),
+    };
     Diagnostics::one(Diagnostic::new(DiagnosticKind::Syntax, location, format!("malformed graph: {message}")))
 }
 
@@ -560,31 +566,41 @@ pub fn migrate_v3(mut old: GraphDoc) -> GraphDoc {
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so readers
-/// never see a half-written file. With `overwrite` false an existing file is an error.
+/// never see a half-written file: a full disk or any other failure leaves no file under the
+/// final name and no temporary behind. With `overwrite` false an existing file is an error (and
+/// one appearing meanwhile is not replaced).
+///
+/// The temporary is made by `tempfile`: a random name opened with `O_EXCL`, so it cannot follow
+/// a link planted under a predictable name, and writers on several threads never share one.
 pub fn write_atomic(path: &Path, bytes: &[u8], overwrite: bool) -> std::io::Result<()> {
     use std::io::Write;
-    if !overwrite && path.exists() {
-        return Err(std::io::Error::new(
+    let exists = || {
+        std::io::Error::new(
             std::io::ErrorKind::AlreadyExists,
             format!("{} exists; refusing to overwrite it (ask for overwrite to replace it)", path.display()),
-        ));
+        )
+    };
+    if !overwrite && path.exists() {
+        return Err(exists());
     }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    let prefix = format!(".{name}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // tempfile makes its files private (0600); a frame or a graph is shared like any file the
+    // user writes: 0666 less the umask, as `File::create` gives.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir)?;
+    // Through the plain file: `NamedTempFile`'s own writes add the temporary's name to errors.
+    tmp.as_file_mut().write_all(bytes)?;
+    tmp.as_file().sync_all()?;
+    let persisted = if overwrite { tmp.persist(path) } else { tmp.persist_noclobber(path) };
+    persisted.map(drop).map_err(|e| if e.error.kind() == std::io::ErrorKind::AlreadyExists { exists() } else { e.error })
 }
 
 /// Parses `node.port` into its two halves.
@@ -641,13 +657,22 @@ mod tests {
 
     #[test]
     fn a_malformed_graph_is_described_in_the_files_terms_not_the_readers() {
-        for text in
-            ["42", "[]", "Graph(version: 1)", "", "(version: 1, nodes: {\"a\": 3})", "(version: 1, nodes: {\"a\": (kind: 1)})"]
-        {
+        let deep =
+            format!("(version: 1, nodes: {{\"a\": (type: \"x\", params: {{\"b\": {}1{}}})}})", "[".repeat(500), "]".repeat(500));
+        for text in [
+            "42",
+            "[]",
+            "Graph(version: 1)",
+            "",
+            "(version: 1, nodes: {\"a\": 3})",
+            "(version: 1, nodes: {\"a\": (kind: 1)})",
+            deep.as_str(),
+        ] {
             let message = GraphDoc::from_ron(text).unwrap_err().0[0].message.clone();
-            let internal = ["VersionProbe", "GraphDoc", "NodeDoc", "NodeV0", "struct"];
+            let internal = ["VersionProbe", "GraphDoc", "NodeDoc", "NodeV0", "struct", "ron::", "serde_stacker"];
             assert!(!internal.iter().any(|n| message.contains(n)), "{text:?}: {message}");
-            assert!(message.contains("a graph, (version") || message.contains("a node, (type"), "{text:?}: {message}");
+            let says = ["a graph, (version", "a node, (type", "nested too deep"];
+            assert!(says.iter().any(|s| message.contains(s)), "{text:?}: {message}");
         }
     }
 

@@ -151,6 +151,8 @@ pub enum DiagnosticKind {
     Include,
     /// A writer path that leaves the output folder (`--out`, else the graph's folder).
     OutsideOutput,
+    /// A file the graph reads that lies outside the folders reads are confined to (`--read-root`).
+    OutsideReadRoots,
     /// A node id that cannot be used (empty, or holding the include separator `/`).
     BadId,
     /// An animated parameter that is malformed (keys out of order, an expression that does not
@@ -217,5 +219,15 @@ impl Diagnostics {
             d.file.get_or_insert_with(|| file.to_path_buf());
         }
         self
+    }
+}
+
+/// A value as an error quotes it: whole when short, else its start and its length (a value
+/// pasted by mistake, or a hostile one, can be megabytes).
+pub fn shortened(text: &str) -> String {
+    const SHOWN: usize = 80;
+    match text.char_indices().nth(SHOWN) {
+        None => text.to_string(),
+        Some((cut, _)) => format!("{}… ({} characters)", &text[..cut], text.chars().count()),
     }
 }

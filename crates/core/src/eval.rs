@@ -224,7 +224,7 @@ impl Evaluator {
         let cooked = if gn.lifted {
             Ok(lift(gn, values, fingerprint))
         } else {
-            gn.node.cook(&Inputs::new(desc, &values), &node_ctx).and_then(|out| check_outputs(gn, out))
+            guarded(|| gn.node.cook(&Inputs::new(desc, &values), &node_ctx)).and_then(|out| check_outputs(gn, out))
         };
         node_ctx.report(Progress::NodeFinished { node: gn.id.clone(), ok: cooked.is_ok() });
         match cooked {
@@ -237,6 +237,20 @@ impl Evaluator {
             Err(e) => Outcome { result: Err(wrap(gn, e)), entry: None, cooked: true },
         }
     }
+}
+
+/// Runs a node's cook, turning a panic (a bug: a node met an input it did not expect) into an
+/// error of that node, so one node's bug fails its own branch with a message instead of taking
+/// the process (a farm task, a Python interpreter, the editor) down with it.
+fn guarded(cook: impl FnOnce() -> Result<Vec<Value>, NodeError>) -> Result<Vec<Value>, NodeError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(cook)).unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(NodeError::msg(format!("internal error, a bug in pyrograph (please report it with the graph): {what}")))
+    })
 }
 
 fn wrap(gn: &GraphNode, e: NodeError) -> NodeError {
@@ -397,7 +411,7 @@ impl Lifted {
         })?;
         let node_ctx = ctx.for_node(&self.id);
         node_ctx.log_frame(frame);
-        let out = self.node.cook(&Inputs::new(desc, &values), &node_ctx).map_err(in_frame)?;
+        let out = guarded(|| self.node.cook(&Inputs::new(desc, &values), &node_ctx)).map_err(in_frame)?;
         if out.len() != desc.outputs.len() {
             return Err(in_frame(NodeError::msg("wrong number of outputs")));
         }

@@ -14,10 +14,12 @@ pub mod eval;
 pub mod fingerprint;
 pub mod frames;
 pub mod graph;
+pub mod limits;
 pub mod node;
 pub mod registry;
 pub mod stepping;
 pub mod timeline;
+mod typos;
 pub mod value;
 
 pub use anim::Animated;

@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use crate::node::{Node, NodeDesc};
+use crate::typos::within_edits;
 
 /// Node types by stable type name.
 #[derive(Clone, Default)]
@@ -70,32 +71,20 @@ impl Registry {
         self.nodes
             .keys()
             .chain(self.loader.keys())
-            .map(|k| (edit_distance(k, name).min(edit_distance(k.rsplit('.').next().unwrap_or(k), tail)), k))
-            .filter(|(d, _)| *d <= 2)
+            .filter_map(|k| {
+                let whole = within_edits(k, name, 2);
+                let short = within_edits(k.rsplit('.').next().unwrap_or(k), tail, 2);
+                Some((whole.into_iter().chain(short).min()?, k))
+            })
             .min()
             .map(|(_, k)| k.as_str())
     }
 }
 
-/// Levenshtein distance; short names only, so the quadratic table is fine.
-pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::typos::edit_distance;
 
     #[test]
     fn edit_distance_counts_single_edits() {
@@ -109,5 +98,9 @@ mod tests {
         let r = Registry::with_builtins();
         assert_eq!(r.suggest("math.ad"), Some("math.add"));
         assert_eq!(r.suggest("zzzzzzzz"), None);
+        // Lengths too far apart are not compared (a hostile name of millions of characters).
+        assert_eq!(within_edits("math.add", "math.addxx", 2), Some(2));
+        assert_eq!(within_edits("math.add", "math.addxxx", 2), None);
+        assert_eq!(r.suggest(&"m".repeat(1_000_000)), None);
     }
 }

@@ -21,6 +21,8 @@ pyrograph_core::node! {
         a: f64 = 0.0,
         /// whether to fail
         fail: bool = false,
+        /// whether to panic, as a node with a bug would
+        panic: bool = false,
     }
     pub struct FailOut {
         /// a
@@ -33,6 +35,7 @@ impl Cook for Fail {
         if self.fail {
             return Err(NodeError::port(port!(Fail, fail), "asked to fail"));
         }
+        assert!(!self.panic, "asked to panic");
         Ok(FailOut { value: self.a })
     }
 }
@@ -225,6 +228,23 @@ fn a_failing_node_marks_its_downstream_and_other_branches_still_cook() {
     let after = res.node("after").unwrap().as_ref().unwrap_err();
     assert_eq!(after, &NodeError::Upstream("bad".into()));
     assert_eq!(res.root_errors().len(), 1);
+}
+
+#[test]
+fn a_panicking_node_is_an_error_of_that_node_and_other_branches_still_cook() {
+    let mut doc = two_branches();
+    doc.add_node("bad", NodeDoc::new("test.fail").param("panic", ParamValue::Bool(true)));
+    doc.add_node("after", NodeDoc::new("math.add"));
+    doc.connect("add.value", "bad.a").connect("bad.value", "after.a");
+    let g = build(&doc);
+    let res = pyrograph_core::Evaluator::new().cook(&g, &["after", "add2"], &CookCtx::new()).unwrap();
+    assert_eq!(float(&res.output(&g, "add2", "value").unwrap()), 6.0);
+    let bad = res.node("bad").unwrap().as_ref().unwrap_err().to_string();
+    assert!(
+        bad.starts_with("node 'bad' (test.fail): internal error, a bug in pyrograph") && bad.ends_with("asked to panic"),
+        "{bad}"
+    );
+    assert_eq!(res.node("after").unwrap().as_ref().unwrap_err(), &NodeError::Upstream("bad".into()));
 }
 
 #[test]

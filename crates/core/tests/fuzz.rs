@@ -14,7 +14,7 @@ use proptest::test_runner::{Config, TestRunner};
 use pyrograph_core::anim::Expr;
 use pyrograph_core::frames::FrameSet;
 use pyrograph_core::value::{Points, RampKeys};
-use pyrograph_core::{GraphDoc, ParamValue};
+use pyrograph_core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, ParamValue};
 
 fn cases() -> u32 {
     std::env::var("PYROGRAPH_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(100_000)
@@ -150,6 +150,32 @@ fn the_expression_parser_never_panics() {
     fuzz("Expr::parse + eval", SEEDS, "0123456789.+-*/^%()<>=!&|{}, framtiesnoculpdxhgfk_", |t| {
         if let Ok(e) = Expr::parse(t) {
             let _ = e.eval(12.5, 24.0);
+        }
+    });
+}
+
+#[test]
+fn includes_never_panic() {
+    // The included file is what changes: an outer graph includes it twice and sums its output.
+    const SEEDS: &[&str] = &[
+        r#"(version: 4, interface: (outputs: {"value": "x.value"}, params: {"b": "x.b"}), nodes: {"x": (type: "math.add", params: {"a": 1.0, "b": keys([(0, 1), (10, 2)])})}, edges: [])"#,
+        r#"(version: 4, interface: (outputs: {"value": "i.value"}), nodes: {"i": (type: "graph.include", params: {"path": "leaf.ron"})}, edges: [])"#,
+        r#"(version: 4, interface: (outputs: {"value": "i.value"}), nodes: {"i": (type: "graph.include", params: {"path": "inc.ron"})}, edges: [])"#,
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let outer = dir.path().join("outer.ron");
+    std::fs::write(
+        &outer,
+        r#"(version: 4, nodes: {"a": (type: "graph.include", params: {"path": "inc.ron"}), "b": (type: "graph.include", params: {"path": "inc.ron", "b": 3.0}), "s": (type: "math.add")}, edges: [("a.value", "s.a"), ("b.value", "s.b")])"#,
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("leaf.ron"), SEEDS[0]).unwrap();
+    let inc = dir.path().join("inc.ron");
+    let registry = pyrograph_core::Registry::with_builtins();
+    fuzz("graph.include (files on disk)", SEEDS, RON, |t| {
+        std::fs::write(&inc, t).unwrap();
+        if let Ok((_, g)) = Graph::load(&outer, &registry, &BuildOptions::default()) {
+            let _ = Evaluator::new().output(&g, "s.value", &CookCtx::new());
         }
     });
 }

@@ -5,6 +5,7 @@
 //! a cycle through all of a chain is one error that names a few of its nodes.
 
 use pyrograph_core::{BuildOptions, CookCtx, DiagnosticKind, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Registry, Value};
+use pyrograph_testing::include_bomb;
 
 const CHAIN: usize = 20_000;
 
@@ -58,29 +59,6 @@ fn a_cycle_through_a_long_chain_is_one_error_naming_a_few_of_its_nodes() {
     assert_eq!(cycles.len(), 1, "{:?}", cycles.iter().map(|d| &d.message).collect::<Vec<_>>());
     let message = &cycles[0].message;
     assert!(message.contains("20000 nodes") && message.contains("'n0'") && message.len() < 400, "{message}");
-}
-
-/// Files f0 … f{levels}: each includes the next twice and adds their values; the last is one
-/// node (`broken`: one with an unknown type). f0 flattens to 2^(levels + 1) − 1 nodes.
-fn include_bomb(dir: &std::path::Path, levels: usize, broken: bool) -> std::path::PathBuf {
-    for k in 0..=levels {
-        let text = if k == levels {
-            let ty = if broken { "math.nope" } else { "math.add" };
-            format!(
-                r#"(version: 1, interface: (outputs: {{"value": "x.value"}}), nodes: {{"x": (type: "{ty}", params: {{"a": 1.0}})}}, edges: [])"#
-            )
-        } else {
-            let inc = |id: &str| format!(r#""{id}": (type: "graph.include", params: {{"path": "f{}.ron"}})"#, k + 1);
-            format!(
-                r#"(version: 1, interface: (outputs: {{"value": "s.value"}}), nodes: {{{}, {}, "s": (type: "math.add")}},
-                    edges: [("a.value", "s.a"), ("b.value", "s.b")])"#,
-                inc("a"),
-                inc("b")
-            )
-        };
-        std::fs::write(dir.join(format!("f{k}.ron")), text).unwrap();
-    }
-    dir.join("f0.ron")
 }
 
 fn load(path: &std::path::Path) -> Result<Graph, pyrograph_core::Diagnostics> {

@@ -91,6 +91,10 @@ impl Library {
     pub fn scan(dirs: &[PathBuf]) -> Library {
         let mut lib = Library::default();
         for dir in dirs {
+            if let Err(why) = pyrograph_core::limits::may_read(dir) {
+                lib.refused.push((dir.clone(), why));
+                continue;
+            }
             let Ok(entries) = std::fs::read_dir(dir) else {
                 lib.missing.push(dir.clone());
                 continue;
@@ -99,6 +103,11 @@ impl Library {
                 entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "ron")).collect();
             files.sort();
             for file in files {
+                // A link in the folder may point anywhere: each file is checked where it leads.
+                if let Err(why) = pyrograph_core::limits::may_read(&file) {
+                    lib.refused.push((file, why));
+                    continue;
+                }
                 match GraphDoc::load(&file) {
                     Ok(doc) => lib.add(preset_of(file, doc)),
                     Err(d) => lib.refused.push((file, d.to_string())),

@@ -76,6 +76,97 @@ impl XorShift {
     }
 }
 
+/// The bytes of a PNG file whose header declares `w` × `h` RGB pixels and which holds none: a
+/// decompression bomb's header, for tests of the pixel budget.
+pub fn png_declaring(w: u32, h: u32) -> Vec<u8> {
+    // CRC-32 of a chunk's type and data, bit by bit: the test needs three small chunks.
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for b in bytes {
+            c ^= u32::from(*b);
+            for _ in 0..8 {
+                c = if c & 1 == 1 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    }
+    let chunk = |kind: &[u8], data: &[u8]| {
+        let body = [kind, data].concat();
+        [&(data.len() as u32).to_be_bytes()[..], &body, &crc32(&body).to_be_bytes()].concat()
+    };
+    let ihdr = [&w.to_be_bytes()[..], &h.to_be_bytes(), &[8, 2, 0, 0, 0]].concat();
+    [&b"\x89PNG\r\n\x1a\n"[..], &chunk(b"IHDR", &ihdr), &chunk(b"IDAT", &[]), &chunk(b"IEND", &[])].concat()
+}
+
+/// Files f0 … f{levels}: each includes the next twice and adds their values; the last is one
+/// node (`broken`: one with an unknown type). f0 flattens to 2^(levels + 1) − 1 nodes.
+pub fn include_bomb(dir: &std::path::Path, levels: usize, broken: bool) -> std::path::PathBuf {
+    for k in 0..=levels {
+        let text = if k == levels {
+            let ty = if broken { "math.nope" } else { "math.add" };
+            format!(
+                r#"(version: 1, interface: (outputs: {{"value": "x.value"}}), nodes: {{"x": (type: "{ty}", params: {{"a": 1.0}})}}, edges: [])"#
+            )
+        } else {
+            let inc = |id: &str| format!(r#""{id}": (type: "graph.include", params: {{"path": "f{}.ron"}})"#, k + 1);
+            format!(
+                r#"(version: 1, interface: (outputs: {{"value": "s.value"}}), nodes: {{{}, {}, "s": (type: "math.add")}},
+                    edges: [("a.value", "s.a"), ("b.value", "s.b")])"#,
+                inc("a"),
+                inc("b")
+            )
+        };
+        std::fs::write(dir.join(format!("f{k}.ron")), text).unwrap();
+    }
+    dir.join("f0.ron")
+}
+
+/// A graph file's text: `math.add` nodes n0 → n1 → … → n{len − 1}, each adding 1 (so n{k}
+/// cooks to k + 1), written the way a generator script writes it.
+pub fn chain_ron(len: usize) -> String {
+    let mut text = String::from("(version: 4, nodes: {\n");
+    for i in 0..len {
+        text.push_str(&format!("\"n{i}\": (type: \"math.add\", params: {{\"b\": 1.0}}),\n"));
+    }
+    text.push_str("}, edges: [\n");
+    for i in 1..len {
+        text.push_str(&format!("(\"n{}.value\", \"n{i}.a\"),\n", i - 1));
+    }
+    text.push_str("])\n");
+    text
+}
+
+/// `seed` changed by one to six random edits drawn from `alphabet` (a character inserted, removed
+/// or replaced, a run duplicated, the text cut short), for bounded fuzzing without a fuzzing
+/// crate: the same kinds of edit as the proptest targets of `crates/core/tests/fuzz.rs`.
+/// `alphabet` must not be empty.
+pub fn mutated(seed: &str, alphabet: &str, rng: &mut XorShift) -> String {
+    let alphabet: Vec<char> = alphabet.chars().collect();
+    let mut text: Vec<char> = seed.chars().collect();
+    let edits = 1 + (rng.next_u64() % 6) as usize;
+    for _ in 0..edits {
+        let at = if text.is_empty() { 0 } else { (rng.next_u64() % (text.len() as u64 + 1)) as usize };
+        let pick = alphabet[(rng.next_u64() % alphabet.len() as u64) as usize];
+        match rng.next_u64() % 5 {
+            0 => text.insert(at, pick),
+            1 if at < text.len() => {
+                text.remove(at);
+            }
+            2 if at < text.len() => text[at] = pick,
+            3 if at < text.len() => {
+                let end = (at + 1 + (rng.next_u64() % 16) as usize).min(text.len());
+                let run: Vec<char> = text[at..end].to_vec();
+                let times = 1 + (rng.next_u64() % 64) as usize;
+                for _ in 0..times {
+                    text.splice(at..at, run.iter().copied());
+                }
+            }
+            _ => text.truncate(at),
+        }
+    }
+    text.into_iter().collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -168,6 +168,7 @@ pub fn save(db: &Database, dir: &Path, pack_size: usize, overwrite: bool) -> Res
 /// Reads and validates the header of the database in `dir`.
 pub fn read_header(dir: &Path) -> Result<Header, String> {
     let path = dir.join(HEADER);
+    pyrograph_core::limits::may_read(&path)?;
     let text = std::fs::read_to_string(&path)
         .map_err(|e| format!("cannot read {}: {e} (is this an Eigenfires database folder?)", path.display()))?;
     let h: Header = ron::from_str(&text).map_err(|e| format!("{} is not an Eigenfires database header: {e}", path.display()))?;
@@ -179,6 +180,18 @@ pub fn read_header(dir: &Path) -> Result<Header, String> {
     }
     if h.checksum != CHECKSUM {
         return Err(format!("{}: unknown checksum '{}'", path.display(), h.checksum));
+    }
+    // The header names its binary files: only plain names inside the folder, so a hostile or
+    // corrupt header cannot send the reader elsewhere (`../../secret`, `/etc/passwd`).
+    for entry in std::iter::once(&h.mean).chain(h.packs.iter().map(|p| &p.data)) {
+        let mut parts = Path::new(&entry.file).components();
+        if !matches!((parts.next(), parts.next()), (Some(std::path::Component::Normal(_)), None)) {
+            return Err(format!(
+                "{}: names the data file \"{}\", which is not a file name inside the database folder",
+                path.display(),
+                entry.file
+            ));
+        }
     }
     let n = h.width as u64 * h.height as u64;
     let mut next = 0;
@@ -196,6 +209,7 @@ pub fn read_header(dir: &Path) -> Result<Header, String> {
 
 fn read_checked(dir: &Path, entry: &FileEntry) -> Result<Vec<u8>, String> {
     let path = dir.join(&entry.file);
+    pyrograph_core::limits::may_read(&path)?;
     let bytes = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     if bytes.len() as u64 != entry.bytes {
         return Err(format!(
@@ -379,5 +393,17 @@ mod tests {
         assert!(load(dir.path(), 0).unwrap_err().contains("not an Eigenfires database header"));
         let empty = tempfile::tempdir().unwrap();
         assert!(load(empty.path(), 0).unwrap_err().contains("database folder"));
+    }
+
+    #[test]
+    fn a_header_naming_files_outside_its_folder_is_refused_before_reading_them() {
+        let dir = tempfile::tempdir().unwrap();
+        save(&trained(), dir.path(), 5, false).unwrap();
+        let header = std::fs::read_to_string(dir.path().join(HEADER)).unwrap();
+        for hostile in ["../../../etc/passwd", "/etc/passwd", "sub/mean.bin", ".."] {
+            std::fs::write(dir.path().join(HEADER), header.replace("\"mean.bin\"", &format!("{hostile:?}"))).unwrap();
+            let e = load(dir.path(), 0).unwrap_err();
+            assert!(e.contains("not a file name inside the database folder") && e.contains(hostile), "{hostile}: {e}");
+        }
     }
 }

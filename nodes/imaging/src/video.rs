@@ -84,6 +84,7 @@ fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> 
 /// against what decodes at the end of the stream ([`decoded_count`]); results are cached per file
 /// (path, size and modification time), so a re-cook does not probe again.
 pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
+    pyrograph_core::limits::may_read(path).map_err(path_error)?;
     let key = probe_key(path);
     if let Some(info) = key.as_ref().and_then(|k| probe_cache().lock().ok()?.get(k).cloned()) {
         return Ok(info);

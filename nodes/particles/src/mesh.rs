@@ -441,6 +441,7 @@ fn failing_line(text: &str) -> Option<usize> {
 /// Reads a Wavefront OBJ (triangles and polygons; objects welded where their vertices coincide).
 /// Errors name the file and, for a parse error, the line and its text.
 pub fn load_obj(path: &Path) -> Result<PolygonSoup, String> {
+    pyrograph_core::limits::may_read(path)?;
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read OBJ file {}: {e}", path.display()))?;
     let models = parse_obj_text(&text).map_err(|e| match failing_line(&text) {
         Some(line) => format!(

@@ -21,47 +21,13 @@ impl Editor {
         self.recent_file = Some(file);
     }
 
-    /// Opens a graph file. A file that does not parse leaves an empty document and reports why;
-    /// a file that parses but does not validate opens with its problems on the nodes.
-    pub fn open(&mut self, path: &Path) -> Result<(), String> {
-        self.cooker.cancel();
-        let (doc, err) = match GraphDoc::load(path) {
-            Ok(doc) => (doc, None),
-            Err(d) => (GraphDoc::new(), Some(d)),
-        };
-        // A file that does not parse is not adopted: saving must never overwrite it with nothing.
-        self.path = err.is_none().then(|| path.to_path_buf());
-        self.doc = doc.clone();
-        self.saved = doc;
-        self.history.clear();
-        self.selection.clear();
-        self.preview = None;
-        self.preview_req = None;
-        self.cook_errors.clear();
-        self.cook_warnings.clear();
-        self.revision += 1;
-        self.revalidate();
-        self.push_recent(path);
-        if let Some(d) = err {
-            self.validation.diagnostics = d.0.clone();
-            self.validation.graph = None;
-            let text = d.to_string();
-            self.set_status(format!("cannot open {}: {text}", path.display()), true);
-            return Err(text);
-        }
-        match self.validation.diagnostics.len() {
-            0 => self.set_status(format!("opened {}", path.display()), false),
-            n => self.set_status(format!("opened {} with {n} problem(s): see the red badges", path.display()), true),
-        }
-        Ok(())
-    }
-
     /// Starts a new, empty document.
     pub fn new_document(&mut self) {
         self.cooker.cancel();
         self.path = None;
         self.doc = GraphDoc::new();
         self.saved = GraphDoc::new();
+        self.saves += 1;
         self.history.clear();
         self.selection.clear();
         self.preview = None;
@@ -83,6 +49,7 @@ impl Editor {
                 let moved = self.path.as_deref() != Some(path);
                 self.path = Some(path.to_path_buf());
                 self.saved = self.doc.clone();
+                self.saves += 1;
                 self.push_recent(path);
                 self.set_status(format!("saved {}", path.display()), false);
                 if moved {
@@ -100,7 +67,7 @@ impl Editor {
         }
     }
 
-    fn push_recent(&mut self, path: &Path) {
+    pub(super) fn push_recent(&mut self, path: &Path) {
         let p = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         self.recent.retain(|r| *r != p);
         self.recent.insert(0, p);

@@ -20,7 +20,9 @@ from ._native import (
     Value,
     __version__,
     describe,
+    limits,
     nodes,
+    set_limits,
 )
 
-__all__ = ["Clip", "Contours", "FrameMemory", "Graph", "GraphError", "Problem", "Value", "__version__", "describe", "nodes"]
+__all__ = ["Clip", "Contours", "FrameMemory", "Graph", "GraphError", "Problem", "Value", "__version__", "describe", "limits", "nodes", "set_limits"]

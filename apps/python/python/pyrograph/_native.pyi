@@ -158,3 +158,16 @@ def nodes() -> list[dict[str, Any]]:
 def describe(type: str) -> str:
     """One node type's reference as Markdown (doc citing its paper section, ports, defaults,
     ranges): its section of docs/nodes.md. GraphError for an unknown type."""
+
+def set_limits(
+    *,
+    read_roots: Sequence[str | os.PathLike[str]] | None = None,
+    max_nodes: int | None = None,
+    max_pixels: int | None = None,
+) -> None:
+    """Confine reads to `read_roots` (symbolic links followed; [] lifts it) and set the node and
+    pixel limits (0 restores the default), process-wide, as the CLI's --read-root, --max-nodes
+    and --max-pixels. Arguments left out keep their setting."""
+
+def limits() -> dict[str, Any]:
+    """The limits in force: read_roots, max_nodes, max_pixels."""

@@ -23,6 +23,8 @@ use noise::{NoiseFn, Perlin};
 use rhai::packages::{ArithmeticPackage, BasicMathPackage, LogicPackage, Package};
 use rhai::{AST, Dynamic, Engine, EvalAltResult, LexError, ParseError, ParseErrorType, Position, Scope};
 
+use crate::typos::within_edits;
+
 /// Longest accepted expression, in characters: a parameter field, not a program.
 const MAX_CHARS: usize = 4096;
 /// rhai's nesting limit. Brackets count two levels each and a chain `a + b + …` one per operator;
@@ -332,6 +334,11 @@ fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
 /// A seed moves the line to another whole-number cell in y and z, giving an unrelated pattern;
 /// seed 0 is the plain `noise(x)`. Also `math.noise`'s.
 pub(crate) fn perlin(x: f64, seed: f64) -> f64 {
+    // An infinite or NaN `x` (`noise(time / 0)`) has no place on the line; the crate would panic
+    // turning it into a lattice cell. NaN makes the expression's result an error, naming it.
+    if !x.is_finite() {
+        return f64::NAN;
+    }
     let cell = (seed.floor() as i64 as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let y = 0.5 + (cell >> 56) as f64;
     let z = 0.25 + ((cell >> 48) & 0xff) as f64;
@@ -613,24 +620,8 @@ fn unknown_variable(name: &str) -> String {
 
 /// " (did you mean 'frame'?)" for the closest name within two edits, else nothing.
 fn did_you_mean(name: &str, candidates: &[&str]) -> String {
-    let best = candidates.iter().map(|c| (edit_distance(name, c), *c)).filter(|&(d, _)| d <= 2).min_by_key(|&(d, _)| d);
+    let best = candidates.iter().filter_map(|c| Some((within_edits(name, c, 2)?, *c))).min_by_key(|&(d, _)| d);
     best.map_or_else(String::new, |(_, c)| format!(" (did you mean '{c}'?)"))
-}
-
-/// Levenshtein distance, for typo hints only.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let substitute = diagonal + usize::from(ca != cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitute.min(row[j] + 1).min(diagonal + 1);
-        }
-    }
-    row[b.len()]
 }
 
 /// A rhai type name as artists would say it: no `i64`/`f64`/`ImmutableString` in messages.

@@ -163,6 +163,19 @@ fn noise_and_rand() {
     assert!(at("noise(1e20)", 0.0).abs() <= 1.0);
 }
 
+/// Found by libFuzzer (fuzz/, target `expression`): an infinite argument reached the noise
+/// crate, which panicked turning it into a lattice cell.
+#[test]
+fn noise_of_an_infinite_or_nan_argument_is_an_error_not_a_panic() {
+    for text in ["if frame < 40  { clamp(noise(time/ 0), -1, 1) }", "noise(-1 / 0)", "noise(0 / 0, 3)", "noise(1, 1 / 0) * 0"] {
+        let e = Expr::parse(text).unwrap_or_else(|err| panic!("{text}: {err}"));
+        match e.eval(12.0, 24.0) {
+            Ok(v) => assert!(v.is_finite(), "{text}: {v}"),
+            Err(err) => assert!(!err.to_string().contains("panicked"), "{text}: {err}"),
+        }
+    }
+}
+
 #[test]
 fn every_listed_function_is_callable_with_whole_and_decimal_arguments() {
     for (usage, help) in FUNCTIONS {

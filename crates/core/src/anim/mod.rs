@@ -44,7 +44,9 @@ impl Track {
         match self {
             Track::Const(v) => Ok(*v),
             Track::Keys(c) => Ok(c.sample(frame)),
-            Track::Expr(e) => e.eval(frame, fps).map_err(|err| format!("expression \"{}\": {err}", e.text())),
+            Track::Expr(e) => {
+                e.eval(frame, fps).map_err(|err| format!("expression \"{}\": {err}", crate::error::shortened(e.text())))
+            }
         }
     }
 }
@@ -187,9 +189,9 @@ fn track(pv: &ParamValue, shape: Shape) -> Result<Track, String> {
         ParamValue::Call(name, arg) => match name.as_str() {
             "keys" => keys(arg, shape).map(|c| Track::Keys(Arc::new(c))),
             "expr" => match &**arg {
-                ParamValue::String(text) => {
-                    Expr::parse(text).map(|e| Track::Expr(Arc::new(e))).map_err(|e| format!("expression \"{text}\": {e}"))
-                }
+                ParamValue::String(text) => Expr::parse(text)
+                    .map(|e| Track::Expr(Arc::new(e)))
+                    .map_err(|e| format!("expression \"{}\": {e}", crate::error::shortened(text))),
                 other => Err(format!("expr takes the expression as a string, e.g. expr(\"sin(time)\"), got {other}")),
             },
             other => Err(format!("unknown form '{other}(…)': a parameter takes keys([...]) or expr(\"...\")")),

@@ -186,7 +186,7 @@ fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx, diags: &mut Vec<Diagnostic
             diags.push(diag(
                 DiagnosticKind::UnknownNodeType,
                 Location::Node(id.to_string()),
-                format!("unknown node type '{}'{hint}; `pyrograph nodes` lists them", nd.type_name),
+                format!("unknown node type '{}'{hint}; `pyrograph nodes` lists them", crate::error::shortened(&nd.type_name)),
             ));
             None
         }

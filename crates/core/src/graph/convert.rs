@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 
 use super::LoadCtx;
 use crate::document::ParamValue;
-use crate::error::DiagnosticKind;
+use crate::error::{DiagnosticKind, shortened};
+use crate::limits::{inside, may_read};
 use crate::node::{PathRole, PortDesc};
 use crate::value::{PortType, Value};
 
@@ -23,57 +24,6 @@ fn resolve_path(p: &Path, role: PathRole, ctx: &LoadCtx) -> PathBuf {
     match (role, &ctx.options.output_dir) {
         (PathRole::Output, Some(out)) => out.join(p),
         _ => ctx.dir.join(p),
-    }
-}
-
-/// `path` with `.` and `..` resolved by their names (no file-system access: the file may not
-/// exist yet); a `..` above the start is kept.
-fn lexical(path: &Path) -> PathBuf {
-    use std::path::Component;
-    let mut out: Vec<Component> = Vec::new();
-    for c in path.components() {
-        match c {
-            Component::CurDir => {}
-            Component::ParentDir => match out.last() {
-                Some(Component::Normal(_)) => {
-                    out.pop();
-                }
-                Some(Component::RootDir | Component::Prefix(_)) => {}
-                _ => out.push(c),
-            },
-            other => out.push(other),
-        }
-    }
-    out.iter().collect()
-}
-
-/// Whether `path` stays inside folder `root`, judged by names (`out/a/../b.png` is inside
-/// `out`; `out/../b.png` and `/tmp/b.png` are not, unless `root` is `/tmp`) and by where the file
-/// system takes them: a symbolic link inside `root` to a folder elsewhere (`out/link/b.png`)
-/// leads outside. A relative `root` is taken from the current folder, as the writer will take it.
-pub(crate) fn inside(path: &Path, root: &Path) -> bool {
-    let abs = |p: &Path| if p.is_absolute() { lexical(p) } else { lexical(&std::env::current_dir().unwrap_or_default().join(p)) };
-    let (path, root) = (abs(path), abs(root));
-    path.starts_with(&root) && real(&path).starts_with(real(&root))
-}
-
-/// Where a write to the absolute, lexically clean `path` lands: its longest existing ancestor
-/// resolved through symbolic links, the names that do not exist yet appended (a writer creates
-/// them as folders and a file, which follow no link).
-fn real(path: &Path) -> PathBuf {
-    let mut existing = path;
-    let mut missing = Vec::new();
-    loop {
-        if let Ok(resolved) = existing.canonicalize() {
-            return missing.iter().rev().fold(resolved, |p, name| p.join(name));
-        }
-        match (existing.parent(), existing.file_name()) {
-            (Some(parent), Some(name)) => {
-                missing.push(name.to_os_string());
-                existing = parent;
-            }
-            _ => return path.to_path_buf(),
-        }
     }
 }
 
@@ -150,7 +100,7 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
         Ok(None) => {}
         Err(message) => return Err((DiagnosticKind::Animation, message)),
     }
-    let wrong = |what: &str| (DiagnosticKind::WrongKind, format!("needs {what}, got {pv}"));
+    let wrong = |what: &str| (DiagnosticKind::WrongKind, format!("needs {what}, got {}", shortened(&pv.to_string())));
     match &port.ty {
         PortType::Float => {
             let v = number(pv).ok_or_else(|| wrong("a number"))?;
@@ -224,6 +174,10 @@ pub(super) fn param_to_value(pv: &ParamValue, port: &PortDesc, ctx: &LoadCtx) ->
                             ctx.root.display()
                         ),
                     ));
+                }
+                // An empty path is "not set": the node says so when it cooks.
+                if role == PathRole::Input && !expanded.is_empty() {
+                    may_read(&path).map_err(|m| (DiagnosticKind::OutsideReadRoots, m))?;
                 }
                 Ok(Value::Path(path))
             }

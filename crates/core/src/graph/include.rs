@@ -30,6 +30,7 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Rc<(Graph, NodeDesc)>, 
     };
     let expanded = expand_vars(raw).map_err(|m| vec![include_diag(id, m)])?;
     let path = ctx.dir.join(&expanded);
+    crate::limits::may_read(&path).map_err(|m| vec![include_diag(id, m)])?;
     let canon = std::fs::canonicalize(&path)
         .map_err(|e| vec![include_diag(id, format!("cannot open included graph {}: {e}", path.display()))])?;
     if ctx.include_stack.contains(&canon) {
@@ -57,6 +58,14 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Rc<(Graph, NodeDesc)>, 
 fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<Diagnostic>> {
     let text =
         std::fs::read_to_string(canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
+    if !looks_like_a_graph(&text) {
+        // Say no more than that: the parser's message would quote the file, and an include may
+        // name any file a service can read (`/etc/passwd`).
+        return Err(vec![include_diag(
+            id,
+            format!("{} is not a graph file (RON starting with `(version: ...`, as pyrograph saves)", canon.display()),
+        )]);
+    }
     let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, canon, d.0))?;
     let mut stack = ctx.include_stack.clone();
     stack.push(canon.to_path_buf());
@@ -140,6 +149,22 @@ pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnos
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let nd = NodeDoc::new(INCLUDE_TYPE).param(INCLUDE_PATH, ParamValue::String(name));
     load("preset", &nd, &ctx).map(|built| built.1.clone()).map_err(|d| Diagnostics(d).in_file(path))
+}
+
+/// Whether `text` starts as a graph document does: blanks and comments, then `(` or `#![`
+/// (RON's extensions), or the unversioned shape's `(` as well.
+fn looks_like_a_graph(text: &str) -> bool {
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(after) = rest.strip_prefix("//") {
+            rest = after.split_once('\n').map_or("", |(_, r)| r);
+        } else if let Some(after) = rest.strip_prefix("/*") {
+            rest = after.split_once("*/").map_or("", |(_, r)| r);
+        } else {
+            return rest.starts_with('(') || rest.starts_with("#![") || rest.starts_with("GraphDoc");
+        }
+    }
 }
 
 fn short(p: &Path) -> String {

@@ -11,14 +11,6 @@ use crate::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
 use crate::document::{GraphDoc, ParamValue};
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 
-/// Nodes a flattened graph may have unless the environment variable `PYROGRAPH_MAX_NODES` says
-/// otherwise: far more than any real graph (the shipped ones have at most a few hundred).
-pub const DEFAULT_MAX_NODES: u64 = 1_000_000;
-
-fn max_nodes() -> u64 {
-    std::env::var("PYROGRAPH_MAX_NODES").ok().and_then(|v| v.trim().replace('_', "").parse().ok()).unwrap_or(DEFAULT_MAX_NODES)
-}
-
 /// The files met so far: each parsed document (with its folder) and flattened size.
 #[derive(Default)]
 struct Sizes {
@@ -36,6 +28,10 @@ fn includes(doc: &GraphDoc, dir: &Path) -> Vec<(String, PathBuf)> {
         }
         let Some(ParamValue::String(raw)) = nd.params.get(INCLUDE_PATH) else { continue };
         let Ok(expanded) = expand_vars(raw) else { continue };
+        // A file outside the read roots is not read here; building reports it.
+        if crate::limits::may_read(&dir.join(&expanded)).is_err() {
+            continue;
+        }
         if let Ok(canon) = std::fs::canonicalize(dir.join(expanded)) {
             out.push((id.clone(), canon));
         }
@@ -77,7 +73,7 @@ fn short(p: &Path) -> String {
 /// Refuses a document (in folder `dir`) whose flattened graph would exceed the node limit, with
 /// an error at its biggest include naming the chain of biggest includes below it.
 pub(super) fn check(doc: &GraphDoc, dir: &Path) -> Result<(), Diagnostics> {
-    let limit = max_nodes();
+    let limit = crate::limits::max_nodes();
     let mut sizes = Sizes::default();
     let total = size_of(doc, dir, &mut sizes, &mut Vec::new());
     if total <= limit {
@@ -98,15 +94,22 @@ pub(super) fn check(doc: &GraphDoc, dir: &Path) -> Result<(), Diagnostics> {
         let Some((next, next_dir)) = sizes.docs.get(&canon) else { break };
         (at, at_dir) = (next, next_dir.clone());
     }
-    let first = chain.first().map(|(id, _)| id.clone()).unwrap_or_default();
+    let hint = crate::limits::raise_hint("--max-nodes", "PYROGRAPH_MAX_NODES", total);
+    let Some((first, _)) = chain.first() else {
+        return Err(Diagnostics::one(Diagnostic::new(
+            DiagnosticKind::Include,
+            Location::File,
+            format!("the graph has {total} nodes, more than the {limit} pyrograph builds; if it is meant to be this big, {hint}"),
+        )));
+    };
     let path: Vec<&str> = chain.iter().map(|(_, f)| f.as_str()).collect();
     Err(Diagnostics::one(Diagnostic::new(
         DiagnosticKind::Include,
-        Location::Port { node: first, port: INCLUDE_PATH.into() },
+        Location::Port { node: first.clone(), port: INCLUDE_PATH.into() },
         format!(
             "flattened, the graph would have {total} nodes, more than the {limit} pyrograph builds: {}; if it is meant \
-             to be this big, raise the limit with the environment variable PYROGRAPH_MAX_NODES",
-            path.join(" → ")
+             to be this big, {hint}",
+            path.join(" → "),
         ),
     )))
 }

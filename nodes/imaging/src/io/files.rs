@@ -40,12 +40,13 @@ fn is_exr(path: &Path) -> bool {
     has_extension(path, &["exr"])
 }
 
-/// Pixels an image file may declare and still be decoded: 16384 × 16384 unless the environment
-/// variable `PYROGRAPH_MAX_PIXELS` says otherwise. A header is checked against it before any
-/// pixel is allocated, so a small file declaring an enormous image (a decompression bomb) is an
-/// error naming the file and its size, not an exhausted machine.
+/// Pixels an image file may declare and still be decoded: 16384 × 16384 unless `--max-pixels`
+/// or the environment variable `PYROGRAPH_MAX_PIXELS` says otherwise (see
+/// [`pyrograph_core::limits`]). A header is checked against it before any pixel is allocated, so
+/// a small file declaring an enormous image (a decompression bomb) is an error naming the file
+/// and its size, not an exhausted machine.
 pub fn pixel_budget() -> u64 {
-    std::env::var("PYROGRAPH_MAX_PIXELS").ok().and_then(|v| v.trim().replace('_', "").parse().ok()).unwrap_or(1 << 28)
+    pyrograph_core::limits::max_pixels()
 }
 
 /// Refuses a header that declares more pixels than [`pixel_budget`].
@@ -67,10 +68,11 @@ pub fn over_budget(path: &Path, w: u32, h: u32) -> Option<String> {
     let amount = |px: u64| if px >= 1_000_000 { format!("{:.1} megapixels", px as f64 / 1e6) } else { format!("{px} pixels") };
     Some(format!(
         "{}: the file declares {w} × {h} pixels ({}), more than the {} pyrograph decodes; if it is a real \
-         image, raise the limit with the environment variable PYROGRAPH_MAX_PIXELS={pixels}",
+         image, {}",
         path.display(),
         amount(pixels),
-        amount(budget)
+        amount(budget),
+        pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", pixels)
     ))
 }
 
@@ -81,6 +83,8 @@ pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
 }
 
 fn header_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
+    // Every decode passes here first: a file outside the read roots is not opened.
+    pyrograph_core::limits::may_read(path).map_err(NodeError::msg)?;
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     if is_exr(path) {
         // The exr crate, not `image`, so gray (`Y`) files written by the writer read back too.
@@ -150,6 +154,7 @@ pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
 /// Loads one image file after checking its header; every error names the file and is an
 /// [`IoError::Path`].
 pub fn read_image_file(path: &Path) -> Result<Image, IoError> {
+    pyrograph_core::limits::may_read(path).map_err(IoError::Path)?;
     if path.is_dir() {
         return Err(IoError::Path(format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display())));
     }

@@ -134,6 +134,7 @@ pyrograph_core::choice! {
 /// numbered sequence (a pattern, or a folder whose images differ only in their number) with
 /// missing numbers between its first and last is refused or held, as `gaps` says.
 pub fn find_input_files(path: &Path, gaps: Gaps) -> Result<InputFiles, IoError> {
+    pyrograph_core::limits::may_read(path).map_err(IoError::Path)?;
     if path.is_dir() {
         let files = list_directory(path)?;
         return match numbered_files(&files) {

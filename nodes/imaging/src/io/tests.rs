@@ -393,36 +393,16 @@ fn loads_the_tealight_video() {
 }
 
 /// A PNG of a few dozen bytes whose header declares `w` × `h` RGB pixels (and no pixel data).
-fn png_declaring(w: u32, h: u32) -> Vec<u8> {
-    // CRC-32 of a chunk's type and data, bit by bit: the test needs three small chunks.
-    fn crc32(bytes: &[u8]) -> u32 {
-        let mut c = !0u32;
-        for b in bytes {
-            c ^= u32::from(*b);
-            for _ in 0..8 {
-                c = if c & 1 == 1 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
-            }
-        }
-        !c
-    }
-    let chunk = |kind: &[u8], data: &[u8]| {
-        let body = [kind, data].concat();
-        [&(data.len() as u32).to_be_bytes()[..], &body, &crc32(&body).to_be_bytes()].concat()
-    };
-    let ihdr = [&w.to_be_bytes()[..], &h.to_be_bytes(), &[8, 2, 0, 0, 0]].concat();
-    [&b"\x89PNG\r\n\x1a\n"[..], &chunk(b"IHDR", &ihdr), &chunk(b"IDAT", &[]), &chunk(b"IEND", &[])].concat()
-}
-
 #[test]
 fn a_header_declaring_an_enormous_image_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bomb.png");
-    std::fs::write(&path, png_declaring(40_000, 40_000)).unwrap();
+    std::fs::write(&path, pyrograph_testing::png_declaring(40_000, 40_000)).unwrap();
     let e = load_image(&path).unwrap_err().to_string();
     assert!(e.contains("bomb.png") && e.contains("declares 40000 × 40000 pixels (1600.0 megapixels)"), "{e}");
     assert!(e.contains("PYROGRAPH_MAX_PIXELS"), "{e}");
     // Within the budget, the same header is read (and then fails on its missing pixels).
-    std::fs::write(&path, png_declaring(4, 4)).unwrap();
+    std::fs::write(&path, pyrograph_testing::png_declaring(4, 4)).unwrap();
     let e = load_image(&path).unwrap_err().to_string();
     assert!(!e.contains("declares"), "{e}");
 }

@@ -126,7 +126,7 @@ fn source_node(registry: &Registry, doc: &mut GraphDoc, id: &str, source: &Path,
     }
     // A single picture feeds an image input as it is; anything else is read as a clip, and a
     // clip on an image input cooks the preset once per frame.
-    let single = source.is_file() && ["png", "jpg", "jpeg", "exr", "tif", "tiff"].iter().any(|x| has_ext(source, x));
+    let single = source.is_file() && pyrograph_nodes_imaging::io::IMAGE_EXTENSIONS.iter().any(|x| has_ext(source, x));
     if single && *ty == PortType::Image {
         doc.add_node(id, NodeDoc::new("imaging.load_image").param("path", text));
         Ok(format!("{id}.image"))

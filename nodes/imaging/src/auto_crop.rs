@@ -27,7 +27,10 @@ pyrograph_core::node! {
     /// kept inside the frame. Outputs the cropped clip and the box, so an artist can freeze it in
     /// imaging.crop. Frames with an empty mask are left out of the box and listed in a warning, as is a flame
     /// that touches an edge of the picture in a quarter of the frames or more (its base or tip outside it); a
-    /// mask empty in every frame is an error.
+    /// mask empty in every frame is an error. A fire that fills the picture (its box over the clip spans max_fill
+    /// of the frame's width or height: a bonfire, a flame filmed too close) has no single axis to straighten: fills
+    /// is true, with one warning in place of the edge warnings of its sides and top, and imaging.pose_normalize fed
+    /// it leaves every frame unturned and unscaled.
     #[node("imaging.auto_crop", "Pre-processing", WholeClip)]
     pub struct AutoCrop {
         /// The clip to crop.
@@ -47,6 +50,9 @@ pyrograph_core::node! {
         /// Round the box's width and height up to a multiple of this (1: exact).
         #[range(1, 1024)]
         multiple: u32 = 8,
+        /// A flame whose box over the clip spans this fraction of the frame's width or height fills the picture
+        #[range(0.05, 1.0)]
+        max_fill: f64 = 0.9,
     }
     pub struct AutoCropOut {
         /// The cropped clip.
@@ -59,6 +65,8 @@ pyrograph_core::node! {
         width: u32,
         /// Height of the box.
         height: u32,
+        /// The fire fills the picture: connect to imaging.pose_normalize's fills.
+        fills: bool,
     }
 }
 
@@ -170,6 +178,32 @@ pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (wid
     out
 }
 
+/// Whether a flame whose outline spans `span` (width, height) fills a `frame` (width, height): it
+/// reaches `max_fill` of either side. The one rule of `imaging.auto_crop` (over a clip) and
+/// `imaging.pose_normalize` (per frame, when nothing tells it about the clip).
+pub fn fills_picture(span: (f64, f64), frame: (f64, f64), max_fill: f64) -> bool {
+    span.0 >= max_fill * frame.0 || span.1 >= max_fill * frame.1
+}
+
+/// What a fire filling the picture means and what is done about it: `span` is how much of the
+/// frame the fire's box over the clip spans (auto crop), `None` for one frame's outline (pose).
+pub fn fill_warning(span: Option<f64>, max_fill: f64) -> String {
+    let what = match span {
+        Some(share) => format!("its box over the clip spans {:.0} % of the frame's width or height", 100.0 * share),
+        None => format!("in frames like this the outline spans {:.0} % of the frame's width or height or more", 100.0 * max_fill),
+    };
+    format!(
+        "the fire fills the picture ({what}): it has no single axis, so it is neither turned nor scaled; crop to one \
+         flame with room around it to straighten it"
+    )
+}
+
+/// How much of a `width` × `height` frame the box `b` spans: the larger of its width's and its
+/// height's share.
+pub fn box_span(b: PixelBox, (width, height): (u32, u32)) -> f64 {
+    (f64::from(b[2] - b[0]) / f64::from(width.max(1))).max(f64::from(b[3] - b[1]) / f64::from(height.max(1)))
+}
+
 /// Frames of a clip, cropped to one box.
 struct CropSource {
     clip: Clip,
@@ -202,16 +236,24 @@ impl FrameSource for CropSource {
 impl Cook for AutoCrop {
     fn cook(self, ctx: &CookCtx) -> Result<AutoCropOut, NodeError> {
         let masks: &Clip = &self.mask;
+        // Every frame's mask cooks the chain above it (a decode and a mask at full size): in
+        // parallel, in frame order; only the boxes are kept.
+        use rayon::prelude::*;
+        let found = (0..masks.len())
+            .into_par_iter()
+            .map(|i| {
+                ctx.check_cancel()?;
+                let Value::Mask(mask) = masks.get(i, ctx)? else {
+                    return Err(NodeError::port(port!(AutoCrop, mask), format!("frame {i} is not a mask")));
+                };
+                Ok(((mask.width(), mask.height()), mask_box(&mask)))
+            })
+            .collect::<Result<Vec<_>, NodeError>>()?;
+        let size = found.first().map(|(s, _)| *s);
         let mut boxes = Vec::new();
         let mut empty = Vec::new();
-        let mut size = None;
-        for i in 0..masks.len() {
-            ctx.check_cancel()?;
-            let Value::Mask(mask) = masks.get(i, ctx)? else {
-                return Err(NodeError::port(port!(AutoCrop, mask), format!("frame {i} is not a mask")));
-            };
-            size.get_or_insert((mask.width(), mask.height()));
-            match mask_box(&mask) {
+        for (i, (_, b)) in found.into_iter().enumerate() {
+            match b {
                 Some(b) => boxes.push(b),
                 None => empty.push(i),
             }
@@ -225,17 +267,26 @@ impl Cook for AutoCrop {
                 format!("the mask is empty in all {} frames: no flame to frame (check the HSV mask's thresholds)", masks.len()),
             ));
         }
-        for warning in framing_warnings(&boxes, &empty, masks.len(), (width, height)) {
-            ctx.warn(warning);
-        }
         let b = combine_boxes(&boxes, self.combine, self.percentile);
         let rect = frame_box(b, self.margin, self.square, self.multiple, width, height);
+        let span = box_span(b, (width, height));
+        let fills = span >= self.max_fill;
+        for warning in framing_warnings(&boxes, &empty, masks.len(), (width, height)) {
+            // A fire filling the picture reaches its sides and top: one warning says so, below. A
+            // base outside the picture is another matter (a learned flame needs it) and stays.
+            if !fills || warning.contains(BASE_OUTSIDE) || !warning.starts_with("the flame touches") {
+                ctx.warn(warning);
+            }
+        }
+        if fills {
+            ctx.warn(fill_warning(Some(span), self.max_fill));
+        }
         let clip: &Clip = &self.clip;
         let mut h = Fingerprinter::new();
         ("imaging.auto_crop", clip.fingerprint(), rect).hash(&mut h);
         let cropped =
             Clip::new(clip.element().clone(), clip.fps(), h.finish(), Arc::new(CropSource { clip: clip.clone(), rect }));
-        Ok(AutoCropOut { clip: ClipOf::new(cropped), x: rect.0, y: rect.1, width: rect.2, height: rect.3 })
+        Ok(AutoCropOut { clip: ClipOf::new(cropped), x: rect.0, y: rect.1, width: rect.2, height: rect.3, fills })
     }
 }
 
@@ -259,6 +310,57 @@ mod tests {
         assert!(w[1].contains("bottom edge in 90 % of frames") && w[1].contains("base is outside"), "{}", w[1]);
         let whole: Vec<PixelBox> = vec![[10, 5, 30, 50]; 10];
         assert!(framing_warnings(&whole, &[], 10, (80, 60)).is_empty());
+    }
+
+    #[test]
+    fn a_fire_fills_the_picture_when_its_box_spans_most_of_the_frame_either_way() {
+        assert_eq!(box_span([30, 10, 60, 70], (100, 80)), 0.75);
+        assert!(!fills_picture((30.0, 60.0), (100.0, 80.0), 0.9));
+        assert_eq!(box_span([2, 10, 98, 40], (100, 80)), 0.96, "wide");
+        assert_eq!(box_span([40, 0, 50, 76], (100, 80)), 0.95, "tall");
+        assert!(fills_picture((10.0, 76.0), (100.0, 80.0), 0.9) && fills_picture((96.0, 30.0), (100.0, 80.0), 0.9));
+        let w = fill_warning(Some(0.96), 0.9);
+        assert!(w.contains("fills the picture (its box over the clip spans 96 % of the frame's width or height)"), "{w}");
+        assert!(fill_warning(None, 0.9).contains("in frames like this the outline spans 90 %"));
+    }
+
+    /// Cooks the node with `margin` 0.1 over masks whose flame is the box of each frame in `boxes`,
+    /// in 100 × 80 frames; returns whether it fills and the warnings.
+    fn cook_boxes(boxes: &[PixelBox]) -> (AutoCropOut, Vec<String>) {
+        use pyrograph_core::{PortType, Value};
+        let masks = boxes.iter().map(|b| Value::Mask(Arc::new(mask_with(100, 80, *b)))).collect();
+        let images = boxes.iter().map(|_| Value::Image(Arc::new(Image::new(100, 80, pyrograph_core::Channels::Gray)))).collect();
+        let node = AutoCrop {
+            clip: ClipOf::new(Clip::from_frames(PortType::Image, 24.0, images)),
+            mask: ClipOf::new(Clip::from_frames(PortType::Mask, 24.0, masks)),
+            combine: BoxCombine::Union,
+            percentile: 98.0,
+            margin: 0.1,
+            square: false,
+            multiple: 8,
+            max_fill: 0.9,
+        };
+        let ctx = CookCtx::new();
+        let out = node.cook(&ctx).unwrap();
+        (out, ctx.warnings().into_iter().map(|w| w.message).collect())
+    }
+
+    #[test]
+    fn a_clip_that_fills_the_picture_says_so_once_and_keeps_its_base_warning() {
+        // A flame swaying across the frame: wall to wall over the clip, cut at both sides.
+        let sway: Vec<PixelBox> = (0..8).map(|i| if i % 2 == 0 { [0, 20, 60, 70] } else { [40, 20, 100, 70] }).collect();
+        let (out, warnings) = cook_boxes(&sway);
+        assert!(out.fills);
+        assert_eq!(warnings.len(), 1, "the side edges are part of filling the picture: {warnings:?}");
+        assert!(warnings[0].contains("spans 100 % of the frame's width or height"), "{}", warnings[0]);
+        // Its base below the frame as well: that is said apart (a learned flame needs its base).
+        let cut: Vec<PixelBox> = sway.iter().map(|b| [b[0], b[1], b[2], 80]).collect();
+        let (_, warnings) = cook_boxes(&cut);
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+        assert!(warnings.iter().any(|w| w.contains(BASE_OUTSIDE)));
+        // One flame with room around it: no fill, no warning.
+        let (out, warnings) = cook_boxes(&[[40, 20, 60, 60]; 8]);
+        assert!(!out.fills && warnings.is_empty(), "{warnings:?}");
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! One image file: reading its header and pixels (PNG, JPEG, OpenEXR), encoding an image as PNG
+//! One image file: reading its header and pixels (PNG, JPEG, TIFF, DPX, OpenEXR), encoding an image as PNG
 //! or OpenEXR bytes, and writing a file atomically.
 
 use std::io::Cursor;
@@ -76,22 +76,25 @@ pub fn over_budget(path: &Path, w: u32, h: u32) -> Option<String> {
     ))
 }
 
-/// Width and height from the file's header, without decoding the pixels; a size over the
-/// [`pixel_budget`] is an error.
-pub fn image_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
-    header_dimensions(path).and_then(|size| check_budget(path, size))
+/// Width and height from the file's header (of `layer`, for OpenEXR; "" is the main layer),
+/// without decoding the pixels; a size over the [`pixel_budget`] is an error.
+pub fn image_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
+    header_dimensions(path, layer).and_then(|size| check_budget(path, size))
 }
 
-fn header_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
+fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
     // Every decode passes here first: a file outside the read roots is not opened.
     pyrograph_core::limits::may_read(path).map_err(NodeError::msg)?;
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     if is_exr(path) {
-        // The exr crate, not `image`, so gray (`Y`) files written by the writer read back too.
-        let meta = exr::prelude::MetaData::read_from_file(path, false).map_err(|e| named(&e))?;
-        let header = meta.headers.first().ok_or_else(|| named(&"no image layer"))?;
-        let size = header.layer_size;
-        return Ok((to_u32(size.0, path)?, to_u32(size.1, path)?));
+        // The exr crate, not `image`, so gray (`Y`) files and layers other than the first read too.
+        return super::exr_layers::exr_dimensions(path, layer);
+    }
+    if !layer.is_empty() {
+        return Err(named(&format!("layer '{layer}' was asked for, but only OpenEXR files have layers")));
+    }
+    if has_extension(path, &["dpx"]) {
+        return super::dpx::dpx_dimensions(path);
     }
     image::ImageReader::open(path)
         .map_err(|e| named(&e))?
@@ -101,17 +104,17 @@ fn header_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
         .map_err(|e| named(&e))
 }
 
-fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
-    u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
-}
-
-/// Decodes one image file: colour files become RGBA, gray files gray. Its header is checked
-/// against the [`pixel_budget`] first.
-pub fn decode_image(path: &Path) -> Result<Image, NodeError> {
+/// Decodes one image file (`layer` of an OpenEXR file; "" is its main layer): colour files become
+/// RGBA, gray files gray. Its header is checked against the [`pixel_budget`] first (decoders
+/// allocate what a header declares).
+pub fn decode_image(path: &Path, layer: &str) -> Result<Image, NodeError> {
+    let (w, h) = image_dimensions(path, layer)?;
     if is_exr(path) {
-        return decode_exr(path);
+        return super::exr_layers::decode_exr_layer(path, layer);
     }
-    let (w, h) = image_dimensions(path)?;
+    if has_extension(path, &["dpx"]) {
+        return super::dpx::decode_dpx(path, (w, h));
+    }
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     let mut reader = image::ImageReader::open(path).map_err(|e| named(&e))?.with_guessed_format().map_err(|e| named(&e))?;
     // The image crate's own allocation limit (512 MiB by default) would refuse a plate within
@@ -123,37 +126,9 @@ pub fn decode_image(path: &Path) -> Result<Image, NodeError> {
     Ok(convert::from_dynamic(img))
 }
 
-/// Decodes the first layer of an OpenEXR file: `Y` only → gray, else R, G, B (and A, default 1).
-/// Its header is checked against the [`pixel_budget`] first (the exr crate allocates what a
-/// header declares).
-pub fn decode_exr(path: &Path) -> Result<Image, NodeError> {
-    image_dimensions(path)?;
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
-    let file = exr::prelude::read_first_flat_layer_from_file(path).map_err(|e| named(&e))?;
-    let layer = &file.layer_data;
-    let (w, h) = (to_u32(layer.size.0, path)?, to_u32(layer.size.1, path)?);
-    let pixels = w as usize * h as usize;
-    // Subsampled channels (chroma) hold fewer samples than pixels; they are treated as absent.
-    let channel = |name: &str| -> Option<Vec<f32>> {
-        let c = layer.channel_data.list.iter().find(|c| c.name.eq(name))?;
-        let samples: Vec<f32> = c.sample_data.values_as_f32().collect();
-        (samples.len() == pixels).then_some(samples)
-    };
-    let image = match (channel("R"), channel("G"), channel("B"), channel("Y")) {
-        (Some(r), Some(g), Some(b), _) => {
-            let a = channel("A").unwrap_or_else(|| vec![1.0; pixels]);
-            let data = (0..pixels).flat_map(|i| [r[i], g[i], b[i], a[i]]).collect();
-            Image::from_vec(w, h, Channels::Rgba, data)
-        }
-        (_, _, _, Some(y)) => Image::from_vec(w, h, Channels::Gray, y),
-        _ => return Err(named(&"has neither R, G, B nor Y channels")),
-    };
-    image.ok_or_else(|| named(&"channel sizes do not match the image size"))
-}
-
 /// Loads one image file after checking its header; every error names the file and is an
 /// [`IoError::Path`].
-pub fn read_image_file(path: &Path) -> Result<Image, IoError> {
+pub fn read_image_file(path: &Path, layer: &str) -> Result<Image, IoError> {
     pyrograph_core::limits::may_read(path).map_err(IoError::Path)?;
     if path.is_dir() {
         return Err(IoError::Path(format!("{} is a folder; give one image file, or use imaging.load_sequence", path.display())));
@@ -161,7 +136,7 @@ pub fn read_image_file(path: &Path) -> Result<Image, IoError> {
     if !path.is_file() {
         return Err(no_such(path));
     }
-    decode_image(path).map_err(|e| IoError::Path(e.to_string()))
+    decode_image(path, layer).map_err(|e| IoError::Path(e.to_string()))
 }
 
 // ---------------------------------------------------------------------------------------------

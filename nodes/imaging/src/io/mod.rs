@@ -8,6 +8,8 @@
 //! the nodes name the port. [`load_image`], [`load_sequence`] and [`write_image`] are the nodes'
 //! cooks as plain functions, for callers outside a graph.
 
+pub mod dpx;
+pub mod exr_layers;
 pub mod files;
 pub mod nodes;
 pub mod sequence;
@@ -23,7 +25,7 @@ pub use nodes::*;
 pub use sequence::*;
 
 /// Extensions (lower case) of the still-image files the loaders read.
-pub const IMAGE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "exr"];
+pub const IMAGE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "exr", "tif", "tiff", "dpx"];
 
 /// Extensions (lower case) of the video files read through `ffmpeg`.
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "mov", "avi", "mkv", "webm", "m4v"];

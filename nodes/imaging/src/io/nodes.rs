@@ -8,7 +8,7 @@ use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, InputPath, NodeError, O
 
 use super::IoError;
 use super::files::{BitDepth, ExrType, OutputFormat, output_format, read_image_file, write_image_file};
-use super::sequence::{Gaps, WriteOptions, open_sequence, write_sequence};
+use super::sequence::{Gaps, SequenceOptions, WriteOptions, open_sequence, write_sequence};
 use crate::color::AlphaMode;
 
 // ---------------------------------------------------------------------------------------------
@@ -18,10 +18,12 @@ use crate::color::AlphaMode;
 pyrograph_core::node! {
     /// Loads an image sequence or a video as a clip.
     ///
-    /// `path` is a folder (every .png/.jpg/.jpeg/.exr file, in natural name order), a pattern (`frame_####.png` or
-    /// `frame_%04d.png`: the existing files, by number), a single image (a one-frame clip) or a video (.mp4 .mov .avi
-    /// .mkv .webm .m4v, decoded with ffmpeg). Every file's header is checked when the node cooks; frames decode on
-    /// demand. Colour files give RGBA frames, gray files gray frames.
+    /// `path` is a folder (every .png/.jpg/.jpeg/.exr/.tif/.tiff/.dpx file, in natural name order), a pattern
+    /// (`frame_####.dpx` or `frame_%04d.exr`: the existing files, by number), a single image (a one-frame clip) or a
+    /// video (.mp4 .mov .avi .mkv .webm .m4v, decoded with ffmpeg). Every file's header is checked when the node
+    /// cooks; frames decode on demand. Colour files give RGBA frames, gray files gray frames; 10- to 16-bit sources
+    /// (TIFF, DPX, video) keep their precision. A video is turned as its rotation tag says, and one with a variable
+    /// frame rate is resampled by timestamps to a constant rate, with a warning.
     #[node("imaging.load_sequence", "Input/Output", Source)]
     pub struct LoadSequence {
         /// Folder, frame pattern, image file or video file.
@@ -32,6 +34,8 @@ pyrograph_core::node! {
         /// A numbered sequence with missing numbers: error (list them) or hold (repeat the frame
         /// before each gap, so every frame keeps its number's time).
         gaps: Gaps = Gaps::Error,
+        /// The layer of OpenEXR files to read (`diffuse`, `beauty.spec`…); empty = the main layer.
+        layer: String = String::new(),
     }
     pub struct LoadSequenceOut {
         /// The frames.
@@ -41,7 +45,8 @@ pyrograph_core::node! {
 
 impl Cook for LoadSequence {
     fn cook(self, ctx: &CookCtx) -> Result<LoadSequenceOut, NodeError> {
-        let clip = open_sequence(&self.path, self.fps, self.gaps, ctx, LoadSequence::node_error);
+        let options = SequenceOptions { fps: self.fps, gaps: self.gaps, layer: self.layer };
+        let clip = open_sequence(&self.path, &options, ctx, LoadSequence::node_error);
         Ok(LoadSequenceOut { clip: ClipOf::new(clip.map_err(LoadSequence::node_error)?) })
     }
 }
@@ -60,17 +65,20 @@ impl LoadSequence {
 /// `gaps` (a numbered sequence with missing numbers is an error), `fps` 0 meaning automatic;
 /// errors name its ports.
 pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
-    open_sequence(path, fps, Gaps::Error, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
+    let options = SequenceOptions { fps, ..SequenceOptions::default() };
+    open_sequence(path, &options, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
 }
 
 pyrograph_core::node! {
-    /// Loads one image file (.png, .jpg, .jpeg or .exr).
+    /// Loads one image file (.png, .jpg, .jpeg, .tif, .tiff, .dpx or .exr).
     ///
-    /// Colour files give an RGBA image, gray files a gray image.
+    /// Colour files give an RGBA image, gray files a gray image; 16-bit and 10-bit files keep their precision.
     #[node("imaging.load_image", "Input/Output", Source)]
     pub struct LoadImage {
         /// The image file.
         path: InputPath,
+        /// The layer of an OpenEXR file to read (`diffuse`, `beauty.spec`…); empty = the main layer.
+        layer: String = String::new(),
     }
     pub struct LoadImageOut {
         /// The image.
@@ -80,7 +88,7 @@ pyrograph_core::node! {
 
 impl Cook for LoadImage {
     fn cook(self, _: &CookCtx) -> Result<LoadImageOut, NodeError> {
-        Ok(LoadImageOut { image: Arc::new(load_image(&self.path)?) })
+        Ok(LoadImageOut { image: Arc::new(read_image_file(&self.path, &self.layer).map_err(LoadImage::node_error)?) })
     }
 }
 
@@ -94,9 +102,10 @@ impl LoadImage {
     }
 }
 
-/// Loads one image file as `imaging.load_image` does; errors name its ports.
+/// Loads one image file (its main layer, for OpenEXR) as `imaging.load_image` does; errors name
+/// its ports.
 pub fn load_image(path: &Path) -> Result<Image, NodeError> {
-    read_image_file(path).map_err(LoadImage::node_error)
+    read_image_file(path, "").map_err(LoadImage::node_error)
 }
 
 // ---------------------------------------------------------------------------------------------

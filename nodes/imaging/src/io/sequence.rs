@@ -263,9 +263,10 @@ fn missing_ranges(numbers: &[u64]) -> Vec<(u64, u64)> {
     numbers.windows(2).filter(|w| w[1] > w[0] + 1).map(|w| (w[0] + 1, w[1] - 1)).collect()
 }
 
-/// Reads every file's header (in parallel) and checks that all frames share one size.
-pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), IoError> {
-    let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f)).collect();
+/// Reads every file's header (in parallel; `layer` of OpenEXR files) and checks that all frames
+/// share one size.
+pub fn check_same_size(files: &[PathBuf], layer: &str) -> Result<(u32, u32), IoError> {
+    let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f, layer)).collect();
     let mut first: Option<((u32, u32), &PathBuf)> = None;
     for (size, file) in sizes.into_iter().zip(files) {
         let size = size.map_err(|e| IoError::Path(e.to_string()))?;
@@ -292,6 +293,8 @@ pub fn check_same_size(files: &[PathBuf]) -> Result<(u32, u32), IoError> {
 struct FileFrames {
     files: Vec<PathBuf>,
     size: (u32, u32),
+    /// The OpenEXR layer to read ("" = the main one).
+    layer: String,
 }
 
 impl FrameSource for FileFrames {
@@ -300,7 +303,7 @@ impl FrameSource for FileFrames {
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
         let file = self.files.get(index).ok_or_else(|| NodeError::msg(format!("no frame {index}")))?;
-        let img = decode_image(file)?;
+        let img = decode_image(file, &self.layer)?;
         // The file may have been replaced since the headers were checked.
         if img.size() != self.size {
             return Err(NodeError::msg(format!(
@@ -316,19 +319,50 @@ impl FrameSource for FileFrames {
     }
 }
 
-/// A lazy clip of image files after checking every header; frames decode on access.
-pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64) -> Result<Clip, IoError> {
-    let size = check_same_size(&files)?;
-    let fingerprint = fingerprint_files(&files)?;
-    Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(FileFrames { files, size })))
+/// A lazy clip of image files (`layer` of OpenEXR files, "" the main one) after checking every
+/// header; frames decode on access.
+pub fn image_sequence_clip(files: Vec<PathBuf>, fps: f64, layer: &str) -> Result<Clip, IoError> {
+    let size = check_same_size(&files, layer)?;
+    let mut fingerprint = fingerprint_files(&files)?;
+    if !layer.is_empty() {
+        let mut h = pyrograph_core::fingerprint::Fingerprinter::new();
+        std::hash::Hash::hash(&(fingerprint, layer), &mut h);
+        fingerprint = std::hash::Hasher::finish(&h);
+    }
+    let layer = layer.to_string();
+    Ok(Clip::new(PortType::Image, fps, fingerprint, Arc::new(FileFrames { files, size, layer })))
 }
 
-/// Opens `path` (folder, pattern, image or video) as a clip; `fps` 0 means automatic. A video's
-/// frames decode after this returns: their errors reach the user through `report`.
-pub fn open_sequence(path: &Path, fps: f64, gaps: Gaps, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
-    match find_input_files(path, gaps)? {
-        InputFiles::Video(video) => crate::video::video_clip(&video, fps, ctx, report),
-        InputFiles::Images(files) => image_sequence_clip(files, if fps > 0.0 { fps } else { DEFAULT_FPS }),
+/// How [`open_sequence`] reads what it finds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SequenceOptions {
+    /// Frames per second; 0 = automatic (the video's rate, else [`DEFAULT_FPS`]).
+    pub fps: f64,
+    /// What to do about missing numbers in a numbered sequence.
+    pub gaps: Gaps,
+    /// The layer of OpenEXR files to read; "" = the main (unnamed) layer.
+    pub layer: String,
+}
+
+impl Default for SequenceOptions {
+    fn default() -> Self {
+        SequenceOptions { fps: 0.0, gaps: Gaps::Error, layer: String::new() }
+    }
+}
+
+/// Opens `path` (folder, pattern, image or video) as a clip. A video's frames decode after this
+/// returns: their errors reach the user through `report`.
+pub fn open_sequence(path: &Path, options: &SequenceOptions, ctx: &CookCtx, report: ReportError) -> Result<Clip, IoError> {
+    match find_input_files(path, options.gaps)? {
+        InputFiles::Video(_) if !options.layer.is_empty() => Err(IoError::Path(format!(
+            "{}: layer '{}' was asked for, but a video has no layers (only OpenEXR files do)",
+            path.display(),
+            options.layer
+        ))),
+        InputFiles::Video(video) => crate::video::video_clip(&video, options.fps, ctx, report),
+        InputFiles::Images(files) => {
+            image_sequence_clip(files, if options.fps > 0.0 { options.fps } else { DEFAULT_FPS }, &options.layer)
+        }
     }
 }
 

@@ -297,7 +297,13 @@ fn a_sequence_with_missing_numbers_is_refused_naming_them_or_held() {
     for path in [dir.path().join("s_####.png"), dir.path().to_path_buf()] {
         let err = load_sequence(&path, 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("frames 3, 6-7 are missing (3 of the numbers 0-9)") && err.contains("hold"), "{err}");
-        let held = open_sequence(&path, 0.0, Gaps::Hold, &ctx, LoadSequence::node_error).unwrap();
+        let held = open_sequence(
+            &path,
+            &SequenceOptions { gaps: Gaps::Hold, ..SequenceOptions::default() },
+            &ctx,
+            LoadSequence::node_error,
+        )
+        .unwrap();
         assert_eq!(held.len(), 10, "every number keeps its frame");
         // Frame 3 repeats frame 2; frames 6 and 7 repeat frame 5; the others are their own.
         for (i, source) in [0, 1, 2, 2, 4, 5, 5, 5, 8, 9].into_iter().enumerate() {

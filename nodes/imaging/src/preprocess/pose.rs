@@ -8,6 +8,7 @@ use imageproc::geometric_transformations::{Border, Interpolation, Projection, wa
 use pyrograph_core::{Channels, Contour, Contours, Cook, CookCtx, Image, NodeError, port};
 
 use super::contours::simplify_closed;
+use crate::auto_crop::{fill_warning, fills_picture};
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
 
 /// How contour points are weighted in the line fit (eq. 7–8).
@@ -270,6 +271,8 @@ pyrograph_core::choice! {
         Rotate = "rotate",
         /// [`PoseMode::CenterScale`].
         CenterScale = "center_scale",
+        /// Only measure the lean (for imaging.smooth_angle): the frame passes through, no guard acts or warns.
+        Measure = "measure",
     }
 }
 
@@ -293,16 +296,19 @@ pyrograph_core::node! {
     /// and the image is rotated about the lower end so the flame stands vertical. Mode center_scale instead moves the
     /// flame's bounding box to the centre and scales it to target_height of the frame (angle and end points are
     /// still reported). With no contours the image passes through and angle is 0. Guards for footage the thesis did
-    /// not film: a lean beyond max_angle is turned only max_angle, and an outline spanning at least max_width of the
-    /// frame's width (a fire filling the picture, which has no single axis) is not turned; both warn, and turned
-    /// reports the rotation applied.
+    /// not film: a lean beyond max_angle is turned only max_angle, and a fire filling the picture (which has no
+    /// single axis) is neither turned nor scaled — every frame of the clip when fills is connected to
+    /// imaging.auto_crop's fills, else (without use_lean) each frame whose outline spans max_width of the frame's
+    /// width or height, the auto crop's rule; both warn, and turned reports the rotation applied. With use_lean the
+    /// clip decides alone (the smoothed lean, the auto crop's fills), so no frame is treated apart from its clip.
+    /// Mode measure only reports the lean, for imaging.smooth_angle.
     #[node("imaging.pose_normalize", "Pre-processing", PerFrame)]
     pub struct PoseNormalize {
         /// Frame to normalize (gray or RGBA)
         image: Arc<Image>,
         /// Flame contours traced from this frame
         contours: Arc<Contours>,
-        /// rotate: stand the flame upright; center_scale: centre and scale it
+        /// rotate: stand the flame upright; center_scale: centre and scale it; measure: only report the lean
         mode: PoseModeOption = PoseModeOption::Rotate,
         /// Point weighting of the line fit (remedies 3 and 1)
         weights: WeightingOption = WeightingOption::Uniform,
@@ -315,9 +321,11 @@ pyrograph_core::node! {
         /// Largest rotation in degrees; a flame leaning further is turned this far only (rotate mode)
         #[range(0.0, 180.0)]
         max_angle: f64 = 45.0,
-        /// Outline width, as a fraction of the frame's, from which the frame is not turned (rotate mode)
+        /// Outline span, as a fraction of the frame's width or height, from which a frame fills the picture and is not turned (rotate mode)
         #[range(0.05, 1.0)]
         max_width: f64 = 0.9,
+        /// The fire fills the picture over the clip (connect imaging.auto_crop's fills): no frame is turned or scaled, and the auto crop has said so (rotate mode)
+        fills: bool = false,
         /// Keep the turned flame inside the frame: where the turn would push part of it out, move it back in and, if it is taller or wider than the frame, scale it down about its root (rotate mode; off keeps every frame's scale, as the thesis does)
         keep_inside: bool = false,
         /// Straighten by lean instead of the fitted angle (connect imaging.smooth_angle's angle so the turn does not jitter); the guards still apply (rotate mode)
@@ -341,24 +349,14 @@ pyrograph_core::node! {
 }
 
 /// The rotation `imaging.pose_normalize` applies for a measured lean: the lean itself, at most
-/// `max_angle` either way, and none when the outline spans `max_width` of the frame or more.
-/// Returns the turn and, when a guard acted, the warning to give.
-pub fn guarded_turn(
-    lean_deg: f64,
-    outline_width: f64,
-    frame_width: f64,
-    max_angle: f64,
-    max_width: f64,
-) -> (f64, Option<String>) {
+/// `max_angle` either way, and none when the outline's span (width, height) fills the frame's
+/// (the auto crop's [`fills_picture`] rule at `max_width`). Returns the turn and, when a guard
+/// acted, the warning to give.
+pub fn guarded_turn(lean_deg: f64, span: (f64, f64), frame: (f64, f64), max_angle: f64, max_width: f64) -> (f64, Option<String>) {
     // One wording for every frame (no per-frame numbers), so a clip reports each guard once
     // (see CookCtx::warn) instead of once per frame.
-    if outline_width >= max_width * frame_width {
-        let msg = format!(
-            "the flame's outline spans max_width ({:.0} %) of the frame's width or more: a fire filling the picture has no \
-             single axis, so frames like this are not turned; crop to one flame to straighten it",
-            100.0 * max_width
-        );
-        return (0.0, Some(msg));
+    if fills_picture(span, frame, max_width) {
+        return (0.0, Some(fill_warning(None, max_width)));
     }
     if lean_deg.abs() > max_angle {
         let turn = max_angle.copysign(lean_deg);
@@ -369,6 +367,15 @@ pub fn guarded_turn(
         return (turn, Some(msg));
     }
     (lean_deg, None)
+}
+
+/// Columns and rows the outline covers: a traced outline runs through pixel centres, so one from
+/// the first column to the last spans the whole width.
+fn outline_span(contour: &Contour) -> (f64, f64) {
+    let b = contour.points.iter().fold([f32::INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY], |b, &[x, y]| {
+        [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)]
+    });
+    if b[0] > b[2] { (0.0, 0.0) } else { (f64::from(b[2] - b[0]) + 1.0, f64::from(b[3] - b[1]) + 1.0) }
 }
 
 impl Cook for PoseNormalize {
@@ -387,7 +394,7 @@ impl Cook for PoseNormalize {
             ));
         }
         let mode = match self.mode {
-            PoseModeOption::Rotate => PoseMode::Rotate,
+            PoseModeOption::Rotate | PoseModeOption::Measure => PoseMode::Rotate,
             PoseModeOption::CenterScale => PoseMode::CenterScale(self.target_height),
         };
         let weighting = match self.weights {
@@ -396,20 +403,24 @@ impl Cook for PoseNormalize {
             WeightingOption::LowPoly => Weighting::LowPoly(self.lowpoly_tolerance),
         };
         let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
+        let (angle, root, tip) = axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
+        if self.mode == PoseModeOption::Measure {
+            return Ok(PoseNormalizeOut { image: Arc::clone(&self.image), angle, root, tip, turned: 0.0 });
+        }
         let (image, turned) = match (mode, axis) {
             (PoseMode::Rotate, Some(a)) => {
-                // Columns covered: a traced outline runs through pixel centres, so an outline
-                // from the first column to the last spans the whole width.
-                let width = main_contour(contours).map_or(0.0, |c| {
-                    let xs = c.points.iter().map(|p| f64::from(p[0]));
-                    xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min) + 1.0
-                });
+                let (iw, ih) = (f64::from(image.width()), f64::from(image.height()));
+                let span = main_contour(contours).map_or((0.0, 0.0), outline_span);
                 let lean = if self.use_lean { self.lean } else { a.angle_deg };
-                let (turn, warning) = guarded_turn(lean, width, f64::from(image.width()), self.max_angle, self.max_width);
+                // A clip the auto crop found filling the picture: every frame stays as it is, and
+                // the auto crop has given the one warning. Straightening by the clip's smoothed lean,
+                // the clip's fills is the rule: a frame is not exempted on its own.
+                let frame_fill = if self.use_lean { f64::INFINITY } else { self.max_width };
+                let (turn, warning) =
+                    if self.fills { (0.0, None) } else { guarded_turn(lean, span, (iw, ih), self.max_angle, frame_fill) };
                 if let Some(w) = warning {
                     ctx.warn(w);
                 }
-                let (iw, ih) = (f64::from(image.width()), f64::from(image.height()));
                 let fit = main_contour(contours)
                     .and_then(|c| turned_bounds(&c.points, a.root, turn))
                     .map_or((1.0, [0.0; 2]), |b| keep_inside(b, a.root, iw, ih, 1.0));
@@ -429,7 +440,6 @@ impl Cook for PoseNormalize {
             }
             _ => (pose_normalize(image, contours, mode, weighting).image, 0.0),
         };
-        let (angle, root, tip) = axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
         Ok(PoseNormalizeOut { image: Arc::new(image), angle, root, tip, turned })
     }
 }
@@ -475,21 +485,30 @@ pub(crate) mod tests {
 
     #[test]
     fn guards_limit_the_turn_and_say_so() {
-        assert_eq!(guarded_turn(10.0, 30.0, 200.0, 45.0, 0.9), (10.0, None));
-        let (turn, w) = guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9);
+        let frame = (200.0, 100.0);
+        assert_eq!(guarded_turn(10.0, (30.0, 60.0), frame, 45.0, 0.9), (10.0, None));
+        let (turn, w) = guarded_turn(-60.0, (30.0, 60.0), frame, 45.0, 0.9);
         assert_eq!(turn, -45.0);
         assert!(w.is_some_and(|w| w.contains("leans more than max_angle (45°)") && w.contains("turned 45° only")));
         // Every frame over the limit words it alike, so a clip reports it once.
-        assert_eq!(guarded_turn(-60.0, 30.0, 200.0, 45.0, 0.9).1, guarded_turn(70.0, 30.0, 200.0, 45.0, 0.9).1);
-        let (turn, w) = guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9);
+        assert_eq!(guarded_turn(-60.0, (30.0, 60.0), frame, 45.0, 0.9).1, guarded_turn(70.0, (30.0, 60.0), frame, 45.0, 0.9).1);
+        let (turn, w) = guarded_turn(20.0, (190.0, 60.0), frame, 45.0, 0.9);
         assert_eq!(turn, 0.0);
-        assert!(w.is_some_and(|w| w.contains("spans max_width (90 %) of the frame's width")));
-        assert_eq!(guarded_turn(20.0, 190.0, 200.0, 45.0, 0.9).1, guarded_turn(-5.0, 199.0, 200.0, 45.0, 0.9).1);
+        assert!(w.is_some_and(|w| w.contains("fills the picture") && w.contains("neither turned nor scaled")));
+        // As wide or as tall: the auto crop's rule, in the auto crop's words.
+        let tall = guarded_turn(-5.0, (40.0, 95.0), frame, 45.0, 0.9);
+        assert_eq!(guarded_turn(20.0, (190.0, 60.0), frame, 45.0, 0.9), tall);
+        assert_eq!(tall.1, Some(fill_warning(None, 0.9)));
     }
 
     /// Cooks the node with its defaults on `m` (the mask as the frame), returning the output and
     /// the warnings.
     fn cook_node(m: &Mask) -> (PoseNormalizeOut, Vec<String>) {
+        cook_node_with(m, false)
+    }
+
+    /// [`cook_node`] with `fills` set as given.
+    fn cook_node_with(m: &Mask, fills: bool) -> (PoseNormalizeOut, Vec<String>) {
         let node = PoseNormalize {
             image: Arc::new(mask_image(m)),
             contours: Arc::new(trace_contours(m)),
@@ -499,6 +518,7 @@ pub(crate) mod tests {
             target_height: 0.8,
             max_angle: 45.0,
             max_width: 0.9,
+            fills,
             keep_inside: true,
             use_lean: false,
             lean: 0.0,
@@ -533,12 +553,20 @@ pub(crate) mod tests {
         // A flame in the middle of the same frame is turned as before, without a warning.
         let (out, warnings) = cook_node(&ellipse_mask(100, 100, (50.0, 50.0), (8.0, 30.0), 20.0));
         assert!((out.turned - 20.0).abs() < 1.0 && warnings.is_empty(), "{} {warnings:?}", out.turned);
+        // In a clip the auto crop found filling the picture, that frame too stays as it is, and
+        // the auto crop's warning is the only one.
+        let m = ellipse_mask(100, 100, (50.0, 50.0), (8.0, 30.0), 20.0);
+        let (out, warnings) = cook_node_with(&m, true);
+        assert_eq!((out.turned, warnings.len()), (0.0, 0));
+        assert!((out.angle - 20.0).abs() < 1.0, "the lean is still measured: {}", out.angle);
+        assert_eq!(out.image.data(), mask_image(&m).data());
     }
 
     #[test]
     fn a_turned_flame_is_kept_whole_inside_the_frame() {
-        // A long flame lying 40° across a wide, short frame: upright it is taller than the frame.
-        let m = ellipse_mask(200, 90, (100.0, 50.0), (8.0, 52.0), 40.0);
+        // A long flame lying 40° across a wide, short frame (80 of its 100 rows): upright it is
+        // taller than the frame.
+        let m = ellipse_mask(200, 100, (100.0, 55.0), (8.0, 52.0), 40.0);
         let (out, warnings) = cook_node(&m);
         assert!((out.turned - 40.0).abs() < 1.0, "{}", out.turned);
         assert!(warnings.iter().any(|w| w.contains("would not fit the frame") && w.contains("scaled")), "{warnings:?}");
@@ -551,9 +579,9 @@ pub(crate) mod tests {
         let after = lit(&out.image);
         // Nothing touches the border, and (almost) all of the flame is still there: scaled
         // to fit, its area shrinks by the scale squared, never by a cut.
-        assert!(after.iter().all(|&(x, y)| x > 0 && y > 0 && x < 199 && y < 89), "the flame touches the frame's edge");
+        assert!(after.iter().all(|&(x, y)| x > 0 && y > 0 && x < 199 && y < 99), "the flame touches the frame's edge");
         let upright =
-            Mask::from_vec(200, 90, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+            Mask::from_vec(200, 100, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
         let axis = flame_axis(main_contour(&trace_contours(&upright)).unwrap(), Weighting::Uniform).unwrap();
         assert!(axis.angle_deg.abs() < 2.0, "still upright: {}", axis.angle_deg);
         let height = axis.root[1] - axis.tip[1];

@@ -68,22 +68,21 @@ impl Cook for SmoothAngle {
         if clip.is_empty() {
             return Err(NodeError::port(port!(SmoothAngle, angle), "the angle clip has no frames"));
         }
-        let mut values = Vec::with_capacity(clip.len());
-        for i in 0..clip.len() {
-            ctx.check_cancel()?;
-            match clip.get(i, ctx)? {
-                Value::Float(v) if v.is_finite() => values.push(v),
-                Value::Float(v) => {
-                    return Err(NodeError::port(port!(SmoothAngle, angle), format!("frame {i} has the angle {v}")));
+        // Every frame's angle cooks the per-frame chain above it: in parallel, in frame order.
+        use rayon::prelude::*;
+        let values = (0..clip.len())
+            .into_par_iter()
+            .map(|i| {
+                ctx.check_cancel()?;
+                match clip.get(i, ctx)? {
+                    Value::Float(v) if v.is_finite() => Ok(v),
+                    Value::Float(v) => Err(NodeError::port(port!(SmoothAngle, angle), format!("frame {i} has the angle {v}"))),
+                    other => {
+                        Err(NodeError::port(port!(SmoothAngle, angle), format!("frame {i} is {}, not an angle", other.summary())))
+                    }
                 }
-                other => {
-                    return Err(NodeError::port(
-                        port!(SmoothAngle, angle),
-                        format!("frame {i} is {}, not an angle", other.summary()),
-                    ));
-                }
-            }
-        }
+            })
+            .collect::<Result<Vec<f64>, NodeError>>()?;
         let smooth = gaussian_filter(&median_filter(&values, self.median_radius), self.sigma);
         let frames = smooth.into_iter().map(Value::Float).collect();
         Ok(SmoothAngleOut { angle: ClipOf::new(Clip::from_frames(PortType::Float, clip.fps(), frames)) })

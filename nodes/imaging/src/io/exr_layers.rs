@@ -1,0 +1,227 @@
+//! OpenEXR files with several layers (passes): the layers a file holds, and decoding one of them.
+//!
+//! A layer is what compositors call one: the channels sharing a name before their last dot
+//! (`diffuse.R`, `diffuse.G`, `diffuse.B` are layer `diffuse`), in a single-part file or in any
+//! part of a multi-part file, where a part's channels without a dot take the part's name as
+//! Nuke reads them. Channels without a dot in a single-part file form the main layer, named ""
+//! here and `rgba` in messages.
+
+use std::path::Path;
+
+use exr::meta::MetaData;
+use pyrograph_core::{Channels, Image, NodeError};
+
+/// The layer and base name of a channel: its name before and after the last dot; without a dot,
+/// the layer is `part`, the part's name in a multi-part file (None in a single-part file, whose
+/// name attribute is not a layer).
+fn layer_of(part: Option<&str>, channel: &str) -> (String, String) {
+    match channel.rsplit_once('.') {
+        Some((prefix, base)) => (prefix.to_string(), base.to_string()),
+        None => (part.unwrap_or("").to_string(), channel.to_string()),
+    }
+}
+
+/// The name a part gives its bare channels: its name attribute, in a file of several parts.
+fn part_name(meta_parts: usize, name: Option<&exr::meta::attribute::Text>) -> Option<String> {
+    name.filter(|_| meta_parts > 1).map(ToString::to_string)
+}
+
+/// The layers of a file's parts, in order, each once: (part index, layer name).
+fn layers(meta: &MetaData) -> Vec<(usize, String)> {
+    let mut out: Vec<(usize, String)> = Vec::new();
+    for (i, header) in meta.headers.iter().enumerate() {
+        let part = part_name(meta.headers.len(), header.own_attributes.layer_name.as_ref());
+        for c in &header.channels.list {
+            let (label, _) = layer_of(part.as_deref(), &c.name.to_string());
+            if !out.iter().any(|(_, l)| *l == label) {
+                out.push((i, label));
+            }
+        }
+    }
+    out
+}
+
+/// The part holding `layer` ("" = the main layer, else the first part's layer when the file has
+/// no main layer and no layer was asked for: a single-layer file whose channels are prefixed).
+fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, String), NodeError> {
+    let all = layers(meta);
+    let pick = match layer {
+        "" => all.iter().find(|(_, l)| l.is_empty()).or(if all.len() == 1 { all.first() } else { None }),
+        want => all.iter().find(|(_, l)| l == want).or_else(|| all.iter().find(|(_, l)| l.eq_ignore_ascii_case(want))),
+    };
+    pick.cloned().ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|(_, l)| if l.is_empty() { "rgba" } else { l.as_str() }).collect();
+        let asked = if layer.is_empty() { "no main (unnamed) layer".to_string() } else { format!("no layer '{layer}'") };
+        NodeError::msg(format!(
+            "{}: the file has {asked}; its layers are {}; set layer to one of them",
+            path.display(),
+            names.join(", ")
+        ))
+    })
+}
+
+fn read_meta(path: &Path) -> Result<MetaData, NodeError> {
+    MetaData::read_from_file(path, false).map_err(|e| NodeError::msg(format!("{}: {e}", path.display())))
+}
+
+/// Width and height of `layer`'s part, from the header alone.
+pub fn exr_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
+    let meta = read_meta(path)?;
+    let (part, _) = find_layer(&meta, layer, path)?;
+    let size = meta.headers[part].layer_size;
+    Ok((to_u32(size.0, path)?, to_u32(size.1, path)?))
+}
+
+fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
+    u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
+}
+
+/// Decodes `layer` of an OpenEXR file (its header checked against the budget by the caller): `Y`
+/// only → gray, else R, G, B (and A, default 1).
+pub fn decode_exr_layer(path: &Path, layer: &str) -> Result<Image, NodeError> {
+    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    let meta = read_meta(path)?;
+    let (part, label) = find_layer(&meta, layer, path)?;
+    let file = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| named(&e))?;
+    let data = file.layer_data.get(part).ok_or_else(|| named(&"the layer's part is missing"))?;
+    let (w, h) = (to_u32(data.size.0, path)?, to_u32(data.size.1, path)?);
+    let pixels = w as usize * h as usize;
+    let bare = part_name(file.layer_data.len(), data.attributes.layer_name.as_ref());
+    // Subsampled channels (chroma) hold fewer samples than pixels; they are treated as absent.
+    let channel = |base: &str| -> Option<Vec<f32>> {
+        let c = data
+            .channel_data
+            .list
+            .iter()
+            .find(|c| layer_of(bare.as_deref(), &c.name.to_string()) == (label.clone(), base.to_string()))?;
+        let samples: Vec<f32> = c.sample_data.values_as_f32().collect();
+        (samples.len() == pixels).then_some(samples)
+    };
+    let image = match (channel("R"), channel("G"), channel("B"), channel("Y")) {
+        (Some(r), Some(g), Some(b), _) => {
+            let a = channel("A").unwrap_or_else(|| vec![1.0; pixels]);
+            let data = (0..pixels).flat_map(|i| [r[i], g[i], b[i], a[i]]).collect();
+            Image::from_vec(w, h, Channels::Rgba, data)
+        }
+        (_, _, _, Some(y)) => Image::from_vec(w, h, Channels::Gray, y),
+        _ => {
+            let shown = if label.is_empty() { "rgba".to_string() } else { format!("'{label}'") };
+            return Err(named(&format!("layer {shown} has neither R, G, B nor Y channels")));
+        }
+    };
+    image.ok_or_else(|| named(&"channel sizes do not match the image size"))
+}
+
+#[cfg(test)]
+mod tests {
+    use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, WritableImage as _};
+
+    use super::*;
+
+    const W: usize = 6;
+    const H: usize = 4;
+
+    /// A channel whose sample at pixel i is `seed + i / 100`.
+    fn channel(name: &str, seed: f32) -> AnyChannel<FlatSamples> {
+        AnyChannel::new(name, FlatSamples::F32((0..W * H).map(|i| seed + i as f32 / 100.0).collect()))
+    }
+
+    fn layer(name: &str, channels: Vec<AnyChannel<FlatSamples>>) -> Layer<AnyChannels<FlatSamples>> {
+        Layer::new(
+            (W, H),
+            LayerAttributes::named(name),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels.into_iter().collect()),
+        )
+    }
+
+    /// One part (named `render`, a name that is not a layer) holding the main RGBA, a `diffuse`
+    /// RGB and a `depth.Y` layer, as renderers write legacy multi-layer files.
+    fn single_part(path: &Path) {
+        let channels = vec![
+            channel("R", 1.0),
+            channel("G", 2.0),
+            channel("B", 3.0),
+            channel("A", 0.5),
+            channel("diffuse.R", 10.0),
+            channel("diffuse.G", 20.0),
+            channel("diffuse.B", 30.0),
+            channel("depth.Y", 7.0),
+        ];
+        exr::image::Image::from_layer(layer("render", channels)).write().to_file(path).unwrap();
+    }
+
+    /// Two parts, `beauty` and `spec`, each with bare R, G, B channels, as Nuke writes multi-part.
+    fn multi_part(path: &Path) {
+        let beauty = layer("beauty", vec![channel("R", 1.0), channel("G", 2.0), channel("B", 3.0)]);
+        let spec = layer("spec", vec![channel("R", 4.0), channel("G", 5.0), channel("B", 6.0)]);
+        let attributes = exr::prelude::ImageAttributes::new(exr::prelude::IntegerBounds::from_dimensions((W, H)));
+        exr::image::Image::from_layers(attributes, SmallVec::from_vec(vec![beauty, spec])).write().to_file(path).unwrap();
+    }
+
+    fn px(img: &Image, i: usize) -> Vec<f32> {
+        let n = img.channels().count();
+        img.data()[i * n..(i + 1) * n].to_vec()
+    }
+
+    #[test]
+    fn each_layer_of_a_single_part_file_reads_apart() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("passes.exr");
+        single_part(&path);
+        let main = decode_exr_layer(&path, "").unwrap();
+        assert_eq!(px(&main, 5), vec![1.05, 2.05, 3.05, 0.55]);
+        let diffuse = decode_exr_layer(&path, "diffuse").unwrap();
+        assert_eq!(px(&diffuse, 23), vec![10.23, 20.23, 30.23, 1.0], "no alpha in the layer: opaque");
+        let depth = decode_exr_layer(&path, "Depth").unwrap();
+        assert_eq!((depth.channels(), px(&depth, 1)), (Channels::Gray, vec![7.01]), "names match case-blind");
+        assert_eq!(exr_dimensions(&path, "diffuse").unwrap(), (W as u32, H as u32));
+        let e = decode_exr_layer(&path, "specular").unwrap_err().to_string();
+        assert!(e.contains("passes.exr: the file has no layer 'specular'; its layers are rgba, depth, diffuse"), "{e}");
+    }
+
+    #[test]
+    fn the_parts_of_a_multi_part_file_are_its_layers() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("parts.exr");
+        multi_part(&path);
+        assert_eq!(px(&decode_exr_layer(&path, "spec").unwrap(), 2), vec![4.02, 5.02, 6.02, 1.0]);
+        assert_eq!(px(&decode_exr_layer(&path, "beauty").unwrap(), 2), vec![1.02, 2.02, 3.02, 1.0]);
+        let e = decode_exr_layer(&path, "").unwrap_err().to_string();
+        assert!(e.contains("no main (unnamed) layer; its layers are beauty, spec; set layer"), "{e}");
+    }
+
+    #[test]
+    fn a_sequence_reads_the_layer_asked_for() {
+        use crate::io::{LoadSequence, SequenceOptions, open_sequence};
+        let dir = tempfile::tempdir().unwrap();
+        for n in 1..=3 {
+            single_part(&dir.path().join(format!("shot_{n:04}.exr")));
+        }
+        let ctx = pyrograph_core::CookCtx::new();
+        let open = |layer: &str| {
+            let options = SequenceOptions { layer: layer.into(), ..SequenceOptions::default() };
+            open_sequence(&dir.path().join("shot_####.exr"), &options, &ctx, LoadSequence::node_error)
+        };
+        let diffuse = open("diffuse").unwrap();
+        let main = open("").unwrap();
+        assert_eq!(diffuse.len(), 3);
+        assert_ne!(diffuse.fingerprint(), main.fingerprint(), "another layer is another clip for the caches");
+        assert_eq!(px(&diffuse.image(2, &ctx).unwrap(), 0), vec![10.0, 20.0, 30.0, 1.0]);
+        let e = LoadSequence::node_error(open("nope").unwrap_err()).to_string();
+        assert!(e.contains("shot_0001.exr: the file has no layer 'nope'"), "{e}");
+        std::fs::write(dir.path().join("a.png"), b"").unwrap();
+        let png = crate::io::files::image_dimensions(&dir.path().join("a.png"), "diffuse").unwrap_err().to_string();
+        assert!(png.contains("only OpenEXR files have layers"), "{png}");
+    }
+
+    #[test]
+    fn channel_names_give_layers_under_their_part() {
+        assert_eq!(layer_of(None, "R"), (String::new(), "R".into()));
+        assert_eq!(layer_of(None, "diffuse.R"), ("diffuse".into(), "R".into()));
+        assert_eq!(layer_of(None, "light.key.B"), ("light.key".into(), "B".into()));
+        assert_eq!(layer_of(Some("beauty"), "R"), ("beauty".into(), "R".into()));
+        assert_eq!(layer_of(Some("diffuse"), "diffuse.G"), ("diffuse".into(), "G".into()));
+        assert_eq!(layer_of(Some("aov"), "spec.A"), ("spec".into(), "A".into()));
+    }
+}

@@ -23,7 +23,7 @@ use crate::io::{DEFAULT_FPS, IoError, ReportError, fingerprint_files};
 
 mod probe;
 
-pub use probe::{VariableRate, VideoInfo, decoded_count, parse_probe, probe_video, variable_rate};
+pub use probe::{VariableRate, VideoInfo, decoded_count, on_one_grid, parse_probe, probe_video, variable_rate};
 use probe::{path_error, run_error};
 
 /// A cursor this many frames behind a request reads on to it rather than seeking (a seek decodes
@@ -48,15 +48,30 @@ impl Cursor {
     fn spawn(ffmpeg: &str, path: &Path, info: &VideoInfo, start: usize, seek: Option<f64>) -> Result<Cursor, IoError> {
         let mut cmd = Command::new(ffmpeg);
         cmd.args(["-v", "error", "-nostdin"]);
-        if let Some(t) = seek {
-            // An input seek is exact in ffmpeg: it decodes from the keyframe before `t` and drops
-            // the frames before it. Half a frame early lands on frame `start` whatever the rounding.
-            cmd.arg("-ss").arg(format!("{t:.6}"));
+        match (seek, &info.variable) {
+            (Some(t), None) => {
+                // An input seek is exact in ffmpeg: it decodes from the keyframe before `t` and
+                // drops the frames before it. Half a frame early lands on frame `start` whatever
+                // the rounding.
+                cmd.arg("-ss").arg(format!("{t:.6}"));
+            }
+            (Some(t), Some(_)) => {
+                // A resampled clip: decode from the keyframe before `t` keeping every frame and
+                // its own time, so the resampler below sees what a walk from the start sees there.
+                cmd.args(["-noaccurate_seek", "-ss"]).arg(format!("{t:.6}")).arg("-copyts");
+            }
+            (None, _) => {}
         }
         cmd.arg("-i").arg(path).args(["-map", "0:v:0", "-an", "-sn", "-dn"]);
         if let Some(v) = &info.variable {
-            // Each output frame is the source frame on screen at its time, starting at the first.
-            cmd.arg("-vf").arg(format!("fps={}", rate_text(v.rate)));
+            // Each output frame is the source frame on screen at its time, counted from the
+            // clip's first frame; after a seek, the frames before `start` are dropped here.
+            let rate = rate_text(v.rate);
+            let filter = match seek {
+                Some(_) => format!("fps={rate}:start_time={:.6},select='gte(n\\,{start})'", v.first),
+                None => format!("fps={rate}"),
+            };
+            cmd.arg("-vf").arg(filter);
         }
         // Every frame out of the decoder (or the resampler) once, in order.
         cmd.args(["-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", if info.bits > 8 { "rgb48le" } else { "rgb24" }, "-"])
@@ -163,11 +178,16 @@ impl VideoFrames {
                 return Ok(pool.swap_remove(i));
             }
         }
-        if index == 0 || !self.info.constant_rate {
-            return Cursor::spawn(&self.ffmpeg, &self.path, &self.info, 0, None);
+        let seek = match &self.info.variable {
+            _ if index == 0 => None,
+            Some(v) => Some((v.first + (index as f64 - 0.5) / v.rate).max(0.0)),
+            None if self.info.constant_rate => Some(((index as f64 - 0.5) / self.fps).max(0.0)),
+            None => None,
+        };
+        match seek {
+            Some(t) => Cursor::spawn(&self.ffmpeg, &self.path, &self.info, index, Some(t)),
+            None => Cursor::spawn(&self.ffmpeg, &self.path, &self.info, 0, None),
         }
-        let t = (index as f64 - 0.5) / self.fps;
-        Cursor::spawn(&self.ffmpeg, &self.path, &self.info, index, Some(t.max(0.0)))
     }
 
     fn give_back(&self, cursor: Cursor) {

@@ -53,6 +53,8 @@ pub struct VariableRate {
     pub source_frames: usize,
     /// Seconds from the first frame's time to the end of the last frame.
     pub seconds: f64,
+    /// The first frame's time in seconds (frame 0 of the resampled clip).
+    pub first: f64,
 }
 
 /// An error about the video file (videos are read by `imaging.load_sequence`, which puts these on
@@ -118,7 +120,12 @@ pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
     }
     if !info.constant_rate {
         let text = ffprobe_csv(ffprobe, path, "packet=pts_time,duration_time")?;
-        if let Some(v) = variable_rate(&text, info.fps, info.base) {
+        if let Some(base) = info.base.filter(|&b| on_one_grid(&text, b)) {
+            // An average rate written with rounding (2997/100 beside 30000/1001): every frame is
+            // on the base rate's grid, none missing, so the clip is constant-rate after all.
+            info.constant_rate = true;
+            info.fps = Some(base);
+        } else if let Some(v) = variable_rate(&text, info.fps, info.base) {
             info.frames = Some(((v.seconds * v.rate).round() as usize).max(1));
             info.fps = Some(v.rate);
             info.variable = Some(v);
@@ -197,6 +204,19 @@ pub(crate) fn last_frame_index(text: &str, start: f64, fps: f64) -> Option<usize
     (index.is_finite() && index >= 0.0).then_some(index as usize)
 }
 
+/// Whether the packets' times (`pts_time,…` lines, any order) lie on one grid of `base` frames a
+/// second with no step missing: frame `i` within half a frame of `first + i / base`.
+pub fn on_one_grid(packets: &str, base: f64) -> bool {
+    let mut times: Vec<f64> =
+        packets.lines().filter_map(|l| l.split(',').next()?.trim().parse::<f64>().ok()).filter(|t| t.is_finite()).collect();
+    if times.len() < 2 || !base.is_finite() || base <= 0.0 {
+        return false;
+    }
+    times.sort_by(f64::total_cmp);
+    let first = times[0];
+    times.iter().enumerate().all(|(i, t)| ((t - first) * base - i as f64).abs() < 0.5)
+}
+
 /// Frame rates cameras and editors use: a variable-rate clip is resampled to one of these.
 const STANDARD_RATES: [f64; 12] = [23.976, 24.0, 25.0, 29.97, 30.0, 48.0, 50.0, 59.94, 60.0, 90.0, 100.0, 120.0];
 
@@ -238,7 +258,7 @@ pub fn variable_rate(packets: &str, average: Option<f64>, base: Option<f64>) -> 
             .filter(|s| (s - average).abs() <= 0.05 * average)
             .unwrap_or(average),
     };
-    Some(VariableRate { rate, average, source_frames: times.len(), seconds })
+    Some(VariableRate { rate, average, source_frames: times.len(), seconds, first })
 }
 
 /// Parses `key=value` lines printed by `ffprobe -show_entries stream=...`.

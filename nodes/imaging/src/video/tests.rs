@@ -207,6 +207,20 @@ fn a_variable_rate_is_resampled_to_its_base_rate_or_the_standard_rate_nearest_it
 }
 
 #[test]
+fn times_on_the_base_rate_grid_are_a_constant_rate_whatever_the_stated_average() {
+    let ntsc: Vec<String> = (0..90).rev().map(|i| format!("{:.6},0.033367", f64::from(i) * 1001.0 / 30000.0)).collect();
+    assert!(on_one_grid(&ntsc.join("\n"), 30000.0 / 1001.0));
+    // A frame dropped (a gap of two steps) or a frame late by more than half a step: not one grid.
+    let mut dropped = ntsc.clone();
+    dropped.remove(40);
+    assert!(!on_one_grid(&dropped.join("\n"), 30000.0 / 1001.0));
+    let mut late = ntsc.clone();
+    late[10] = format!("{:.6},", (79.0 + 0.6) * 1001.0 / 30000.0);
+    assert!(!on_one_grid(&late.join("\n"), 30000.0 / 1001.0));
+    assert!(!on_one_grid("0.0,\n", 24.0) && !on_one_grid("", 24.0));
+}
+
+#[test]
 fn sixteen_bit_frames_keep_values_between_the_eight_bit_steps() {
     let v: u16 = 1000; // 1000/65535 lies between 3/255 and 4/255
     let px: Vec<u8> = [v, 0, 65535].iter().flat_map(|s| s.to_le_bytes()).collect();
@@ -319,6 +333,12 @@ fn a_variable_rate_clip_is_resampled_by_its_timestamps_with_a_warning() {
     }
     // Frames 24-26 hold one source frame, as its time says.
     assert!(want[24] == want[25] && want[25] == want[26] && want[26] != want[27]);
+    // Asked out of order, each answer seeks (to the keyframe before, resampling from there): the
+    // frames a walk gives.
+    let jump = video_clip(&path, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
+    for i in [70, 5, 93, 30, 31, 0, 50, 24, 26] {
+        assert!(rgb24(&jump.image(i, &ctx).unwrap()) == want[i], "frame {i} after a seek");
+    }
     // A rate asked for samples there instead.
     let ctx = CookCtx::new();
     let thirty = video_clip(&path, 30.0, &ctx, LoadSequence::node_error).unwrap();

@@ -35,6 +35,7 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<io::nodes::LoadImage>();
     registry.declare::<io::nodes::WriteSequence>();
     registry.declare::<io::nodes::WriteImage>();
+    registry.declare::<io::write_layers::WriteExrLayers>();
     registry.declare::<gray::ToGray>();
     registry.declare::<crop::Crop>();
     registry.declare::<resize::Resize>();

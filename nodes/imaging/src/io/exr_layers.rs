@@ -9,6 +9,7 @@
 use std::path::Path;
 
 use exr::meta::MetaData;
+use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, WritableImage as _, f16};
 use pyrograph_core::{Channels, Image, NodeError};
 
 /// The layer and base name of a channel: its name before and after the last dot; without a dot,
@@ -112,6 +113,59 @@ pub fn decode_exr_layer(path: &Path, layer: &str) -> Result<Image, NodeError> {
     image.ok_or_else(|| named(&"channel sizes do not match the image size"))
 }
 
+/// One layer to write: its name ("" = the main layer, channels R, G, B, A or Y), its pixels and
+/// whether its samples are 16-bit halves (else 32-bit floats).
+pub struct LayerOut<'a> {
+    /// Layer name: channels are written as `name.R`… (bare `R`… for "").
+    pub name: &'a str,
+    /// The layer's pixels: RGBA gives R, G, B, A; gray gives Y.
+    pub image: &'a Image,
+    /// Half (16-bit) samples instead of float (32-bit).
+    pub half: bool,
+}
+
+/// Encodes `layers` (all one size) as one single-part OpenEXR file whose channels are named
+/// `layer.channel`, as Nuke, Fusion and Resolve write and read passes. Chunks are compressed one
+/// after another so one frame written twice gives the same bytes (see `encode_exr`).
+pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, NodeError> {
+    let first = layers.first().ok_or_else(|| NodeError::msg("no layer to write"))?;
+    let size = first.image.size();
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    for layer in layers {
+        if layer.image.size() != size {
+            let (w, h) = layer.image.size();
+            return Err(NodeError::msg(format!(
+                "layer '{}' is {w}×{h} but the main layer is {}×{}; every layer of a file has one size",
+                layer.name, size.0, size.1
+            )));
+        }
+        let names: &[&str] = match layer.image.channels() {
+            Channels::Rgba => &["R", "G", "B", "A"],
+            Channels::Gray => &["Y"],
+        };
+        let n = names.len();
+        for (c, base) in names.iter().enumerate() {
+            let values = layer.image.data().iter().skip(c).step_by(n).copied();
+            let samples = if layer.half {
+                FlatSamples::F16(values.map(f16::from_f32).collect())
+            } else {
+                FlatSamples::F32(values.collect())
+            };
+            let name = if layer.name.is_empty() { (*base).to_string() } else { format!("{}.{base}", layer.name) };
+            channels.push(AnyChannel::new(name.as_str(), samples));
+        }
+    }
+    let (w, h) = (size.0 as usize, size.1 as usize);
+    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(channels.into()));
+    let mut bytes = Vec::new();
+    exr::image::Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;
+    Ok(bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, WritableImage as _};
@@ -189,6 +243,35 @@ mod tests {
         assert_eq!(px(&decode_exr_layer(&path, "beauty").unwrap(), 2), vec![1.02, 2.02, 3.02, 1.0]);
         let e = decode_exr_layer(&path, "").unwrap_err().to_string();
         assert!(e.contains("no main (unnamed) layer; its layers are beauty, spec; set layer"), "{e}");
+    }
+
+    #[test]
+    fn written_layers_read_back_by_name_in_half_and_float() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.exr");
+        let px = |i: usize| i as f32 / 10.0 + 0.123_456_7;
+        let rgba = Image::from_vec(3, 2, Channels::Rgba, (0..24).map(px).collect()).unwrap();
+        let gray = Image::from_vec(3, 2, Channels::Gray, (0..6).map(|i| px(i) * 3.0).collect()).unwrap();
+        let layers = [
+            LayerOut { name: "", image: &rgba, half: true },
+            LayerOut { name: "emission", image: &rgba, half: false },
+            LayerOut { name: "depth", image: &gray, half: false },
+        ];
+        let bytes = encode_exr_layers(&layers).unwrap();
+        assert_eq!(bytes, encode_exr_layers(&layers).unwrap(), "one frame, one file, byte for byte");
+        std::fs::write(&path, bytes).unwrap();
+        let main = decode_exr_layer(&path, "").unwrap();
+        let emission = decode_exr_layer(&path, "emission").unwrap();
+        assert_eq!(emission.data(), rgba.data(), "float layers are exact");
+        let half_err = main.data().iter().zip(rgba.data()).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(half_err > 0.0 && half_err < 2e-3, "half samples round: {half_err}");
+        assert_eq!(decode_exr_layer(&path, "depth").unwrap().data(), gray.data());
+        let small = Image::from_vec(1, 1, Channels::Gray, vec![0.0]).unwrap();
+        let e = encode_exr_layers(&[
+            LayerOut { name: "", image: &rgba, half: true },
+            LayerOut { name: "mask", image: &small, half: true },
+        ]);
+        assert!(e.unwrap_err().to_string().contains("layer 'mask' is 1×1 but the main layer is 3×2"));
     }
 
     #[test]

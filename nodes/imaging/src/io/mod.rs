@@ -13,6 +13,7 @@ pub mod exr_layers;
 pub mod files;
 pub mod nodes;
 pub mod sequence;
+pub mod write_layers;
 
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};

@@ -418,8 +418,27 @@ pub fn frames_to_write(len: usize, frames: Option<&FrameSet>) -> Result<Vec<usiz
 ///
 /// Nothing is written when any target exists and `overwrite` is off.
 pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Result<Vec<PathBuf>, IoError> {
+    write_frames(clip.len(), options, ctx, |i| {
+        let img = clip.image(i, ctx)?;
+        match options.alpha {
+            AlphaMode::Straight => encode_image(&img, options.format),
+            AlphaMode::Premultiplied => encode_image(&premultiply(&img), options.format),
+        }
+    })
+}
+
+/// Writes `len` frames as files named by `options.pattern` (its format and alpha are the caller's
+/// to apply in `encode`, which makes frame `i`'s bytes): the render's frame range or every frame,
+/// in parallel, each file atomically; returns the paths written, in frame order. Nothing is
+/// written when any target exists and `overwrite` is off.
+pub fn write_frames(
+    len: usize,
+    options: &WriteOptions,
+    ctx: &CookCtx,
+    encode: impl Fn(usize) -> Result<Vec<u8>, NodeError> + Sync,
+) -> Result<Vec<PathBuf>, IoError> {
     let (dir, pattern) = output_pattern(&options.pattern)?;
-    let frames = frames_to_write(clip.len(), options.frames.as_ref())?;
+    let frames = frames_to_write(len, options.frames.as_ref())?;
     let mut targets: Vec<(usize, PathBuf)> =
         frames.into_iter().map(|i| (i, dir.join(pattern.file_name(options.start + i as u64)))).collect();
     if options.skip_existing {
@@ -440,11 +459,10 @@ pub fn write_sequence(clip: &Clip, options: &WriteOptions, ctx: &CookCtx) -> Res
     let done = AtomicUsize::new(0);
     targets.par_iter().try_for_each(|(i, path)| {
         ctx.check_cancel()?;
-        let img = clip.image(*i, ctx).map_err(|e| NodeError::Frame { frame: *i, source: Box::new(e) })?;
-        let bytes = match options.alpha {
-            AlphaMode::Straight => encode_image(&img, options.format)?,
-            AlphaMode::Premultiplied => encode_image(&premultiply(&img), options.format)?,
-        };
+        let bytes = encode(*i).map_err(|e| match e {
+            e @ NodeError::Frame { .. } => e,
+            e => NodeError::Frame { frame: *i, source: Box::new(e) },
+        })?;
         write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
         ctx.record_written(path);
         ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());

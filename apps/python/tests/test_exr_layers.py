@@ -1,0 +1,76 @@
+"""Multi-layer OpenEXR files read on the other side: `imaging.write_exr_layers` files opened with
+the OpenEXR package (PyPI `OpenEXR`, the Academy Software Foundation's own bindings), each layer
+checked against single-layer files of the same frame written by `imaging.write_sequence`."""
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+if os.environ.get("CI") == "true":
+    import OpenEXR  # CI installs it: a missing package fails the run instead of skipping the test
+else:
+    OpenEXR = pytest.importorskip("OpenEXR", reason="pip install OpenEXR (.ci/run installs it)")
+
+GRAPH = """(
+    version: 1,
+    nodes: {
+        "flame": (type: "imaging.turbulence_flame", params: {"width": 48, "height": 64, "frames": 3, "seed": 7}),
+        "gray": (type: "imaging.to_gray"),
+        "glow": (type: "imaging.gaussian_blur", params: {"sigma": 2.0}),
+        "layers": (type: "imaging.write_exr_layers", params: {
+            "pattern": "layered/f_####.exr", "exr_type": "float",
+            "name1": "mask", "type1": "float", "name2": "glow", "type2": "half",
+        }),
+        "main": (type: "imaging.write_sequence", params: {"pattern": "main/f_####.exr", "exr_type": "float", "alpha": "premultiplied"}),
+        "mask": (type: "imaging.write_sequence", params: {"pattern": "mask/f_####.exr", "exr_type": "float"}),
+        "glow_out": (type: "imaging.write_sequence", params: {"pattern": "glow/f_####.exr", "exr_type": "half", "alpha": "premultiplied"}),
+    },
+    edges: [
+        ("flame.clip", "layers.main"),
+        ("flame.clip", "gray.image"),
+        ("gray.image", "layers.layer1"),
+        ("flame.clip", "glow.image"),
+        ("glow.image", "layers.layer2"),
+        ("flame.clip", "main.clip"),
+        ("gray.image", "mask.clip"),
+        ("glow.image", "glow_out.clip"),
+    ],
+)
+"""
+
+
+def channels(path):
+    """Every channel of an EXR file's parts, by name, as float32 arrays (OpenEXR's own reader)."""
+    out = {}
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        for part in f.parts:
+            for name, channel in part.channels.items():
+                out[name] = np.asarray(channel.pixels, dtype=np.float32)
+    return out
+
+
+def test_each_layer_equals_the_single_layer_file_of_the_same_frame(cli, tmp_path):
+    graph = tmp_path / "layers.ron"
+    graph.write_text(GRAPH)
+    out = tmp_path / "out"
+    subprocess.run([cli, "render", graph, "--out", out], check=True, capture_output=True)
+    files = sorted((out / "layered").iterdir())
+    assert [p.name for p in files] == ["f_0000.exr", "f_0001.exr", "f_0002.exr"]
+    for p in files:
+        layered = channels(p)
+        assert sorted(layered) == sorted(["R", "G", "B", "A", "mask.Y", "glow.R", "glow.G", "glow.B", "glow.A"])
+        main, mask, glow = (channels(out / d / p.name) for d in ("main", "mask", "glow"))
+        for c in "RGBA":
+            assert np.array_equal(layered[c], main[c]), (p.name, c)
+            assert layered[f"glow.{c}"].shape == (64, 48)
+            assert np.array_equal(layered[f"glow.{c}"], glow[c]), (p.name, c)
+        assert np.array_equal(layered["mask.Y"], mask["Y"]), p.name
+        # The layers differ from each other: the comparisons above are not trivially true.
+        assert np.abs(layered["glow.R"] - layered["R"]).max() > 0.01
+        assert layered["A"].max() > 0.5 and layered["A"].min() < 0.1
+    # Sample types as asked: the main layer and the mask in float, the glow in half.
+    with OpenEXR.File(str(files[0]), separate_channels=True) as f:
+        kinds = {name: c.pixels.dtype for name, c in f.parts[0].channels.items()}
+    assert kinds["R"] == np.float32 and kinds["mask.Y"] == np.float32 and kinds["glow.R"] == np.float16

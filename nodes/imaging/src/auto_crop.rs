@@ -178,9 +178,9 @@ pub fn framing_warnings(boxes: &[PixelBox], empty: &[usize], frames: usize, (wid
     out
 }
 
-/// Whether a flame whose outline spans `span` (width, height) fills a `frame` (width, height): it
-/// reaches `max_fill` of either side. The one rule of `imaging.auto_crop` (over a clip) and
-/// `imaging.pose_normalize` (per frame, when nothing tells it about the clip).
+/// Whether a fire whose box spans `span` (width, height) fills a `frame` (width, height): it
+/// reaches `max_fill` of either side. `imaging.auto_crop`'s rule over a clip, which
+/// `imaging.pose_normalize` follows through its `fills`.
 pub fn fills_picture(span: (f64, f64), frame: (f64, f64), max_fill: f64) -> bool {
     span.0 >= max_fill * frame.0 || span.1 >= max_fill * frame.1
 }
@@ -190,7 +190,7 @@ pub fn fills_picture(span: (f64, f64), frame: (f64, f64), max_fill: f64) -> bool
 pub fn fill_warning(span: Option<f64>, max_fill: f64) -> String {
     let what = match span {
         Some(share) => format!("its box over the clip spans {:.0} % of the frame's width or height", 100.0 * share),
-        None => format!("in frames like this the outline spans {:.0} % of the frame's width or height or more", 100.0 * max_fill),
+        None => format!("in frames like this the outline spans {:.0} % of the frame's width or more", 100.0 * max_fill),
     };
     format!(
         "the fire fills the picture ({what}): it has no single axis, so it is neither turned nor scaled; crop to one \
@@ -321,7 +321,7 @@ mod tests {
         assert!(fills_picture((10.0, 76.0), (100.0, 80.0), 0.9) && fills_picture((96.0, 30.0), (100.0, 80.0), 0.9));
         let w = fill_warning(Some(0.96), 0.9);
         assert!(w.contains("fills the picture (its box over the clip spans 96 % of the frame's width or height)"), "{w}");
-        assert!(fill_warning(None, 0.9).contains("in frames like this the outline spans 90 %"));
+        assert!(fill_warning(None, 0.9).contains("in frames like this the outline spans 90 % of the frame's width or more"));
     }
 
     /// Cooks the node with `margin` 0.1 over masks whose flame is the box of each frame in `boxes`,

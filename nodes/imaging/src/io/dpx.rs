@@ -48,8 +48,13 @@ pub fn decode_dpx(path: &Path, (w, h): (u32, u32)) -> Result<Image, NodeError> {
     let deep = dpx_header(path)?.2 > 8;
     let out = Command::new("ffmpeg")
         .args(["-v", "error", "-nostdin", "-f", "dpx_pipe", "-i"])
-        // `file:` so a name with a colon or a leading dash is never read as a protocol or option.
-        .arg(std::ffi::OsString::from(format!("file:{}", path.display())))
+        // `file:` so a name with a colon or a leading dash is never read as a protocol or option,
+        // joined to the path's own bytes so a name that is not UTF-8 arrives whole.
+        .arg({
+            let mut url = std::ffi::OsString::from("file:");
+            url.push(path.as_os_str());
+            url
+        })
         .args(["-frames:v", "1", "-f", "rawvideo", "-pix_fmt", if deep { "rgba64le" } else { "rgba" }, "-"])
         .stdin(Stdio::null())
         .output()

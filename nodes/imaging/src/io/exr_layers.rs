@@ -42,12 +42,17 @@ fn layers(meta: &MetaData) -> Vec<(usize, String)> {
     out
 }
 
-/// The part holding `layer` ("" = the main layer, else the first part's layer when the file has
-/// no main layer and no layer was asked for: a single-layer file whose channels are prefixed).
+/// The part holding `layer` and the layer's name there. "" (or `rgba`, as compositors call it)
+/// is the main layer: the channels without a dot; a file without them gives its first part's layer
+/// when it has several parts (as readers of multi-part files do), or its only layer.
 fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, String), NodeError> {
     let all = layers(meta);
+    let layer = if layer.eq_ignore_ascii_case("rgba") { "" } else { layer };
     let pick = match layer {
-        "" => all.iter().find(|(_, l)| l.is_empty()).or(if all.len() == 1 { all.first() } else { None }),
+        "" => all
+            .iter()
+            .find(|(_, l)| l.is_empty())
+            .or_else(|| (meta.headers.len() > 1 || all.len() == 1).then(|| all.first()).flatten()),
         want => all.iter().find(|(_, l)| l == want).or_else(|| all.iter().find(|(_, l)| l.eq_ignore_ascii_case(want))),
     };
     pick.cloned().ok_or_else(|| {
@@ -59,6 +64,13 @@ fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, Strin
             names.join(", ")
         ))
     })
+}
+
+/// Width and height of every part of the file: each is decoded when one layer is read, so each is
+/// checked against the pixel budget.
+pub fn exr_part_sizes(path: &Path) -> Result<Vec<(u32, u32)>, NodeError> {
+    let meta = read_meta(path)?;
+    meta.headers.iter().map(|h| Ok((to_u32(h.layer_size.0, path)?, to_u32(h.layer_size.1, path)?))).collect()
 }
 
 fn read_meta(path: &Path) -> Result<MetaData, NodeError> {
@@ -113,6 +125,13 @@ pub fn decode_exr_layer(path: &Path, layer: &str) -> Result<Image, NodeError> {
     image.ok_or_else(|| named(&"channel sizes do not match the image size"))
 }
 
+/// The longest channel name written (`layer.R`): OpenEXR's long-name limit is 255 bytes.
+pub const MAX_NAME: usize = 250;
+
+/// What a channel name may hold, said when one does not.
+pub const NAME_RULE: &str = "an OpenEXR channel name holds at most 250 bytes of Latin-1 characters (letters, digits, \
+                             punctuation; no other scripts)";
+
 /// One layer to write: its name ("" = the main layer, channels R, G, B, A or Y), its pixels and
 /// whether its samples are 16-bit halves (else 32-bit floats).
 pub struct LayerOut<'a> {
@@ -152,7 +171,10 @@ pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, NodeError> 
                 FlatSamples::F32(values.collect())
             };
             let name = if layer.name.is_empty() { (*base).to_string() } else { format!("{}.{base}", layer.name) };
-            channels.push(AnyChannel::new(name.as_str(), samples));
+            let text = exr::prelude::Text::new_or_none(name.as_str())
+                .filter(|_| name.len() <= MAX_NAME)
+                .ok_or_else(|| NodeError::msg(format!("layer '{}': {}", layer.name, NAME_RULE)))?;
+            channels.push(AnyChannel::new(text, samples));
         }
     }
     let (w, h) = (size.0 as usize, size.1 as usize);
@@ -225,6 +247,7 @@ mod tests {
         single_part(&path);
         let main = decode_exr_layer(&path, "").unwrap();
         assert_eq!(px(&main, 5), vec![1.05, 2.05, 3.05, 0.55]);
+        assert_eq!(decode_exr_layer(&path, "RGBA").unwrap().data(), main.data(), "rgba names the main layer");
         let diffuse = decode_exr_layer(&path, "diffuse").unwrap();
         assert_eq!(px(&diffuse, 23), vec![10.23, 20.23, 30.23, 1.0], "no alpha in the layer: opaque");
         let depth = decode_exr_layer(&path, "Depth").unwrap();
@@ -241,8 +264,10 @@ mod tests {
         multi_part(&path);
         assert_eq!(px(&decode_exr_layer(&path, "spec").unwrap(), 2), vec![4.02, 5.02, 6.02, 1.0]);
         assert_eq!(px(&decode_exr_layer(&path, "beauty").unwrap(), 2), vec![1.02, 2.02, 3.02, 1.0]);
-        let e = decode_exr_layer(&path, "").unwrap_err().to_string();
-        assert!(e.contains("no main (unnamed) layer; its layers are beauty, spec; set layer"), "{e}");
+        // No main layer: the first part, as readers of multi-part files take it.
+        assert_eq!(px(&decode_exr_layer(&path, "").unwrap(), 2), vec![1.02, 2.02, 3.02, 1.0]);
+        let e = decode_exr_layer(&path, "diffuse").unwrap_err().to_string();
+        assert!(e.contains("no layer 'diffuse'; its layers are beauty, spec; set layer"), "{e}");
     }
 
     #[test]

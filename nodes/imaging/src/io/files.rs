@@ -88,6 +88,10 @@ fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> 
     let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
     if is_exr(path) {
         // The exr crate, not `image`, so gray (`Y`) files and layers other than the first read too.
+        // Reading a layer decodes every part of the file: each is held to the budget.
+        for (w, h) in super::exr_layers::exr_part_sizes(path)? {
+            check_budget(path, (w, h))?;
+        }
         return super::exr_layers::exr_dimensions(path, layer);
     }
     if !layer.is_empty() {

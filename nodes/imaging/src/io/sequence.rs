@@ -156,11 +156,32 @@ pub fn find_input_files(path: &Path, gaps: Gaps) -> Result<InputFiles, IoError> 
     }
 }
 
-/// The image files of a directory, in natural name order.
+/// The image files of a directory, in natural name order: those of its most common image type,
+/// so a reference still or a thumbnail beside the frames (a TIFF beside DPX scans, a JPEG beside
+/// PNGs) is not read as a frame.
 pub fn list_directory(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let entries = std::fs::read_dir(dir).map_err(|e| IoError::Path(format!("{}: {e}", dir.display())))?;
     let mut files: Vec<PathBuf> =
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && has_extension(p, IMAGE_EXTENSIONS)).collect();
+    // One type, two spellings: .jpg and .jpeg, .tif and .tiff.
+    let kind = |p: &PathBuf| match p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("jpeg") => "jpg".to_string(),
+        Some("tiff") => "tif".to_string(),
+        other => other.unwrap_or_default().to_string(),
+    };
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    for f in &files {
+        match counts.iter_mut().find(|(k, _)| *k == kind(f)) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((kind(f), 1)),
+        }
+    }
+    // The most files; a tie goes to the type listed first in IMAGE_EXTENSIONS.
+    let rank = |k: &str| IMAGE_EXTENSIONS.iter().position(|e| *e == k).unwrap_or(usize::MAX);
+    if let Some((main, _)) = counts.iter().min_by_key(|(k, n)| (std::cmp::Reverse(*n), rank(k))) {
+        let main = main.clone();
+        files.retain(|f| kind(f) == main);
+    }
     files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     if files.is_empty() {
         return Err(IoError::Path(format!(

@@ -320,6 +320,9 @@ fn a_sequence_with_missing_numbers_is_refused_naming_them_or_held() {
         std::fs::copy(dir.path().join("s_0000.png"), loose.path().join(name)).unwrap();
     }
     assert_eq!(load_sequence(loose.path(), 0.0, &ctx).unwrap().len(), 2);
+    // A reference still of another type beside the frames is not a frame.
+    std::fs::write(loose.path().join("reference.tif"), b"not read").unwrap();
+    assert_eq!(load_sequence(loose.path(), 0.0, &ctx).unwrap().len(), 2);
 }
 
 #[test]

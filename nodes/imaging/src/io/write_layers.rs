@@ -139,6 +139,9 @@ fn bad_layer_name(name: &str) -> Option<String> {
     if name.chars().any(|c| c.is_control() || c.is_whitespace()) {
         return Some(format!("'{name}' has spaces or control characters"));
     }
+    if exr::prelude::Text::new_or_none(name).is_none() || name.len() + 2 > super::exr_layers::MAX_NAME {
+        return Some(format!("'{}' cannot be written: {}", pyrograph_core::error::shortened(name), super::exr_layers::NAME_RULE));
+    }
     None
 }
 
@@ -273,6 +276,11 @@ mod tests {
         n.pattern = OutputPath(dir.path().join("p_####.png"));
         assert!(refused(n, &ctx).contains("must end in .exr"));
         assert!(bad_layer_name("a..b").is_some() && bad_layer_name("light.key").is_none());
+        assert!(
+            bad_layer_name("火").is_some_and(|w| w.contains("Latin-1")),
+            "a name the format cannot hold is refused, not a panic"
+        );
+        assert!(bad_layer_name(&"x".repeat(300)).is_some());
         assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none(), "nothing was written");
     }
 }

@@ -8,7 +8,7 @@ use imageproc::geometric_transformations::{Border, Interpolation, Projection, wa
 use pyrograph_core::{Channels, Contour, Contours, Cook, CookCtx, Image, NodeError, port};
 
 use super::contours::simplify_closed;
-use crate::auto_crop::{fill_warning, fills_picture};
+use crate::auto_crop::fill_warning;
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
 
 /// How contour points are weighted in the line fit (eq. 7–8).
@@ -298,10 +298,9 @@ pyrograph_core::node! {
     /// still reported). With no contours the image passes through and angle is 0. Guards for footage the thesis did
     /// not film: a lean beyond max_angle is turned only max_angle, and a fire filling the picture (which has no
     /// single axis) is neither turned nor scaled — every frame of the clip when fills is connected to
-    /// imaging.auto_crop's fills, else (without use_lean) each frame whose outline spans max_width of the frame's
-    /// width or height, the auto crop's rule; both warn, and turned reports the rotation applied. With use_lean the
-    /// clip decides alone (the smoothed lean, the auto crop's fills), so no frame is treated apart from its clip.
-    /// Mode measure only reports the lean, for imaging.smooth_angle.
+    /// imaging.auto_crop's fills (its box over the clip spans max_fill of the frame's width or height), else each
+    /// frame whose outline spans max_width of the frame's width; both warn, and turned reports the rotation
+    /// applied. Mode measure only reports the lean, for imaging.smooth_angle.
     #[node("imaging.pose_normalize", "Pre-processing", PerFrame)]
     pub struct PoseNormalize {
         /// Frame to normalize (gray or RGBA)
@@ -321,7 +320,7 @@ pyrograph_core::node! {
         /// Largest rotation in degrees; a flame leaning further is turned this far only (rotate mode)
         #[range(0.0, 180.0)]
         max_angle: f64 = 45.0,
-        /// Outline span, as a fraction of the frame's width or height, from which a frame fills the picture and is not turned (rotate mode)
+        /// Outline width, as a fraction of the frame's, from which a frame fills the picture and is not turned (rotate mode)
         #[range(0.05, 1.0)]
         max_width: f64 = 0.9,
         /// The fire fills the picture over the clip (connect imaging.auto_crop's fills): no frame is turned or scaled, and the auto crop has said so (rotate mode)
@@ -349,13 +348,14 @@ pyrograph_core::node! {
 }
 
 /// The rotation `imaging.pose_normalize` applies for a measured lean: the lean itself, at most
-/// `max_angle` either way, and none when the outline's span (width, height) fills the frame's
-/// (the auto crop's [`fills_picture`] rule at `max_width`). Returns the turn and, when a guard
-/// acted, the warning to give.
+/// `max_angle` either way, and none when the outline spans `max_width` of the frame's width (a
+/// frame on its own: only width counts there, so a flame lying across a short frame is still
+/// straightened; over a clip, the auto crop's [`crate::auto_crop::fills_picture`] decides). Returns
+/// the turn and, when a guard acted, the warning to give.
 pub fn guarded_turn(lean_deg: f64, span: (f64, f64), frame: (f64, f64), max_angle: f64, max_width: f64) -> (f64, Option<String>) {
     // One wording for every frame (no per-frame numbers), so a clip reports each guard once
     // (see CookCtx::warn) instead of once per frame.
-    if fills_picture(span, frame, max_width) {
+    if span.0 >= max_width * frame.0 {
         return (0.0, Some(fill_warning(None, max_width)));
     }
     if lean_deg.abs() > max_angle {
@@ -413,11 +413,9 @@ impl Cook for PoseNormalize {
                 let span = main_contour(contours).map_or((0.0, 0.0), outline_span);
                 let lean = if self.use_lean { self.lean } else { a.angle_deg };
                 // A clip the auto crop found filling the picture: every frame stays as it is, and
-                // the auto crop has given the one warning. Straightening by the clip's smoothed lean,
-                // the clip's fills is the rule: a frame is not exempted on its own.
-                let frame_fill = if self.use_lean { f64::INFINITY } else { self.max_width };
+                // the auto crop has given the one warning.
                 let (turn, warning) =
-                    if self.fills { (0.0, None) } else { guarded_turn(lean, span, (iw, ih), self.max_angle, frame_fill) };
+                    if self.fills { (0.0, None) } else { guarded_turn(lean, span, (iw, ih), self.max_angle, self.max_width) };
                 if let Some(w) = warning {
                     ctx.warn(w);
                 }
@@ -495,10 +493,10 @@ pub(crate) mod tests {
         let (turn, w) = guarded_turn(20.0, (190.0, 60.0), frame, 45.0, 0.9);
         assert_eq!(turn, 0.0);
         assert!(w.is_some_and(|w| w.contains("fills the picture") && w.contains("neither turned nor scaled")));
-        // As wide or as tall: the auto crop's rule, in the auto crop's words.
-        let tall = guarded_turn(-5.0, (40.0, 95.0), frame, 45.0, 0.9);
-        assert_eq!(guarded_turn(20.0, (190.0, 60.0), frame, 45.0, 0.9), tall);
-        assert_eq!(tall.1, Some(fill_warning(None, 0.9)));
+        // In the auto crop's words; a frame on its own fills by its width only (a flame lying
+        // across a short frame is straightened).
+        assert_eq!(guarded_turn(20.0, (190.0, 60.0), frame, 45.0, 0.9).1, Some(fill_warning(None, 0.9)));
+        assert_eq!(guarded_turn(-5.0, (40.0, 95.0), frame, 45.0, 0.9), (-5.0, None));
     }
 
     /// Cooks the node with its defaults on `m` (the mask as the frame), returning the output and
@@ -564,9 +562,8 @@ pub(crate) mod tests {
 
     #[test]
     fn a_turned_flame_is_kept_whole_inside_the_frame() {
-        // A long flame lying 40° across a wide, short frame (80 of its 100 rows): upright it is
-        // taller than the frame.
-        let m = ellipse_mask(200, 100, (100.0, 55.0), (8.0, 52.0), 40.0);
+        // A long flame lying 40° across a wide, short frame: upright it is taller than the frame.
+        let m = ellipse_mask(200, 90, (100.0, 50.0), (8.0, 52.0), 40.0);
         let (out, warnings) = cook_node(&m);
         assert!((out.turned - 40.0).abs() < 1.0, "{}", out.turned);
         assert!(warnings.iter().any(|w| w.contains("would not fit the frame") && w.contains("scaled")), "{warnings:?}");
@@ -579,9 +576,9 @@ pub(crate) mod tests {
         let after = lit(&out.image);
         // Nothing touches the border, and (almost) all of the flame is still there: scaled
         // to fit, its area shrinks by the scale squared, never by a cut.
-        assert!(after.iter().all(|&(x, y)| x > 0 && y > 0 && x < 199 && y < 99), "the flame touches the frame's edge");
+        assert!(after.iter().all(|&(x, y)| x > 0 && y > 0 && x < 199 && y < 89), "the flame touches the frame's edge");
         let upright =
-            Mask::from_vec(200, 100, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
+            Mask::from_vec(200, 90, out.image.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect()).unwrap();
         let axis = flame_axis(main_contour(&trace_contours(&upright)).unwrap(), Weighting::Uniform).unwrap();
         assert!(axis.angle_deg.abs() < 2.0, "still upright: {}", axis.angle_deg);
         let height = axis.root[1] - axis.tip[1];

@@ -24,7 +24,7 @@ use crate::io::{DEFAULT_FPS, IoError, ReportError, fingerprint_files};
 mod probe;
 
 pub use probe::{VariableRate, VideoInfo, decoded_count, on_one_grid, parse_probe, probe_video, variable_rate};
-use probe::{path_error, run_error};
+use probe::{input_url, path_error, run_error};
 
 /// A cursor this many frames behind a request reads on to it rather than seeking (a seek decodes
 /// from the previous keyframe anyway, and starting a process costs a few milliseconds).
@@ -56,22 +56,24 @@ impl Cursor {
                 cmd.arg("-ss").arg(format!("{t:.6}"));
             }
             (Some(t), Some(_)) => {
-                // A resampled clip: decode from the keyframe before `t` keeping every frame and
-                // its own time, so the resampler below sees what a walk from the start sees there.
-                cmd.args(["-noaccurate_seek", "-ss"]).arg(format!("{t:.6}")).arg("-copyts");
+                // A resampled clip: decode from the keyframe before `t` (a time in the stream's
+                // own clock, not after the file's start) keeping every frame and its own time, so
+                // the resampler below sees what a walk from the start sees there.
+                cmd.args(["-noaccurate_seek", "-seek_timestamp", "1", "-ss"]).arg(format!("{t:.6}"));
             }
             (None, _) => {}
         }
-        cmd.arg("-i").arg(path).args(["-map", "0:v:0", "-an", "-sn", "-dn"]);
+        if info.variable.is_some() {
+            cmd.arg("-copyts");
+        }
+        cmd.arg("-i").arg(input_url(path)).args(["-map", "0:v:0", "-an", "-sn", "-dn"]);
         if let Some(v) = &info.variable {
-            // Each output frame is the source frame on screen at its time, counted from the
-            // clip's first frame; after a seek, the frames before `start` are dropped here.
+            // Each output frame is the source frame on screen at its time, on a grid from the
+            // clip's first frame (in the stream's own clock, the same for a walk and a seek); after
+            // a seek, the frames before `start` are dropped here.
             let rate = rate_text(v.rate);
-            let filter = match seek {
-                Some(_) => format!("fps={rate}:start_time={:.6},select='gte(n\\,{start})'", v.first),
-                None => format!("fps={rate}"),
-            };
-            cmd.arg("-vf").arg(filter);
+            let grid = format!("fps={rate}:start_time={:.6}", v.first);
+            cmd.arg("-vf").arg(if start > 0 { format!("{grid},select='gte(n\\,{start})'") } else { grid });
         }
         // Every frame out of the decoder (or the resampler) once, in order.
         cmd.args(["-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", if info.bits > 8 { "rgb48le" } else { "rgb24" }, "-"])
@@ -222,9 +224,16 @@ impl FrameSource for VideoFrames {
             }
             // The resampler's count can differ from the one computed from timestamps by a frame at
             // the end (rounding of the last frame's duration): the last frames hold the one before.
-            if let Some(last) = cursor.last.take().filter(|l| l.len() == buf.len() && at + 2 >= self.len) {
+            let near_end = self.info.variable.is_some() && at + 2 >= self.len && at > 0;
+            if let Some(last) = cursor.last.take().filter(|l| l.len() == buf.len() && near_end) {
                 buf = last;
                 break;
+            }
+            if near_end && at == index {
+                // A cursor that started here (a seek) has no frame before to hold: the one before
+                // is the answer, decoded by a cursor of its own (at most two frames back).
+                drop(cursor);
+                return self.frame(at - 1, ctx);
             }
             let why = cursor.finish();
             let why = why.trim();

@@ -72,6 +72,15 @@ pub(crate) fn run_error(program: &str, path: &Path, e: &std::io::Error) -> IoErr
     }
 }
 
+/// `path` as ffmpeg's and ffprobe's input: through the `file:` protocol, so a name starting with
+/// a dash is not read as an option nor one with a colon as another protocol; built from the path's
+/// own bytes, so a name that is not UTF-8 reaches them whole.
+pub(crate) fn input_url(path: &Path) -> std::ffi::OsString {
+    let mut url = std::ffi::OsString::from("file:");
+    url.push(path.as_os_str());
+    url
+}
+
 /// `ffprobe`'s `entries` of the first video stream as `key=value` lines.
 pub(crate) fn ffprobe_fields(ffprobe: &str, path: &Path, extra: &[&str], entries: &str) -> Result<String, IoError> {
     ffprobe_run(ffprobe, path, extra, entries, "default=noprint_wrappers=1")
@@ -87,7 +96,7 @@ fn ffprobe_run(ffprobe: &str, path: &Path, extra: &[&str], entries: &str, format
         .args(["-v", "error", "-select_streams", "v:0"])
         .args(extra)
         .args(["-show_entries", entries, "-of", format])
-        .arg(path)
+        .arg(input_url(path))
         .stdin(Stdio::null())
         .output()
         .map_err(|e| run_error(ffprobe, path, &e))?;
@@ -120,11 +129,12 @@ pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
     }
     if !info.constant_rate {
         let text = ffprobe_csv(ffprobe, path, "packet=pts_time,duration_time")?;
-        if let Some(base) = info.base.filter(|&b| on_one_grid(&text, b)) {
-            // An average rate written with rounding (2997/100 beside 30000/1001): every frame is
-            // on the base rate's grid, none missing, so the clip is constant-rate after all.
+        // An average rate written with rounding (2997/100 beside 30000/1001), or an interlaced
+        // clip whose base rate counts fields (50 beside an average of 25): every frame is on the
+        // grid of one of the two rates, none missing, so the clip is constant-rate after all.
+        if let Some(rate) = [info.base, info.fps].into_iter().flatten().find(|&r| on_one_grid(&text, r)) {
             info.constant_rate = true;
-            info.fps = Some(base);
+            info.fps = Some(rate);
         } else if let Some(v) = variable_rate(&text, info.fps, info.base) {
             info.frames = Some(((v.seconds * v.rate).round() as usize).max(1));
             info.fps = Some(v.rate);
@@ -186,7 +196,7 @@ pub fn decoded_count(ffprobe: &str, path: &Path, info: &VideoInfo, stated: usize
         .args(["-v", "error", "-select_streams", "v:0", "-read_intervals"])
         .arg(format!("{from:.6}%"))
         .args(["-show_entries", "frame=best_effort_timestamp_time", "-of", "csv=p=0"])
-        .arg(path)
+        .arg(input_url(path))
         .stdin(Stdio::null())
         .output()
         .ok()?;

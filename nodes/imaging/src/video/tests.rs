@@ -218,6 +218,10 @@ fn times_on_the_base_rate_grid_are_a_constant_rate_whatever_the_stated_average()
     late[10] = format!("{:.6},", (79.0 + 0.6) * 1001.0 / 30000.0);
     assert!(!on_one_grid(&late.join("\n"), 30000.0 / 1001.0));
     assert!(!on_one_grid("0.0,\n", 24.0) && !on_one_grid("", 24.0));
+    // Interlaced 1080i50: frames every 1/25 s, a base rate of 50 fields. Not on the fields' grid
+    // (every other slot is empty), on the frames' grid.
+    let fields: Vec<String> = (0..50).map(|i| format!("{:.6},0.04", f64::from(i) / 25.0)).collect();
+    assert!(!on_one_grid(&fields.join("\n"), 50.0) && on_one_grid(&fields.join("\n"), 25.0));
 }
 
 #[test]
@@ -338,6 +342,26 @@ fn a_variable_rate_clip_is_resampled_by_its_timestamps_with_a_warning() {
     let jump = video_clip(&path, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
     for i in [70, 5, 93, 30, 31, 0, 50, 24, 26] {
         assert!(rgb24(&jump.image(i, &ctx).unwrap()) == want[i], "frame {i} after a seek");
+    }
+    // The same clip starting 1.5 s into its clock (an offset an editor or a camera leaves): the
+    // same frames, walked and sought.
+    let late = dir.path().join("late.mp4");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-nostdin", "-i"])
+        .arg(&path)
+        .args(["-c", "copy", "-output_ts_offset", "1.5"])
+        .arg(&late)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let late_walk = video_clip(&late, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
+    assert_eq!(late_walk.len(), want.len());
+    for (i, frame) in want.iter().enumerate() {
+        assert!(rgb24(&late_walk.image(i, &ctx).unwrap()) == *frame, "frame {i} of the late clip");
+    }
+    let late_jump = video_clip(&late, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
+    for i in [93, 70, 5, 31, 0, 50] {
+        assert!(rgb24(&late_jump.image(i, &ctx).unwrap()) == want[i], "frame {i} of the late clip after a seek");
     }
     // A rate asked for samples there instead.
     let ctx = CookCtx::new();

@@ -42,6 +42,21 @@ fn decoded(path: &Path, filters: &[&str], pix_fmt: &str, frame_bytes: usize) -> 
     out.stdout.chunks_exact(frame_bytes).map(<[u8]>::to_vec).collect()
 }
 
+/// Asserts every frame of `clip` is `want` (packed 8-bit RGB).
+fn assert_frames(clip: &pyrograph_frontend::core::Clip, want: &[Vec<u8>], ctx: &CookCtx) {
+    assert_eq!(clip.len(), want.len());
+    for (i, frame) in want.iter().enumerate() {
+        assert!(rgb24(&clip.image(i, ctx).unwrap()) == *frame, "frame {i}");
+    }
+}
+
+/// Asserts the cook gave exactly one warning, saying `what`.
+fn one_warning(ctx: &CookCtx, what: &str) {
+    let warnings = ctx.warnings();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].message.contains(what), "{}", warnings[0].message);
+}
+
 /// An image's RGB as 8-bit samples.
 fn rgb24(img: &Image) -> Vec<u8> {
     img.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).map(|v| (v * 255.0).round() as u8).collect()
@@ -71,13 +86,8 @@ fn a_header_that_overstates_the_frame_count_loses_only_the_missing_frames() {
     assert!(want.len() < 48 && want.len() > 30, "ffmpeg decodes {}", want.len());
     let ctx = CookCtx::new();
     let clip = load_sequence(&trimmed, 0.0, &ctx).unwrap();
-    assert_eq!(clip.len(), want.len());
-    let warnings = ctx.warnings();
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(warnings[0].message.contains(&format!("states 48 frames but {} decode", want.len())), "{}", warnings[0].message);
-    for (i, frame) in want.iter().enumerate() {
-        assert!(rgb24(&clip.image(i, &ctx).unwrap()) == *frame, "frame {i}");
-    }
+    assert_frames(&clip, &want, &ctx);
+    one_warning(&ctx, &format!("states 48 frames but {} decode", want.len()));
 }
 
 #[test]
@@ -92,14 +102,9 @@ fn a_variable_frame_rate_clip_is_resampled_by_timestamps_with_a_warning() {
     let clip = load_sequence(&vfr, 0.0, &ctx).unwrap();
     assert_eq!(clip.fps(), 30.0, "resampled to its base rate");
     let want = decoded(&vfr, &["-vf", "fps=30"], "rgb24", 480 * 320 * 3);
-    assert_eq!(clip.len(), want.len());
     assert!(want.len() >= 46, "the held frames are there: {}", want.len());
-    let warnings = ctx.warnings();
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(warnings[0].message.contains("variable frame rate (39 frames over"), "{}", warnings[0].message);
-    for (i, frame) in want.iter().enumerate() {
-        assert!(rgb24(&clip.image(i, &ctx).unwrap()) == *frame, "frame {i}");
-    }
+    assert_frames(&clip, &want, &ctx);
+    one_warning(&ctx, "variable frame rate (39 frames over");
 }
 
 #[test]
@@ -114,9 +119,7 @@ fn a_rotation_tag_is_applied_as_players_apply_it() {
     let clip = load_sequence(&turned, 0.0, &ctx).unwrap();
     assert_eq!((clip.len(), clip.image(0, &ctx).unwrap().size()), (48, (320, 480)), "a quarter turn stands the frame up");
     assert!(ctx.warnings().is_empty());
-    for (i, frame) in want.iter().enumerate() {
-        assert!(rgb24(&clip.image(i, &ctx).unwrap()) == *frame, "frame {i}");
-    }
+    assert_frames(&clip, &want, &ctx);
 }
 
 #[test]

@@ -98,17 +98,37 @@ fn the_last_frame_time_gives_the_count() {
     assert_eq!(last_frame_index("N/A\n", 0.0, 24.0), None);
 }
 
+/// Writes `to` from `from` with ffmpeg, `before` going before the input and `args` after it
+/// (a stream copy, a trim, a tag).
+fn remux(before: &[&str], from: &Path, args: &[&str], to: &Path) {
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-nostdin"])
+        .args(before)
+        .arg("-i")
+        .arg(from)
+        .args(args)
+        .arg(to)
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
 /// Every frame of `path` as ffmpeg itself decodes it with `filters` (packed RGB, 128×96).
 fn ffmpeg_frames(path: &Path, filters: &[&str]) -> Vec<Vec<u8>> {
+    ffmpeg_decode(path, filters, "rgb24", 128 * 96 * 3)
+}
+
+/// Every frame of `path` as ffmpeg decodes it with `filters`, as `pix_fmt` frames of `frame_bytes`.
+fn ffmpeg_decode(path: &Path, filters: &[&str], pix_fmt: &str, frame_bytes: usize) -> Vec<Vec<u8>> {
     let out = Command::new("ffmpeg")
         .args(["-v", "error", "-nostdin", "-i"])
         .arg(path)
         .args(filters)
-        .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+        .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", pix_fmt, "-"])
         .output()
         .expect("ffmpeg runs");
     assert!(out.status.success());
-    out.stdout.chunks_exact(128 * 96 * 3).map(<[u8]>::to_vec).collect()
+    out.stdout.chunks_exact(frame_bytes).map(<[u8]>::to_vec).collect()
 }
 
 #[test]
@@ -119,14 +139,7 @@ fn a_header_that_overstates_the_count_loses_only_the_missing_frames() {
     // A trim by stream copy, as editing tools make: the file keeps all 48 samples (and states
     // 48 frames) while its edit list hides the first 8, so 40 decode.
     let path = dir.path().join("trimmed.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-ss", "0.3", "-i"])
-        .arg(&full)
-        .args(["-c", "copy"])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    remux(&["-ss", "0.3"], &full, &["-c", "copy"], &path);
     let stated = parse_probe(&ffprobe_fields("ffprobe", &path, &[], "stream=width,height,nb_frames").unwrap());
     assert_eq!(stated.and_then(|i| i.frames), Some(48), "the header states 48 frames");
     let want = ffmpeg_frames(&path, &[]);
@@ -233,19 +246,6 @@ fn sixteen_bit_frames_keep_values_between_the_eight_bit_steps() {
     assert!(rgb48_to_image(2, 1, &px).is_err());
 }
 
-/// Packed 16-bit RGB of every frame of `path` as ffmpeg itself decodes it, with `filters`.
-fn ffmpeg_frames16(path: &Path, filters: &[&str], frame_bytes: usize) -> Vec<Vec<u8>> {
-    let out = Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-i"])
-        .arg(path)
-        .args(filters)
-        .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo", "-pix_fmt", "rgb48le", "-"])
-        .output()
-        .expect("ffmpeg runs");
-    assert!(out.status.success());
-    out.stdout.chunks_exact(frame_bytes).map(<[u8]>::to_vec).collect()
-}
-
 fn rgb24(img: &Image) -> Vec<u8> {
     img.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).map(|v| (v * 255.0).round() as u8).collect()
 }
@@ -265,7 +265,7 @@ fn a_ten_bit_clip_keeps_its_precision() {
     let path = make_video(dir.path(), "t.mkv", 12, &["-pix_fmt", "yuv420p10le"]);
     let ctx = CookCtx::new();
     let clip = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
-    let want = ffmpeg_frames16(&path, &[], 128 * 96 * 6);
+    let want = ffmpeg_decode(&path, &[], "rgb48le", 128 * 96 * 6);
     assert_eq!((clip.len(), want.len()), (12, 12));
     let mut between = 0;
     for (i, frame) in want.iter().enumerate() {
@@ -282,14 +282,7 @@ fn a_rotation_tag_turns_the_frames_as_players_show_them() {
     let dir = tempfile::tempdir().unwrap();
     let flat = make_video(dir.path(), "t.mp4", 12, &[]);
     let path = dir.path().join("turned.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-i"])
-        .arg(&flat)
-        .args(["-c", "copy", "-metadata:s:v:0", "rotate=90"])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    remux(&[], &flat, &["-c", "copy", "-metadata:s:v:0", "rotate=90"], &path);
     let ctx = CookCtx::new();
     let clip = video_clip(&path, 0.0, &ctx, LoadSequence::node_error).unwrap();
     let upright = video_clip(&flat, 0.0, &ctx, LoadSequence::node_error).unwrap();
@@ -346,14 +339,7 @@ fn a_variable_rate_clip_is_resampled_by_its_timestamps_with_a_warning() {
     // The same clip starting 1.5 s into its clock (an offset an editor or a camera leaves): the
     // same frames, walked and sought.
     let late = dir.path().join("late.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-i"])
-        .arg(&path)
-        .args(["-c", "copy", "-output_ts_offset", "1.5"])
-        .arg(&late)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    remux(&[], &path, &["-c", "copy", "-output_ts_offset", "1.5"], &late);
     let late_walk = video_clip(&late, 0.0, &CookCtx::new(), LoadSequence::node_error).unwrap();
     assert_eq!(late_walk.len(), want.len());
     for (i, frame) in want.iter().enumerate() {
@@ -381,14 +367,7 @@ fn a_cut_that_leaves_a_gap_in_the_times_keeps_the_count_that_decodes() {
     // A stream copy of the first 40 frames: it states 40 and 40 decode, but a B-frame it dropped
     // leaves a gap, so the last frame's time says 42.
     let path = dir.path().join("cut.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-i"])
-        .arg(&full)
-        .args(["-frames:v", "40", "-c", "copy"])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    remux(&[], &full, &["-frames:v", "40", "-c", "copy"], &path);
     let want = ffmpeg_frames(&path, &[]);
     assert_eq!(want.len(), 40);
     let ctx = CookCtx::new();

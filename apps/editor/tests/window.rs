@@ -14,8 +14,9 @@ use std::time::{Duration, Instant};
 use pyrograph_testing::workspace;
 use serde_json::Value;
 
-/// Kills the child processes however the test ends, then lets the next test have the screen.
-struct Kill(Vec<Child>, #[allow(dead_code)] MutexGuard<'static, ()>);
+/// Kills the child processes however the test ends, removes the display's lock and socket (a
+/// killed Xvfb leaves them), then lets the next test have the screen.
+struct Kill(Vec<Child>, u32, #[allow(dead_code)] MutexGuard<'static, ()>);
 
 /// One editor at a time: tests running in parallel would pick the same free display.
 static SCREEN: Mutex<()> = Mutex::new(());
@@ -26,6 +27,29 @@ impl Drop for Kill {
             let _ = c.kill();
             let _ = c.wait();
         }
+        clear_display(self.1);
+    }
+}
+
+/// The lock file and socket of X display `n`.
+fn display_files(n: u32) -> [PathBuf; 2] {
+    [PathBuf::from(format!("/tmp/.X{n}-lock")), PathBuf::from(format!("/tmp/.X11-unix/X{n}"))]
+}
+
+/// Whether no X server holds display `n`: no lock file, or one naming a process that is gone
+/// (an Xvfb killed by an earlier run leaves its lock and socket behind; they fill the range).
+fn display_free(n: u32) -> bool {
+    let [lock, socket] = display_files(n);
+    match std::fs::read_to_string(&lock) {
+        Ok(text) => text.trim().parse::<u32>().is_ok_and(|pid| !Path::new(&format!("/proc/{pid}")).exists()),
+        Err(_) => !socket.exists() || std::fs::metadata(&lock).is_err(),
+    }
+}
+
+/// Removes the lock file and socket of display `n` (a free one's are stale).
+fn clear_display(n: u32) {
+    for f in display_files(n) {
+        let _ = std::fs::remove_file(f);
     }
 }
 
@@ -68,7 +92,10 @@ fn selection(dump: &Value) -> Vec<String> {
 /// the returned dump file. Everything started is killed when the returned guard drops.
 fn start_editor(graph: &Path, args: &[&str], dir: &Path) -> (Kill, String, PathBuf) {
     let serial = SCREEN.lock().unwrap_or_else(|e| e.into_inner());
-    let display_num = (90..140).find(|n| !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()).expect("a free display");
+    let display_num = (90..140).find(|&n| display_free(n)).expect("a free display");
+    // Stale files of a killed server: Xvfb would refuse the lock, and the wait below would take
+    // the old socket for the new server's.
+    clear_display(display_num);
     let display = format!(":{display_num}");
     let xvfb = Command::new("Xvfb")
         .args([display.as_str(), "-screen", "0", "1600x1000x24", "-nolisten", "tcp"])
@@ -76,7 +103,7 @@ fn start_editor(graph: &Path, args: &[&str], dir: &Path) -> (Kill, String, PathB
         .stderr(Stdio::null())
         .spawn()
         .expect("Xvfb starts (apt-get install xvfb)");
-    let mut procs = Kill(vec![xvfb], serial);
+    let mut procs = Kill(vec![xvfb], display_num, serial);
     let socket = PathBuf::from(format!("/tmp/.X11-unix/X{display_num}"));
     let start = Instant::now();
     while !socket.exists() {

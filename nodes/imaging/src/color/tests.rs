@@ -164,7 +164,7 @@ fn declared_defaults_are_the_ports_defaults() {
     let smoke = SmokeParams { difference: Difference::Signed, threshold: 8.0, blur: 1.5, color: [0.45, 0.45, 0.45, 1.0] };
     assert_eq!(SmokeParams::default(), smoke);
     let layout =
-        FlipbookOptions { rows: 8, cols: 8, padding: 0, power_of_two: false, alpha: AlphaMode::Straight, motion_range: 0.0 };
+        FlipbookOptions { rows: 8, cols: 8, padding: 0, power_of_two: false, alpha: AlphaMode::Straight, ..Default::default() };
     assert_eq!(FlipbookOptions::default(), layout);
 }
 

@@ -17,13 +17,18 @@ fn text(o: &Output) -> String {
 /// A graph with one writer of `writer_type` whose `port` is `target`, fed what it needs.
 fn graph(writer_type: &str, port: &str, target: &str) -> String {
     let target = target.replace('\\', "\\\\");
-    let (feed, edges) = match writer_type {
-        "imaging.write_image" => ("imaging.constant_color", r#"("src.image", "w.image")"#),
-        "eigen.save_database" => ("imaging.constant_color", ""),
-        _ => ("imaging.turbulence_flame", r#"("src.clip", "w.clip")"#),
+    let size = r#""width": 8, "height": 8"#;
+    let (feed, params, edges) = match writer_type {
+        "imaging.write_image" => ("imaging.constant_color", size, r#"("src.image", "w.image")"#),
+        "eigen.save_database" => ("imaging.constant_color", size, ""),
+        "imaging.write_exr_layers" => ("imaging.turbulence_flame", size, r#"("src.clip", "w.main")"#),
+        "particles.write_usd" => {
+            ("particles.particle_flame", r#""frames": 2"#, r#"("roots.roots", "src.roots"), ("src.flames", "w.particles")"#)
+        }
+        _ => ("imaging.turbulence_flame", size, r#"("src.clip", "w.clip")"#),
     };
     format!(
-        r#"(version: 1, nodes: {{"src": (type: "{feed}", params: {{"width": 8, "height": 8}}),
+        r#"(version: 1, nodes: {{"src": (type: "{feed}", params: {{{params}}}), "roots": (type: "particles.roots"),
             "w": (type: "{writer_type}", params: {{"{port}": "{target}"}})}}, edges: [{edges}])"#
     )
 }
@@ -32,6 +37,8 @@ const WRITERS: &[(&str, &str, &str)] = &[
     ("imaging.write_image", "path", "x.png"),
     ("imaging.write_sequence", "pattern", "x_####.png"),
     ("imaging.write_flipbook", "path", "x.png"),
+    ("imaging.write_exr_layers", "pattern", "x_####.exr"),
+    ("particles.write_usd", "path", "x.usda"),
     ("eigen.save_database", "path", "x.db"),
 ];
 

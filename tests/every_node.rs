@@ -129,6 +129,13 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
             add(doc, "s_roots", NodeDoc::new("particles.roots"));
             "s_roots.roots".to_string()
         }
+        "Clip<Particles>" => {
+            add(doc, "s_roots", NodeDoc::new("particles.roots"));
+            if add(doc, "s_flames", NodeDoc::new("particles.particle_flame").param("frames", int(3))) {
+                doc.connect("s_roots.roots", "s_flames.roots");
+            }
+            "s_flames.flames".to_string()
+        }
         "Mesh" => {
             add(doc, "s_mesh", NodeDoc::new("particles.mesh_load"));
             "s_mesh.mesh".to_string()

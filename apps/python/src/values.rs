@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use pyrograph_frontend::core::{Contours as RustContours, Image, Mask, Value as RustValue};
+use pyrograph_frontend::render::particles::Particles;
 
 /// Keeps cooked pixels alive while numpy arrays view them: the arrays' `base`.
 #[pyclass(frozen, module = "pyrograph")]
@@ -150,7 +151,11 @@ pub fn to_py<'py>(py: Python<'py>, v: &RustValue) -> PyResult<Bound<'py, PyAny>>
         RustValue::Image(img) => image_array(py, img)?,
         RustValue::Mask(m) => mask_array(py, m)?,
         RustValue::Contours(c) => Bound::new(py, Contours { inner: c.clone() })?.into_any(),
-        RustValue::Custom(_) | RustValue::Clip(_) => Bound::new(py, Opaque { value: v.clone() })?.into_any(),
+        RustValue::Custom(_) => match v.downcast::<Particles>() {
+            Some(p) => particles_dict(py, &p)?,
+            None => Bound::new(py, Opaque { value: v.clone() })?.into_any(),
+        },
+        RustValue::Clip(_) => Bound::new(py, Opaque { value: v.clone() })?.into_any(),
         // An animated default (a preset's keyed parameter) reads as it is written in the file.
         RustValue::Anim(a) => a.summary().into_pyobject(py)?.into_any(),
         // A ramp as the list of (position, value) keys a graph file holds.
@@ -158,4 +163,29 @@ pub fn to_py<'py>(py: Python<'py>, v: &RustValue) -> PyResult<Bound<'py, PyAny>>
         // Points as the list a graph file holds (a face place reads as the text "face(F)").
         RustValue::Points(p) => crate::param_values::to_py(py, &p.to_param())?,
     })
+}
+
+/// Particles (flame trajectories, embers, roots, lights) as a dict of numpy arrays, one row per
+/// particle: `position`, `velocity` (N×3), `size` (N×2), `center`, `edge` (N×4, straight RGBA),
+/// `weight` (N), `group` (N, uint32), and the set's `time`, `sides` and `trails`. Copies: a
+/// frame's particles are small next to its pixels.
+fn particles_dict<'py>(py: Python<'py>, p: &Particles) -> PyResult<Bound<'py, PyAny>> {
+    let n = p.particles.len();
+    let d = PyDict::new(py);
+    let rows =
+        |k: usize, f: &dyn Fn(&pyrograph_frontend::render::particles::Particle) -> Vec<f32>| -> PyResult<Bound<'py, PyAny>> {
+            let flat: Vec<f32> = p.particles.iter().flat_map(f).collect();
+            Ok(numpy::PyArray1::from_vec(py, flat).reshape([n, k])?.into_any())
+        };
+    d.set_item("position", rows(3, &|q| q.position.to_vec())?)?;
+    d.set_item("velocity", rows(3, &|q| q.velocity.to_vec())?)?;
+    d.set_item("size", rows(2, &|q| q.size.to_vec())?)?;
+    d.set_item("center", rows(4, &|q| q.center.to_vec())?)?;
+    d.set_item("edge", rows(4, &|q| q.edge.to_vec())?)?;
+    d.set_item("weight", numpy::PyArray1::from_vec(py, p.particles.iter().map(|q| q.weight).collect()))?;
+    d.set_item("group", numpy::PyArray1::from_vec(py, p.particles.iter().map(|q| q.group).collect()))?;
+    d.set_item("time", p.time)?;
+    d.set_item("sides", p.sides)?;
+    d.set_item("trails", p.trails)?;
+    Ok(d.into_any())
 }

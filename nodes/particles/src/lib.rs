@@ -16,6 +16,7 @@ pub mod render;
 pub mod spread;
 pub mod swept;
 pub mod types;
+pub mod usd;
 pub mod wind;
 
 use pyrograph_core::Registry;
@@ -33,6 +34,7 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<fire::RenderFire>();
     registry.declare::<mesh_roots::MeshRoots>();
     registry.declare::<embers::Embers>();
+    registry.declare::<usd::WriteUsd>();
 }
 
 #[cfg(test)]

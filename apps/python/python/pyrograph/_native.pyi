@@ -142,7 +142,11 @@ class Contours:
     def __getitem__(self, index: int) -> dict[str, Any]: ...
 
 class Value:
-    """A cooked value of a type a node crate declares (Mesh, Basis, FlameModel, …)."""
+    """A cooked value of a type a node crate declares (Mesh, Basis, FlameModel, …).
+
+    Particles are not wrapped: they cook to a dict of numpy arrays, one row per particle —
+    ``position`` and ``velocity`` (N×3), ``size`` (N×2), ``center`` and ``edge`` (N×4, straight
+    RGBA), ``weight`` (N), ``group`` (N, uint32) — with the set's ``time``, ``sides`` and ``trails``."""
 
     type: str
     summary: str

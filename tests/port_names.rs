@@ -80,8 +80,10 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("crates/core/src/builtin_time.rs", "frame", "a salt of the frame clip's fingerprint"),
     ("crates/core/src/anim/expr.rs", "clamp", "an expression function"),
     ("crates/core/src/anim/expr.rs", "char", "a kind of rhai token, named in a parse error"),
-    ("nodes/particles/src/usd.rs", "flames", "the default name of the USD prim written"),
-    ("nodes/particles/src/usd.rs", "points", "the UsdGeomPoints attribute's name in the USD schema"),
+    ("nodes/particles/src/usd/mod.rs", "flames", "the default name of the USD prim written"),
+    ("nodes/particles/src/usd/scene.rs", "points", "the point attribute's name in the USD schemas"),
+    ("nodes/particles/src/usd/scene.rs", "mesh", "the name of the USD prim the mesh becomes"),
+    ("nodes/particles/src/usd/scene.rs", "roots", "the name of the USD prim the spread's flame roots become"),
 ];
 
 #[test]

@@ -28,6 +28,8 @@ GRAPH = """(
         "roots": (type: "particles.roots", params: {"layout": "row", "count": 3, "spacing": 1.5}),
         "wind": (type: "particles.wind_field", params: {"wind": (0.3, 0.0, 0.0), "seed": 4}),
         "flame": (type: "particles.particle_flame", params: {"frames": 12, "steps": 10, "flicker": 0.3, "seed": 2}),
+        "cube": (type: "particles.mesh_load", params: {"source": "cube", "size": 2.0}),
+        "spread": (type: "particles.fire_spread", params: {"frames": 12}),
         "text": (type: "particles.write_usd", params: {"path": "fire.usda"}),
         "plain": (type: "particles.write_usd", params: {"path": "fire.usd", "name": "embers_and_flames"}),
     },
@@ -35,6 +37,9 @@ GRAPH = """(
         ("roots.roots", "flame.roots"),
         ("wind.wind", "flame.wind"),
         ("flame.flames", "text.particles"),
+        ("cube.mesh", "spread.mesh"),
+        ("cube.mesh", "text.mesh"),
+        ("spread.spread", "text.spread"),
         ("flame.flames", "plain.particles"),
     ],
 )
@@ -81,6 +86,24 @@ def test_points_have_a_sample_per_frame_and_equal_the_particles(stages, name, pr
             assert pv and pv.GetInterpolation() == UsdGeom.Tokens.vertex, primvar
             np.testing.assert_allclose(np.asarray(pv.Get(frame), dtype=np.float64), values, rtol=1e-6)
         assert points.GetExtentAttr().Get(frame) is not None
+
+
+def test_the_mesh_and_the_spreading_front_are_beside_the_flames(stages):
+    out, _ = stages
+    stage = Usd.Stage.Open(str(out / "fire.usda"))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/mesh"))
+    assert mesh and set(mesh.GetFaceVertexCountsAttr().Get()) == {3}
+    assert mesh.GetSubdivisionSchemeAttr().Get() == "none"
+    assert len(mesh.GetFaceVertexIndicesAttr().Get()) == 3 * len(mesh.GetFaceVertexCountsAttr().Get())
+    front = UsdGeom.BasisCurves(stage.GetPrimAtPath("/World/front"))
+    assert front and front.GetTypeAttr().Get() == "linear"
+    assert front.GetPointsAttr().GetTimeSamples() == [float(t) for t in range(FRAMES)]
+    # The front grows from the ignition point: more of it at the end than at the start.
+    assert len(front.GetPointsAttr().Get(FRAMES - 1)) > len(front.GetPointsAttr().Get(0))
+    counts = front.GetCurveVertexCountsAttr().Get(FRAMES - 1)
+    assert sum(counts) == len(front.GetPointsAttr().Get(FRAMES - 1)) and min(counts) >= 2
+    roots = UsdGeom.Points(stage.GetPrimAtPath("/World/roots"))
+    assert roots and UsdGeom.PrimvarsAPI(roots).GetPrimvar("age").GetInterpolation() == UsdGeom.Tokens.vertex
 
 
 @pytest.mark.parametrize("name", ["fire.usda", "fire.usd"])

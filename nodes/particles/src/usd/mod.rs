@@ -4,10 +4,18 @@
 
 use std::sync::Arc;
 
-use openusd::{sdf, usd};
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{ClipOf, Cook, CookCtx, NodeError, OutputPath, port};
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, NodeError, OutputPath, PortType, port};
 use pyrograph_render::particles::Particles;
+
+use crate::types::{Mesh, SpreadState};
+
+mod scene;
+
+/// An empty spread clip: the default of the optional `spread` input.
+fn no_spread() -> ClipOf<Arc<SpreadState>> {
+    ClipOf::new(Clip::from_frames(PortType::of::<SpreadState>(), 0.0, Vec::new()))
+}
 
 pyrograph_core::node! {
     /// Writes particles over time as a USD stage: one UsdGeomPoints prim sampled at every frame (Perry 1994 §3.2.1 particles, for DCCs).
@@ -15,7 +23,10 @@ pyrograph_core::node! {
     /// `/World/<name>` holds `points`, `widths` (twice the particles' half width), `extent`, and the primvars
     /// `displayColor` and `displayOpacity` (the centre colour), `age` (the particle's weight: its age in
     /// steps for flame particles) and `flame` (which flame or group it belongs to), all per point ("vertex")
-    /// and sampled at time codes 0, 1, … (one per frame; `timeCodesPerSecond` is the clip's rate). The stage
+    /// and sampled at time codes 0, 1, … (one per frame; `timeCodesPerSecond` is the clip's rate). A connected
+    /// `mesh` becomes the Mesh `/World/mesh` (triangles, no subdivision); a connected `spread` (Perry §3.3–3.4)
+    /// the BasisCurves `/World/front` (the burning boundary, linear, closed loops repeated to their start) and
+    /// the Points `/World/roots` (live flame roots with their `age` in seconds), sampled per frame. The stage
     /// says `upAxis = "Y"`, `metersPerUnit = 1`. `.usda` and `.usd` are written as text (binary `.usdc`
     /// is refused: convert with usdcat); the file is written atomically and never replaces one unless
     /// `overwrite` is on.
@@ -23,6 +34,10 @@ pyrograph_core::node! {
     pub struct WriteUsd {
         /// The particles over time (particles.particle_flame, particles.embers).
         particles: ClipOf<Arc<Particles>>,
+        /// A mesh to place with them (the burning object, the logs; particles.mesh_load); default none.
+        mesh: Arc<Mesh> = Arc::new(Mesh::default()),
+        /// A fire spreading over that mesh (particles.fire_spread): its front and flame roots per frame; default none.
+        spread: ClipOf<Arc<SpreadState>> = no_spread(),
         /// The stage file (.usda or .usd, text).
         path: OutputPath = "particles.usda".into(),
         /// The Points prim's name under /World.
@@ -37,11 +52,6 @@ pyrograph_core::node! {
         frames: usize,
     }
 }
-
-/// USD's primvar interpolation for one value per point.
-const VERTEX: &str = "vertex";
-/// The metadata field that holds a primvar's interpolation.
-const INTERPOLATION: &str = "interpolation";
 
 impl Cook for WriteUsd {
     fn cook(self, ctx: &CookCtx) -> Result<WriteUsdOut, NodeError> {
@@ -79,6 +89,17 @@ impl Cook for WriteUsd {
                 ),
             ));
         }
+        let taken = [
+            (scene::MESH, !self.mesh.triangles.is_empty()),
+            (scene::FRONT, !self.spread.is_empty()),
+            (scene::ROOTS, !self.spread.is_empty()),
+        ];
+        if let Some((part, _)) = taken.iter().find(|(part, used)| *used && *part == self.name) {
+            return Err(NodeError::port(
+                port!(WriteUsd, name),
+                format!("'{part}' is the name of the {part} prim this stage also holds; give the particles another name"),
+            ));
+        }
         let overwrite = self.overwrite || ctx.settings().overwrite;
         if !overwrite && self.path.exists() {
             return Err(NodeError::port(
@@ -101,8 +122,18 @@ impl Cook for WriteUsd {
             frames.push(particles);
             ctx.frame_progress(i + 1, clip.len());
         }
-        let bytes = stage_bytes(&frames, clip.fps(), &self.name)
-            .map_err(|e| NodeError::port(path_port, format!("building the USD stage: {e:#}")))?;
+        let mut fronts = Vec::with_capacity(self.spread.len());
+        for i in 0..self.spread.len() {
+            ctx.check_cancel()?;
+            let value = self.spread.get(i, ctx)?;
+            fronts.push(
+                value
+                    .downcast::<SpreadState>()
+                    .ok_or_else(|| NodeError::port(port!(WriteUsd, spread), format!("frame {i} holds no fire spread")))?,
+            );
+        }
+        let scene = scene::Scene { flames: &frames, name: &self.name, mesh: &self.mesh, spread: &fronts, fps: clip.fps() };
+        let bytes = scene.text().map_err(|e| NodeError::port(path_port, format!("building the USD stage: {e:#}")))?;
         if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
                 .map_err(|e| NodeError::port(path_port, format!("cannot create {}: {e}", dir.display())))?;
@@ -132,80 +163,6 @@ fn check_finite(p: &Particles, frame: usize) -> Result<(), NodeError> {
     }
 }
 
-/// The stage of `frames` (time code i = frame i) as `.usda` text.
-pub fn stage_bytes(frames: &[Arc<Particles>], fps: f64, name: &str) -> anyhow::Result<Vec<u8>> {
-    let stage = usd::Stage::builder().in_memory("pyrograph.usda")?;
-    stage.define_prim("/World")?.set_type_name("Xform")?;
-    stage.set_default_prim("World")?;
-    let prim = format!("/World/{name}");
-    stage.define_prim(prim.as_str())?.set_type_name("Points")?;
-    stage.set_start_time_code(0.0)?;
-    stage.set_end_time_code(frames.len().saturating_sub(1) as f64)?;
-    let rate = if fps.is_finite() && fps > 0.0 { fps } else { 24.0 };
-    stage.set_time_codes_per_second(rate)?;
-    stage.set_frames_per_second(rate)?;
-    let attribute = |prop: &str, ty: &str, primvar: bool| -> anyhow::Result<usd::Attribute> {
-        let a = stage.create_attribute(format!("{prim}.{prop}").as_str(), ty)?.set_custom(false)?;
-        Ok(if primvar { a.set_metadata(INTERPOLATION, sdf::Value::Token(VERTEX.into()))? } else { a })
-    };
-    let attrs = [
-        ("points", "point3f[]", false),
-        ("widths", "float[]", false),
-        ("extent", "float3[]", false),
-        ("primvars:displayColor", "color3f[]", true),
-        ("primvars:displayOpacity", "float[]", true),
-        ("primvars:age", "float[]", true),
-        ("primvars:flame", "int[]", true),
-    ];
-    let handles: Vec<usd::Attribute> = attrs.iter().map(|(p, t, v)| attribute(p, t, *v)).collect::<anyhow::Result<_>>()?;
-    // Widths are per point too (UsdGeomPoints: "vertex" when there is one per point).
-    let widths = handles[1].clone().set_metadata(INTERPOLATION, sdf::Value::Token(VERTEX.into()))?;
-    for (t, frame) in frames.iter().enumerate() {
-        let time = usd::TimeCode::from(t as f64);
-        let ps = &frame.particles;
-        let points: Vec<openusd::gf::Vec3f> = ps.iter().map(|q| q.position.into()).collect();
-        handles[0].clone().set_at(sdf::Value::Vec3fVec(points), time)?;
-        let width = |q: &pyrograph_render::particles::Particle| 2.0 * q.size[0].abs().max(q.size[1].abs());
-        widths.clone().set_at(sdf::Value::FloatVec(ps.iter().map(width).collect()), time)?;
-        handles[2].clone().set_at(sdf::Value::Vec3fVec(extent(frame)), time)?;
-        let colors = ps.iter().map(|q| [q.center[0], q.center[1], q.center[2]].into()).collect();
-        handles[3].clone().set_at(sdf::Value::Vec3fVec(colors), time)?;
-        handles[4].clone().set_at(sdf::Value::FloatVec(ps.iter().map(|q| q.center[3]).collect()), time)?;
-        handles[5].clone().set_at(sdf::Value::FloatVec(ps.iter().map(|q| q.weight).collect()), time)?;
-        let groups = ps.iter().map(|q| i32::try_from(q.group).unwrap_or(i32::MAX)).collect();
-        handles[6].clone().set_at(sdf::Value::IntVec(groups), time)?;
-    }
-    {
-        let root_id = stage.root_layer().identifier().to_string();
-        let mut layer = stage.layer_mut(&root_id).ok_or_else(|| anyhow::anyhow!("the stage has no root layer"))?;
-        let root = sdf::Path::abs_root();
-        layer.edit(|edit| {
-            edit.data_mut().set_field(&root, "upAxis", sdf::Value::Token("Y".into()));
-            edit.data_mut().set_field(&root, "metersPerUnit", sdf::Value::Double(1.0));
-            Ok(())
-        })?;
-    }
-    let text = stage.root_layer().export_to_string()?;
-    Ok(text.into_bytes())
-}
-
-/// The bounds of the particles' discs: the points widened by half their width.
-fn extent(frame: &Particles) -> Vec<openusd::gf::Vec3f> {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for q in &frame.particles {
-        let r = q.size[0].abs().max(q.size[1].abs());
-        for k in 0..3 {
-            lo[k] = lo[k].min(q.position[k] - r);
-            hi[k] = hi[k].max(q.position[k] + r);
-        }
-    }
-    if frame.particles.is_empty() {
-        (lo, hi) = ([0.0; 3], [0.0; 3]);
-    }
-    vec![lo.into(), hi.into()]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -228,7 +185,10 @@ mod tests {
     #[test]
     fn the_text_stage_has_a_points_prim_sampled_per_frame() {
         let frames = vec![frame(3, 0.0), frame(2, 1.0), frame(0, 2.0)];
-        let text = String::from_utf8(stage_bytes(&frames, 24.0, "flames").unwrap()).unwrap();
+        let text = String::from_utf8(
+            scene::Scene { flames: &frames, name: "flames", mesh: &Mesh::default(), spread: &[], fps: 24.0 }.text().unwrap(),
+        )
+        .unwrap();
         for needle in [
             "def Points \"flames\"",
             "point3f[] points.timeSamples",
@@ -243,6 +203,42 @@ mod tests {
         }
         // The two points of frame 1, at y = 1.
         assert!(text.contains("1.0: [(0.0, 1.0, -1.0), (1.0, 1.0, -1.0)]"), "{text}");
+    }
+
+    #[test]
+    fn a_mesh_and_a_spread_front_go_beside_the_flames() {
+        use crate::types::FlameRoot;
+        let mesh = Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+            ..Default::default()
+        };
+        let state = |t: f32| {
+            let root = FlameRoot { position: [0.5, 0.5, 0.0], age: t, ..Default::default() };
+            let ring = vec![[0.4, 0.4, 0.0], [0.6, 0.4, 0.0], [0.5, 0.6, 0.0]];
+            Arc::new(SpreadState {
+                time: t,
+                boundaries: vec![ring, vec![[0.0, 0.0, 0.0]]],
+                roots: vec![root],
+                ..Default::default()
+            })
+        };
+        let spread = [state(0.0), state(0.5)];
+        let frames = vec![frame(1, 0.0), frame(1, 1.0)];
+        let scene = scene::Scene { flames: &frames, name: "flames", mesh: &mesh, spread: &spread, fps: 24.0 };
+        let text = String::from_utf8(scene.text().unwrap()).unwrap();
+        for needle in [
+            "def Mesh \"mesh\"",
+            "int[] faceVertexIndices = [0, 1, 2, 1, 3, 2]",
+            "uniform token subdivisionScheme = \"none\"",
+            "def BasisCurves \"front\"",
+            "uniform token type = \"linear\"",
+            // The closed ring comes back to its start; the one-point boundary is left out.
+            "1.0: [4]",
+            "def Points \"roots\"",
+        ] {
+            assert!(text.contains(needle), "{needle} missing in\n{text}");
+        }
     }
 
     #[test]

@@ -22,6 +22,7 @@ fn graph(writer_type: &str, port: &str, target: &str) -> String {
         "imaging.write_image" => ("imaging.constant_color", size, r#"("src.image", "w.image")"#),
         "eigen.save_database" => ("imaging.constant_color", size, ""),
         "imaging.write_exr_layers" => ("imaging.turbulence_flame", size, r#"("src.clip", "w.main")"#),
+        "cloth.write_usd" => ("cloth.mass_spring_flame", r#""frames": 2"#, r#"("src.cloth", "w.cloth")"#),
         "particles.write_usd" => {
             ("particles.particle_flame", r#""frames": 2"#, r#"("roots.roots", "src.roots"), ("src.flames", "w.particles")"#)
         }
@@ -39,6 +40,7 @@ const WRITERS: &[(&str, &str, &str)] = &[
     ("imaging.write_flipbook", "path", "x.png"),
     ("imaging.write_exr_layers", "pattern", "x_####.exr"),
     ("particles.write_usd", "path", "x.usda"),
+    ("cloth.write_usd", "path", "x.usda"),
     ("eigen.save_database", "path", "x.db"),
 ];
 

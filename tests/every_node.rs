@@ -147,7 +147,7 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
             }
             "s_spread.spread".to_string()
         }
-        "ClothState" => {
+        "ClothState" | "Clip<ClothState>" => {
             add(doc, "s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
             "s_cloth.cloth".to_string()
         }

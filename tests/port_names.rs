@@ -84,6 +84,8 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("nodes/particles/src/usd/scene.rs", "points", "the point attribute's name in the USD schemas"),
     ("nodes/particles/src/usd/scene.rs", "mesh", "the name of the USD prim the mesh becomes"),
     ("nodes/particles/src/usd/scene.rs", "roots", "the name of the USD prim the spread's flame roots become"),
+    ("nodes/cloth/src/usd.rs", "cloth", "the default name of the USD prim written"),
+    ("nodes/cloth/src/usd.rs", "points", "the point attribute's name in the USD Mesh schema"),
 ];
 
 #[test]

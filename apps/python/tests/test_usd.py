@@ -126,3 +126,34 @@ def test_a_binary_stage_is_refused_with_the_way_round(tmp_path):
         graph.render(out=tmp_path, nodes=["plain"])
     assert "usdcat" in str(e.value) and "plain" in str(e.value)
     assert not (tmp_path / "fire.usdc").exists()
+
+
+CLOTH = """(
+    version: 3,
+    nodes: {
+        "silk": (type: "cloth.mass_spring_flame", params: {"frames": 6, "count": 3}),
+        "stage": (type: "cloth.write_usd", params: {"path": "cloth.usda"}),
+    },
+    edges: [("silk.cloth", "stage.cloth")],
+)
+"""
+
+
+def test_cloth_flames_are_one_animated_mesh_of_quads(tmp_path):
+    graph = pyrograph.Graph.from_ron(CLOTH)
+    graph.render(out=tmp_path)
+    stage = Usd.Stage.Open(str(tmp_path / "cloth.usda"))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/cloth"))
+    assert mesh and mesh.GetSubdivisionSchemeAttr().Get() == "none"
+    assert mesh.GetPointsAttr().GetTimeSamples() == [float(t) for t in range(6)]
+    counts = mesh.GetFaceVertexCountsAttr().Get()
+    assert set(counts) == {4} and len(mesh.GetFaceVertexIndicesAttr().Get()) == 4 * len(counts)
+    first, last = (np.asarray(mesh.GetPointsAttr().Get(t)) for t in (0, 5))
+    assert first.shape == last.shape and len(first) > 3 * 4, "three cloths of masses"
+    assert not np.allclose(first, last), "the cloths move"
+    api = UsdGeom.PrimvarsAPI(mesh)
+    st = np.asarray(api.GetPrimvar("st").Get())
+    assert api.GetPrimvar("st").GetInterpolation() == UsdGeom.Tokens.vertex and len(st) == len(first)
+    assert st.min() == 0.0 and st.max() == 1.0
+    assert sorted(set(api.GetPrimvar("flame").Get())) == [0, 1, 2]
+    assert validation_errors(tmp_path / "cloth.usda") == []

@@ -12,7 +12,7 @@
 //! `cloth.cloth_render` (built-in procedural flame textures, wireframe, plain cloth) and
 //! `cloth.cloth_render_textured` (the same with a required texture input, so any image or clip —
 //! another node's output — textures the cloth; a `Clip<Image>` there lifts the render over time
-//! together with the cloth clip).
+//! together with the cloth clip), `cloth.write_usd` (the cloths as an animated USD mesh).
 #![deny(missing_docs)]
 
 pub mod render;
@@ -20,6 +20,7 @@ pub mod sim;
 pub mod state;
 pub mod stencil;
 pub mod textures;
+pub mod usd;
 
 use pyrograph_core::Registry;
 
@@ -28,6 +29,7 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<sim::MassSpringFlame>();
     registry.declare::<render::ClothRender>();
     registry.declare::<render::ClothRenderTextured>();
+    registry.declare::<usd::WriteClothUsd>();
 }
 
 #[cfg(test)]

@@ -4,11 +4,11 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::document::write_atomic;
 use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, NodeError, OutputPath, PortType, port};
 use pyrograph_render::particles::Particles;
 
 use crate::types::{Mesh, SpreadState};
+use pyrograph_usd::TargetError;
 
 mod scene;
 
@@ -56,39 +56,12 @@ pyrograph_core::node! {
 impl Cook for WriteUsd {
     fn cook(self, ctx: &CookCtx) -> Result<WriteUsdOut, NodeError> {
         let path_port = port!(WriteUsd, path);
-        let ext = self.path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-        match ext.as_str() {
-            "usda" | "usd" => {}
-            // openusd 0.6 writes a prim's children list as a token array where Pixar's reader wants
-            // a token vector, so a nested prim is lost on load (usd-core: "Invalid children found
-            // in primChildren field"); openusd 0.7 fixes it but needs a newer Rust than this build's.
-            "usdc" => {
-                return Err(NodeError::port(
-                    path_port,
-                    format!(
-                        "'{}': binary .usdc is not written yet (the USD library pyrograph uses writes crate files \
-                         Pixar's USD cannot open); write .usda or .usd (text, which every USD reader opens) and \
-                         convert with `usdcat fire.usda -o fire.usdc` if you need binary",
-                        self.path.display()
-                    ),
-                ));
-            }
-            _ => {
-                return Err(NodeError::port(
-                    path_port,
-                    format!("'{}' must end in .usda or .usd (a USD text stage)", self.path.display()),
-                ));
-            }
-        }
-        if !valid_prim_name(&self.name) {
-            return Err(NodeError::port(
-                port!(WriteUsd, name),
-                format!(
-                    "'{}' is not a USD prim name: use letters, digits and underscores, not starting with a digit",
-                    self.name.escape_default()
-                ),
-            ));
-        }
+        let overwrite = self.overwrite || ctx.settings().overwrite;
+        pyrograph_usd::check_target(&self.path, &self.name, overwrite).map_err(|e| match e {
+            TargetError::Path(m) => NodeError::port(path_port, m),
+            TargetError::Name(m) => NodeError::port(port!(WriteUsd, name), m),
+            TargetError::Exists(m) => NodeError::port(port!(WriteUsd, overwrite), m),
+        })?;
         let taken = [
             (scene::MESH, !self.mesh.triangles.is_empty()),
             (scene::FRONT, !self.spread.is_empty()),
@@ -98,16 +71,6 @@ impl Cook for WriteUsd {
             return Err(NodeError::port(
                 port!(WriteUsd, name),
                 format!("'{part}' is the name of the {part} prim this stage also holds; give the particles another name"),
-            ));
-        }
-        let overwrite = self.overwrite || ctx.settings().overwrite;
-        if !overwrite && self.path.exists() {
-            return Err(NodeError::port(
-                port!(WriteUsd, overwrite),
-                format!(
-                    "{} already exists; nothing was written. Set overwrite to true or render with --overwrite",
-                    self.path.display()
-                ),
             ));
         }
         let clip = &self.particles;
@@ -134,23 +97,10 @@ impl Cook for WriteUsd {
         }
         let scene = scene::Scene { flames: &frames, name: &self.name, mesh: &self.mesh, spread: &fronts, fps: clip.fps() };
         let bytes = scene.text().map_err(|e| NodeError::port(path_port, format!("building the USD stage: {e:#}")))?;
-        if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| NodeError::port(path_port, format!("cannot create {}: {e}", dir.display())))?;
-        }
-        write_atomic(&self.path, &bytes, overwrite)
-            .map_err(|e| NodeError::port(path_port, format!("writing {}: {e}", self.path.display())))?;
+        pyrograph_usd::write(&self.path, &bytes, overwrite).map_err(|m| NodeError::port(path_port, m))?;
         ctx.record_written(&self.path);
         Ok(WriteUsdOut { path: self.path, frames: clip.len() })
     }
-}
-
-/// A USD prim name: an identifier (letters, digits, underscores; not starting with a digit).
-pub fn valid_prim_name(name: &str) -> bool {
-    let mut chars = name.chars();
-    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
-        && name.len() <= 255
 }
 
 fn check_finite(p: &Particles, frame: usize) -> Result<(), NodeError> {
@@ -242,9 +192,7 @@ mod tests {
     }
 
     #[test]
-    fn names_and_numbers_usd_cannot_hold_are_refused() {
-        assert!(valid_prim_name("flames_2") && valid_prim_name("_x"));
-        assert!(!valid_prim_name("2flames") && !valid_prim_name("a b") && !valid_prim_name("") && !valid_prim_name("flame/s"));
+    fn numbers_usd_cannot_hold_are_refused() {
         let mut bad = (*frame(2, 0.0)).clone();
         bad.particles[1].position[0] = f32::NAN;
         let e = check_finite(&bad, 4).unwrap_err().to_string();

@@ -74,3 +74,51 @@ def test_each_layer_equals_the_single_layer_file_of_the_same_frame(cli, tmp_path
     with OpenEXR.File(str(files[0]), separate_channels=True) as f:
         kinds = {name: c.pixels.dtype for name, c in f.parts[0].channels.items()}
     assert kinds["R"] == np.float32 and kinds["mask.Y"] == np.float32 and kinds["glow.R"] == np.float16
+
+
+PASSES = """(
+    version: 3,
+    nodes: {
+        "roots": (type: "particles.roots", params: {"layout": "row", "count": 2, "spacing": 1.5}),
+        "flame": (type: "particles.particle_flame", params: {"frames": 2, "steps": 12}),
+        "beauty": (type: "particles.render_flames", params: {"width": 64, "height": 48, "ground": true, "background": (0.02, 0.02, 0.03, 1.0)}),
+        "emission": (type: "particles.render_flames", params: {"width": 64, "height": 48, "ground": true, "pass": "emission"}),
+        "depth": (type: "particles.render_flames", params: {"width": 64, "height": 48, "ground": true, "pass": "depth"}),
+        "layers": (type: "imaging.write_exr_layers", params: {
+            "pattern": "passes/f_####.exr", "exr_type": "float",
+            "name1": "emission", "type1": "float", "name2": "depth", "type2": "float",
+        }),
+        "e": (type: "imaging.write_sequence", params: {"pattern": "emission/f_####.exr", "exr_type": "float", "alpha": "premultiplied"}),
+        "z": (type: "imaging.write_sequence", params: {"pattern": "depth/f_####.exr", "exr_type": "float"}),
+    },
+    edges: [
+        ("roots.roots", "flame.roots"),
+        ("flame.flames", "beauty.flames"),
+        ("flame.flames", "emission.flames"),
+        ("flame.flames", "depth.flames"),
+        ("beauty.image", "layers.main"),
+        ("emission.image", "layers.layer1"),
+        ("depth.image", "layers.layer2"),
+        ("emission.image", "e.clip"),
+        ("depth.image", "z.clip"),
+    ],
+)
+"""
+
+
+def test_a_particle_renders_passes_go_into_one_file(cli, tmp_path):
+    """The flame renderer's beauty, emission and depth passes as the layers of one EXR a frame."""
+    graph = tmp_path / "passes.ron"
+    graph.write_text(PASSES)
+    out = tmp_path / "out"
+    subprocess.run([cli, "render", graph, "--out", out], check=True, capture_output=True)
+    for p in sorted((out / "passes").iterdir()):
+        layered = channels(p)
+        assert {"R", "G", "B", "A", "emission.R", "emission.A", "depth.Y"} <= set(layered)
+        emission, depth = channels(out / "emission" / p.name), channels(out / "depth" / p.name)
+        for c in "RGBA":
+            assert np.array_equal(layered[f"emission.{c}"], emission[c]), (p.name, c)
+        assert np.array_equal(layered["depth.Y"], depth["Y"]), p.name
+        # The ground is in the beauty and the depth, not in the emission: the bottom row.
+        assert layered["A"][-1].min() > 0.99 and layered["emission.A"][-1].max() == 0.0
+        assert 0 < layered["depth.Y"][-1].max() < 1000 and layered["depth.Y"][0].min() == 1000

@@ -150,6 +150,31 @@ fn render_with(
 }
 
 pyrograph_core::choice! {
+    /// What `particles.render_flames` draws: a compositor's pass.
+    pub enum RenderPass {
+        /// The whole frame.
+        Beauty = "beauty",
+        /// The flames and sparks alone on transparent black.
+        Emission = "emission",
+        /// The opaque mesh and ground's distance along the view axis (gray, world units).
+        Depth = "depth",
+    }
+}
+
+/// The depth pass of `lists`: per pixel, the distance along the camera's view axis of the nearest
+/// opaque surface, the far plane where there is none (a gray image).
+fn depth_image(view: &View, lists: &[DrawList]) -> Image {
+    let frame = pyrograph_render::render(view, lists, [0.0; 4]);
+    let camera = view.camera();
+    let (near, far) = (camera.near(), camera.far());
+    Image::gray_from_fn(frame.width(), frame.height(), |x, y| {
+        // The projection maps view depth z (near..far) to d = far (z − near) / (z (far − near)).
+        let d = frame.depth(x, y).clamp(0.0, 1.0);
+        if d >= 1.0 { far } else { (near * far / (far - d * (far - near))).min(far) }
+    })
+}
+
+pyrograph_core::choice! {
     /// How `particles.render_flames` blends particles.
     pub enum FlameBlend {
         /// Additive to saturation (Perry).
@@ -182,6 +207,10 @@ pyrograph_core::node! {
     /// Sparks (particles.embers) are drawn the same way, and an optional mesh (logs) opaque, lit like the
     /// ground. An optional ground plane is lit by the flame lights of §3.2.4 (connect
     /// particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).
+    /// `pass` picks what is drawn, for compositors' layers: the whole frame (beauty), the flames and sparks
+    /// alone on transparent black (emission; their coverage is its alpha), or the depth of the opaque mesh
+    /// and ground (gray: distance along the camera's view axis in world units, the far plane where there
+    /// is none). Render each pass with its own node and write them with imaging.write_exr_layers.
     #[node("particles.render_flames", "Particles", PerFrame)]
     pub struct RenderFlames {
         /// The particles to draw (particles.particle_flame).
@@ -206,6 +235,8 @@ pyrograph_core::node! {
         ground: bool = false,
         /// The ground plane.
         ground_plane: Ground,
+        /// What to draw: the frame, the flames' emission alone, or the opaque geometry's depth.
+        pass: RenderPass = RenderPass::Beauty,
     }
     pub struct RenderFlamesOut {
         /// The rendered frame (RGBA, straight alpha).
@@ -231,6 +262,12 @@ impl Cook for RenderFlames {
         ctx.check_cancel()?;
         let blend = self.blend.blend();
         let mut lists = Vec::new();
+        if self.pass == RenderPass::Emission {
+            // The flames and sparks alone: no mesh, no ground, nothing behind them.
+            lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
+            let image = render_with(&view, &self.flames, self.exposure, blend, [0.0; 4], None, &self.lights, lists);
+            return Ok(RenderFlamesOut { image: Arc::new(image) });
+        }
         if !self.mesh.triangles.is_empty() {
             let shading = MeshShading {
                 albedo: Vec3::new(self.mesh_color[0], self.mesh_color[1], self.mesh_color[2]),
@@ -239,6 +276,15 @@ impl Cook for RenderFlames {
                 sun: 0.0,
             };
             lists.extend(draw_mesh(&view, &self.mesh, &self.lights, &shading));
+        }
+        if self.pass == RenderPass::Depth {
+            // Flames are light, not surfaces: only the mesh and the ground have a depth.
+            if let Some(g) = ground {
+                let mut list = DrawList::new(&view);
+                draw_ground(&mut list, g, view.camera().target(), &self.lights);
+                lists.push(list);
+            }
+            return Ok(RenderFlamesOut { image: Arc::new(depth_image(&view, &lists)) });
         }
         lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
         let image = render_with(&view, &self.flames, self.exposure, blend, self.background, ground, &self.lights, lists);
@@ -415,5 +461,52 @@ mod tests {
             Err(NodeError::Port { port, .. }) => assert_eq!(port, "camera_target", "target 11 units away, near 20"),
             other => panic!("{:?}", other.err()),
         }
+    }
+
+    /// Cooks render_flames on a candle over the ground with `pass`, returning its image.
+    fn pass_image(pass: &str, ground: bool) -> Arc<Image> {
+        let desc = RenderFlames::desc();
+        let empty = || Value::custom(no_particles());
+        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
+        let mut set = |name: &str, v: Value| values[desc.input_index(name).unwrap()] = v;
+        set("flames", Value::custom(Arc::new(candle_frame(0))));
+        set("width", Value::Int(80));
+        set("height", Value::Int(60));
+        set("ground", Value::Bool(ground));
+        set("pass", Value::Enum(pass.into()));
+        let out = RenderFlames::read(&Inputs::new(&desc, &values)).unwrap().cook(&CookCtx::default()).unwrap();
+        out.image
+    }
+
+    #[test]
+    fn the_emission_pass_is_the_flames_alone() {
+        // Without ground or background, the beauty is the flames: the two passes agree exactly.
+        assert_eq!(pass_image("emission", false).data(), pass_image("beauty", false).data());
+        // Over the ground, the beauty has it and the emission does not.
+        let (emission, beauty) = (pass_image("emission", true), pass_image("beauty", true));
+        assert_eq!(emission.pixel(40, 58), &[0.0; 4], "the ground is not emission");
+        assert!(beauty.pixel(40, 58)[3] > 0.99, "the beauty shows the ground there");
+        let core = view(80, 60).project(Vec3::new(0.0, 2.5, 0.0)).unwrap();
+        assert!(emission.pixel(core.x as u32, core.y as u32)[0] > 0.5);
+    }
+
+    #[test]
+    fn the_depth_pass_is_the_distance_along_the_view_axis() {
+        let depth = pass_image("depth", true);
+        assert_eq!(depth.channels(), pyrograph_core::Channels::Gray);
+        let v = view(80, 60);
+        let forward = (Vec3::new(0.0, 2.5, 0.0) - Vec3::new(0.0, 3.0, 14.0)).normalize();
+        // Points of the ground plane (y = 0): the pass gives their distance along the view axis.
+        for p in [Vec3::new(0.0, 0.0, 6.0), Vec3::new(-2.0, 0.0, 0.0), Vec3::new(3.0, 0.0, -6.0)] {
+            let px = v.project(p).unwrap();
+            // The pixel's centre is up to half a pixel from p: 3 % covers the difference.
+            let got = depth.pixel(px.x as u32, px.y as u32)[0];
+            let expected = (p - Vec3::new(0.0, 3.0, 14.0)).dot(forward);
+            assert!((got - expected).abs() < 0.03 * expected, "{p}: {got} vs {expected}");
+        }
+        // Above the horizon there is nothing: the far plane.
+        assert_eq!(depth.pixel(40, 0)[0], 1000.0);
+        // Without ground, every pixel is far: flames have no depth.
+        assert!(pass_image("depth", false).data().iter().all(|&d| d == 1000.0));
     }
 }

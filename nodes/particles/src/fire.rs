@@ -12,7 +12,8 @@ use pyrograph_render::{Blend, DrawList, View, render_image};
 use rayon::prelude::*;
 
 use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace, validate_params};
-use crate::lit_mesh::{MeshShading, draw_mesh};
+use crate::lit_mesh::{MeshShading, draw_mesh, holdout_mesh};
+use crate::passes::{RenderPass, depth_image, emission_image};
 use crate::render::{LightParams, flame_lights, no_particles, particle_lists};
 use crate::swept::Exposure;
 use crate::types::{Mesh, SpreadState, WindField};
@@ -185,7 +186,8 @@ fn draw_char(view: &View, chars: &Particles) -> DrawList {
 }
 
 /// One frame of a burning mesh (Perry §3.4): the mesh shaded by a key light and the flame lights,
-/// char discs laid on the surface (blended "over"), and the root flames added to saturation.
+/// char discs laid on the surface (blended "over"), and the root flames added to saturation; or
+/// one of its compositing passes (the flames alone behind the mesh as a holdout, the mesh's depth).
 pub fn render_fire(
     view: &View,
     mesh: &Mesh,
@@ -193,6 +195,7 @@ pub fn render_fire(
     wind: &WindField,
     chars: &Particles,
     look: &FireLook,
+    pass: RenderPass,
 ) -> Result<Image, NodeError> {
     validate_params(&look.flame())?;
     validate_wind(wind, port!(RenderFire, wind))?;
@@ -211,10 +214,21 @@ pub fn render_fire(
         sun_direction: Vec3::from_array(look.sun_direction).normalize_or_zero(),
         sun: look.sun,
     };
-    let mut lists = draw_mesh(view, mesh, &lights, &shading);
-    lists.push(draw_char(view, chars));
-    lists.extend(particle_lists(view, &flames, look.exposure, Blend::Additive));
-    Ok(render_image(view, &lists, look.background))
+    match pass {
+        RenderPass::Beauty => {
+            let mut lists = draw_mesh(view, mesh, &lights, &shading);
+            lists.push(draw_char(view, chars));
+            lists.extend(particle_lists(view, &flames, look.exposure, Blend::Additive));
+            Ok(render_image(view, &lists, look.background))
+        }
+        // The flames alone, hidden behind the mesh; the char is the surface's, not light.
+        RenderPass::Emission => {
+            let mut lists = vec![holdout_mesh(view, mesh)];
+            lists.extend(particle_lists(view, &flames, look.exposure, Blend::Additive));
+            Ok(emission_image(view, &lists))
+        }
+        RenderPass::Depth => Ok(depth_image(view, &[holdout_mesh(view, mesh)])),
+    }
 }
 
 pyrograph_core::node! {
@@ -223,7 +237,8 @@ pyrograph_core::node! {
     /// live flame root of the spread a particle flame (§3.2.1–3.2.3) that starts along the face normal, moves
     /// through the wind field, grows in after the root is dropped and dies out at the end of its lifetime l_f.
     /// Flames blend additively to saturation. Connect the Clip<SpreadState> of particles.fire_spread to get a
-    /// clip of frames.
+    /// clip of frames. `pass` draws a compositor's layer instead of the frame: the flames alone on transparent
+    /// black, hidden behind the mesh (emission), or the mesh's distance along the view axis (depth, gray).
     #[node("particles.render_fire", "Particles", PerFrame)]
     pub struct RenderFire {
         /// Spread state (particles.fire_spread).
@@ -242,6 +257,8 @@ pyrograph_core::node! {
         },
         /// How the fire looks.
         look: FireLook,
+        /// What to draw: the frame, the flames' emission alone, or the mesh's depth.
+        pass: RenderPass = RenderPass::Beauty,
     }
     pub struct RenderFireOut {
         /// The rendered frame (RGBA, straight alpha).
@@ -253,7 +270,7 @@ impl Cook for RenderFire {
     fn cook(self, ctx: &CookCtx) -> Result<RenderFireOut, NodeError> {
         let view = self.camera.view()?;
         ctx.check_cancel()?;
-        let image = render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look)?;
+        let image = render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look, self.pass)?;
         Ok(RenderFireOut { image: Arc::new(image) })
     }
 }
@@ -285,7 +302,7 @@ mod tests {
         let cam = Camera::new(Vec3::new(0.0, 3.0, 0.01), Vec3::ZERO, Vec3::Y, 40.0, 0.05, 100.0).unwrap();
         let view = View::new(cam, 96, 96).unwrap();
         let look = FireLook::default();
-        let img = render_fire(&view, &mesh, &state, &wind, &chars, &look).unwrap();
+        let img = render_fire(&view, &mesh, &state, &wind, &chars, &look, RenderPass::Beauty).unwrap();
         let px = |x: u32, y: u32| {
             let d = img.data();
             let k = ((y * 96 + x) * 4) as usize;
@@ -297,7 +314,18 @@ mod tests {
         assert!(corner[0] > 0.1 && corner[0] < 0.9, "mesh {corner:?}");
         let bright = img.data().chunks(4).filter(|p| p[0] > 0.95 && p[1] > 0.3).count();
         assert!(bright > 20, "flame pixels: {bright}");
-        let none = render_fire(&view, &mesh, &SpreadState::default(), &wind, &Particles::default(), &look).unwrap();
+        let none =
+            render_fire(&view, &mesh, &SpreadState::default(), &wind, &Particles::default(), &look, RenderPass::Beauty).unwrap();
         assert!(none.data().chunks(4).all(|p| p[0] < 0.95), "no roots, no flames");
+        // The emission pass: the flames without the mesh (its corner transparent black), as bright.
+        let emission = render_fire(&view, &mesh, &state, &wind, &chars, &look, RenderPass::Emission).unwrap();
+        assert_eq!(&emission.data()[((25 * 96 + 25) * 4)..][..4], &[0.0; 4], "the mesh is a holdout");
+        let lit = emission.data().chunks(4).filter(|p| p[0] > 0.95 && p[1] > 0.3).count();
+        assert!(lit > 20 && lit <= bright + 5, "emission flame pixels: {lit} (beauty {bright})");
+        // The depth pass: the top face (y = 0.5 under a camera at y = 3 looking down) is 2.5 away.
+        let depth = render_fire(&view, &mesh, &state, &wind, &chars, &look, RenderPass::Depth).unwrap();
+        let top = depth.pixel(48, 48)[0];
+        assert!((top - 2.5).abs() < 0.01, "{top}");
+        assert_eq!(depth.pixel(2, 2)[0], 100.0, "beside the cube: the far plane");
     }
 }

@@ -12,6 +12,7 @@ pub mod flame;
 pub mod lit_mesh;
 pub mod mesh;
 pub mod mesh_roots;
+pub mod passes;
 pub mod render;
 pub mod spread;
 pub mod swept;

@@ -116,3 +116,13 @@ pub fn draw_mesh(view: &View, mesh: &Mesh, lights: &Particles, look: &MeshShadin
         })
         .collect()
 }
+
+/// The mesh as a holdout: opaque triangles of transparent black, which hide what is behind them
+/// (depth-tested) without adding colour: the emission pass's stand-in for the burning object.
+pub fn holdout_mesh(view: &View, mesh: &Mesh) -> DrawList {
+    let mut list = DrawList::new(view);
+    for tri in &mesh.triangles {
+        list.triangle(tri.map(|i| Vertex::new(Vec3::from_array(mesh.positions[i as usize]), [0.0; 4])), Blend::Opaque);
+    }
+    list
+}

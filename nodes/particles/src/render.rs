@@ -13,7 +13,8 @@ use pyrograph_render::{Blend, DrawList, Vertex, View, render_image};
 use pyrograph_render::{Particle, Particles};
 use rayon::prelude::*;
 
-use crate::lit_mesh::{MeshShading, draw_mesh};
+use crate::lit_mesh::{MeshShading, draw_mesh, holdout_mesh};
+use crate::passes::{RenderPass, depth_image, emission_image};
 use crate::swept::{Exposure, SweptScratch, draw_steps, swept_flame, trails};
 use crate::types::Mesh;
 
@@ -52,7 +53,9 @@ pub fn light_at(p: Vec3, lights: &Particles) -> Vec3 {
         .sum()
 }
 
-fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Particles) {
+/// Draws the ground plane lit by `lights`, or as a holdout (transparent black that still hides what
+/// is behind it) for the emission pass.
+fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Particles, holdout: bool) {
     let n = GROUND_CELLS;
     let half = ground.ground_size * 0.5;
     let at = |i: usize, j: usize| {
@@ -65,6 +68,9 @@ fn draw_ground(list: &mut DrawList, ground: &Ground, center: Vec3, lights: &Part
     let albedo = Vec3::new(ground.ground_color[0], ground.ground_color[1], ground.ground_color[2]);
     let vertex = |i: usize, j: usize| {
         let p = at(i, j);
+        if holdout {
+            return Vertex::new(p, [0.0; 4]);
+        }
         let lit = albedo * (light_at(p, lights) + Vec3::splat(ground.ambient));
         Vertex::new(p, [lit.x, lit.y, lit.z, 1.0])
     };
@@ -143,35 +149,10 @@ fn render_with(
     lists.extend(particle_lists(view, particles, exposure, blend));
     if let Some(g) = ground {
         let mut list = DrawList::new(view);
-        draw_ground(&mut list, g, view.camera().target(), lights);
+        draw_ground(&mut list, g, view.camera().target(), lights, false);
         lists.push(list);
     }
     render_image(view, &lists, background)
-}
-
-pyrograph_core::choice! {
-    /// What `particles.render_flames` draws: a compositor's pass.
-    pub enum RenderPass {
-        /// The whole frame.
-        Beauty = "beauty",
-        /// The flames and sparks alone on transparent black.
-        Emission = "emission",
-        /// The opaque mesh and ground's distance along the view axis (gray, world units).
-        Depth = "depth",
-    }
-}
-
-/// The depth pass of `lists`: per pixel, the distance along the camera's view axis of the nearest
-/// opaque surface, the far plane where there is none (a gray image).
-fn depth_image(view: &View, lists: &[DrawList]) -> Image {
-    let frame = pyrograph_render::render(view, lists, [0.0; 4]);
-    let camera = view.camera();
-    let (near, far) = (camera.near(), camera.far());
-    Image::gray_from_fn(frame.width(), frame.height(), |x, y| {
-        // The projection maps view depth z (near..far) to d = far (z − near) / (z (far − near)).
-        let d = frame.depth(x, y).clamp(0.0, 1.0);
-        if d >= 1.0 { far } else { (near * far / (far - d * (far - near))).min(far) }
-    })
 }
 
 pyrograph_core::choice! {
@@ -208,7 +189,7 @@ pyrograph_core::node! {
     /// ground. An optional ground plane is lit by the flame lights of §3.2.4 (connect
     /// particles.flame_lights). Connect a Clip of flames to get a clip of frames (RGBA, straight alpha).
     /// `pass` picks what is drawn, for compositors' layers: the whole frame (beauty), the flames and sparks
-    /// alone on transparent black (emission; their coverage is its alpha), or the depth of the opaque mesh
+    /// alone on transparent black, hidden behind the mesh and ground (emission), or the depth of the opaque mesh
     /// and ground (gray: distance along the camera's view axis in world units, the far plane where there
     /// is none). Render each pass with its own node and write them with imaging.write_exr_layers.
     #[node("particles.render_flames", "Particles", PerFrame)]
@@ -263,9 +244,20 @@ impl Cook for RenderFlames {
         let blend = self.blend.blend();
         let mut lists = Vec::new();
         if self.pass == RenderPass::Emission {
-            // The flames and sparks alone: no mesh, no ground, nothing behind them.
+            // The flames and sparks alone on transparent black, hidden where the mesh or the ground
+            // is in front of them (holdouts), as a compositor layers them back over the beauty.
+            if !self.mesh.triangles.is_empty() {
+                lists.push(holdout_mesh(&view, &self.mesh));
+            }
+            if let Some(g) = ground {
+                let mut list = DrawList::new(&view);
+                draw_ground(&mut list, g, view.camera().target(), &self.lights, true);
+                lists.push(list);
+            }
+            let holdouts = !lists.is_empty();
             lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
-            let image = render_with(&view, &self.flames, self.exposure, blend, [0.0; 4], None, &self.lights, lists);
+            lists.extend(particle_lists(&view, &self.flames, self.exposure, blend));
+            let image = if holdouts { emission_image(&view, &lists) } else { render_image(&view, &lists, [0.0; 4]) };
             return Ok(RenderFlamesOut { image: Arc::new(image) });
         }
         if !self.mesh.triangles.is_empty() {
@@ -281,7 +273,7 @@ impl Cook for RenderFlames {
             // Flames are light, not surfaces: only the mesh and the ground have a depth.
             if let Some(g) = ground {
                 let mut list = DrawList::new(&view);
-                draw_ground(&mut list, g, view.camera().target(), &self.lights);
+                draw_ground(&mut list, g, view.camera().target(), &self.lights, false);
                 lists.push(list);
             }
             return Ok(RenderFlamesOut { image: Arc::new(depth_image(&view, &lists)) });
@@ -465,6 +457,11 @@ mod tests {
 
     /// Cooks render_flames on a candle over the ground with `pass`, returning its image.
     fn pass_image(pass: &str, ground: bool) -> Arc<Image> {
+        pass_image_with(pass, ground, Mesh::default())
+    }
+
+    /// [`pass_image`] with a mesh in the scene.
+    fn pass_image_with(pass: &str, ground: bool, mesh: Mesh) -> Arc<Image> {
         let desc = RenderFlames::desc();
         let empty = || Value::custom(no_particles());
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
@@ -474,6 +471,7 @@ mod tests {
         set("height", Value::Int(60));
         set("ground", Value::Bool(ground));
         set("pass", Value::Enum(pass.into()));
+        set("mesh", Value::custom(Arc::new(mesh)));
         let out = RenderFlames::read(&Inputs::new(&desc, &values)).unwrap().cook(&CookCtx::default()).unwrap();
         out.image
     }
@@ -488,6 +486,25 @@ mod tests {
         assert!(beauty.pixel(40, 58)[3] > 0.99, "the beauty shows the ground there");
         let core = view(80, 60).project(Vec3::new(0.0, 2.5, 0.0)).unwrap();
         assert!(emission.pixel(core.x as u32, core.y as u32)[0] > 0.5);
+    }
+
+    #[test]
+    fn a_mesh_in_front_hides_the_flame_in_the_emission_pass() {
+        // A card between the camera (z = 14) and the candle's core (z = 0), over the core only.
+        let mesh = Mesh {
+            positions: vec![[-0.3, 2.2, 5.0], [0.3, 2.2, 5.0], [0.3, 2.8, 5.0], [-0.3, 2.8, 5.0]],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            normals: vec![[0.0, 0.0, 1.0]; 2],
+            ..Default::default()
+        };
+        let core = view(80, 60).project(Vec3::new(0.0, 2.5, 0.0)).unwrap();
+        let (cx, cy) = (core.x as u32, core.y as u32);
+        assert!(pass_image("emission", false).pixel(cx, cy)[0] > 0.5, "the core is bright without the card");
+        let emission = pass_image_with("emission", false, mesh.clone());
+        assert_eq!(emission.pixel(cx, cy), &[0.0; 4], "the card holds the flame out");
+        // Beside the card the flame still shows, and the beauty has the card where the emission has none.
+        assert!(emission.data().chunks(4).any(|p| p[0] > 0.5));
+        assert_eq!(pass_image_with("beauty", false, mesh).pixel(cx, cy)[3], 1.0);
     }
 
     #[test]

@@ -238,23 +238,26 @@ const GENERIC: &str = r#"(
     edges: [("frames.clip", "a.clip"), ("frames.clip", "b.clip")],
 )"#;
 
+/// The engine's frame half-way between cells `k` and `k + 1`, over the whole particle quad (with
+/// motion, or as the same engine's cross-fade).
+fn in_between(blend: Blend, tex: &Texture, mv: &Texture, scale: f32, k: usize, motion: bool) -> Vec<[f32; 4]> {
+    (0..(W * H) as usize)
+        .map(|i| {
+            let (x, y) = ((i % W as usize) as f32 + 0.5, (i / W as usize) as f32 + 0.5);
+            // The quad's uv: u right, v up (Unity and the Labs shader take it so; Unreal's v down
+            // is its own SubUV arithmetic's business, handled by `unreal_uv`).
+            blend(tex, mv, scale, k, 0.5, (x / W as f32, 1.0 - y / H as f32), motion)
+        })
+        .collect()
+}
+
 /// Mean PSNR of the engine's in-betweens (with motion, and as a cross-fade) against the truth.
 fn rebuild(blend: Blend, tex: &Texture, mv: &Texture, scale: f32, truth: &[Arc<Image>]) -> (f64, f64) {
     let (mut with, mut without) = (0.0, 0.0);
     for (k, t) in truth.iter().enumerate() {
         let expected = premultiplied(t);
-        let frame = |motion: bool| -> Vec<[f32; 4]> {
-            (0..(W * H) as usize)
-                .map(|i| {
-                    let (x, y) = ((i % W as usize) as f32 + 0.5, (i / W as usize) as f32 + 0.5);
-                    // The quad's uv: u right, v up (Unity and the Labs shader take it so; Unreal's
-                    // v down is its own SubUV arithmetic's business, handled inside `unreal`).
-                    blend(tex, mv, scale, k, 0.5, (x / W as f32, 1.0 - y / H as f32), motion)
-                })
-                .collect()
-        };
-        with += psnr(&frame(true), &expected);
-        without += psnr(&frame(false), &expected);
+        with += psnr(&in_between(blend, tex, mv, scale, k, true), &expected);
+        without += psnr(&in_between(blend, tex, mv, scale, k, false), &expected);
     }
     (with / truth.len() as f64, without / truth.len() as f64)
 }
@@ -304,16 +307,8 @@ fn picture(dir: &Path, tex: &Texture, mv: &Texture, scale: f32, frames: &[Arc<Im
             d(a).total_cmp(&d(b))
         })
         .unwrap();
-    let quad = |motion: bool| -> Vec<[f32; 4]> {
-        (0..(W * H) as usize)
-            .map(|i| {
-                let (x, y) = ((i % W as usize) as f32 + 0.5, (i / W as usize) as f32 + 0.5);
-                unity(tex, mv, scale, k, 0.5, (x / W as f32, 1.0 - y / H as f32), motion)
-            })
-            .collect()
-    };
     let exact = premultiplied(&truth[k]);
-    let (fade, blend) = (quad(false), quad(true));
+    let (fade, blend) = (in_between(unity, tex, mv, scale, k, false), in_between(unity, tex, mv, scale, k, true));
     let diff = |a: &[[f32; 4]]| -> Vec<[f32; 4]> {
         a.iter().zip(&exact).map(|(p, q)| std::array::from_fn(|c| if c == 3 { 1.0 } else { 8.0 * (p[c] - q[c]).abs() })).collect()
     };

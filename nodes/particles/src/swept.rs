@@ -12,7 +12,8 @@
 //! path is sampled.
 //!
 //! Written here rather than taken from a library: this is a camera-dependent mesh built per
-//! frame from the particles; the rasterizer (`pyrograph_render`) draws it.
+//! frame from the particles; the rasterizer (`pyrograph_render`) draws its body as a grid strip
+//! (`DrawList::strip`: binned per band, not per triangle) and its caps as a small mesh.
 
 use glam::{Vec2, Vec3, Vec4};
 use pyrograph_render::{Blend, Camera, DrawList, Particle, Vertex, View};
@@ -47,6 +48,8 @@ pub struct SweptScratch {
     verts: Vec<Vertex>,
     tris: Vec<[u32; 3]>,
     frames: Vec<StepFrame>,
+    /// The caps' vertices (copies of the end samples' path and rim vertices, then their rims).
+    cap_verts: Vec<Vertex>,
 }
 
 /// One step of the path in the camera's billboard plane.
@@ -137,32 +140,32 @@ pub fn swept_flame(list: &mut DrawList, path: &[Particle], sides: u32, blend: Bl
     }
     // `across` vertices per sample across the path: rim, (inner,) path, (inner,) rim.
     let across = detail.across;
-    for k in 0..samples - 1 {
-        let (a, b) = (across * k, across * (k + 1));
-        for j in 0..across - 1 {
-            tris.extend([[a + j, a + j + 1, b + j + 1], [a + j, b + j + 1, b + j]]);
-        }
-    }
-    // Caps: half of the end particle's N-gon, facing away from the path.
-    for (k, sample, outward) in [(0usize, 0u32, -1.0f32), (n - 1, samples - 1, 1.0)] {
+    list.strip(verts, across, blend);
+    // Caps: half of the end particle's N-gon, facing away from the path, around copies of the
+    // end sample's path and rim vertices.
+    let (body, caps) = (samples, &mut scratch.cap_verts);
+    caps.clear();
+    for (k, sample, outward) in [(0usize, 0u32, -1.0f32), (n - 1, body - 1, 1.0)] {
         let f = frames[k];
         if f.along.length_squared() <= 0.0 {
             continue;
         }
         let rim = f.rim.max(Vec4::ZERO).min(Vec4::new(f32::MAX, f32::MAX, f32::MAX, 1.0)).to_array();
-        let centre = across * sample + across / 2;
-        let mut prev = across * sample;
+        let row = &verts[(across * sample) as usize..(across * (sample + 1)) as usize];
+        let centre = caps.len() as u32;
+        caps.extend([row[(across / 2) as usize], row[0]]);
         for j in 1..detail.cap_sides {
             let theta = std::f32::consts::PI * j as f32 / detail.cap_sides as f32;
             let p = f.at + f.across * theta.cos() + f.along * (outward * theta.sin());
-            verts.push(Vertex::new(p, rim));
-            let v = verts.len() as u32 - 1;
-            tris.push([centre, prev, v]);
-            prev = v;
+            caps.push(Vertex::new(p, rim));
+            let v = caps.len() as u32 - 1;
+            tris.push([centre, v - 1, v]);
         }
-        tris.push([centre, prev, across * sample + across - 1]);
+        caps.push(row[(across - 1) as usize]);
+        let v = caps.len() as u32 - 1;
+        tris.push([centre, v - 1, v]);
     }
-    list.mesh(verts, tris, None, blend);
+    list.mesh(caps, tris, None, blend);
 }
 
 /// Fills `frames` with the path in the billboard plane of each step (tangent, across and along

@@ -185,6 +185,7 @@ fn add_span_avx2(color: &mut [[f32; 4]], xd0: f32, env: &[[f32; 2]], edge: [f32;
 /// every input, a NaN included (see `lane_floor` and [`Texels::texel_coords`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 fn tile_lanes_avx2<const W: usize>(t: &SmallTri, w: [i32; 3], rows_left: usize, tex: Option<&Texels<'_>>) -> Option<TileShading> {
     use std::arch::x86_64::*;
     let (col, row) = (TileLanes::<W>::COL, TileLanes::<W>::ROW);

@@ -23,11 +23,16 @@ pub struct FramesArgs {
     /// Frames per timed run.
     #[arg(long, default_value_t = 24)]
     frames: usize,
+    /// Flames (default: the harness's row, 1,000 particle flames or 144 cloth flames); the scaling
+    /// sweep (benches/scaling/run.py) varies it.
+    #[arg(long)]
+    flames: Option<usize>,
 }
 
-/// 1,000 particle flames on a grid (the flames bench's scene): simulate + render per frame.
+/// 1,000 particle flames (or `--flames`) on a grid (the flames bench's scene, the camera backing
+/// off as the grid grows): simulate + render per frame.
 pub fn particles(a: &FramesArgs, t: Timing) -> Result<String, String> {
-    let n = 1000;
+    let n = a.flames.unwrap_or(1000).max(1);
     let spacing = 2.0;
     let roots = layout_roots(Layout::Grid, n, Vec3::ZERO, spacing, 0.0, Vec3::Y, 0.0, 1);
     let extent = (n as f32).sqrt().ceil() * spacing;
@@ -56,11 +61,15 @@ pub fn particles(a: &FramesArgs, t: Timing) -> Result<String, String> {
     per_frame("particle_flames_frame", &times, a.frames, serde_json::json!({ "flames": n }))
 }
 
-/// 144 cloth flames with the node's default springs: a 24 fps frame's sub-steps + textured render.
+/// 144 cloth flames (or `--flames`) with the node's default springs: a 24 fps frame's sub-steps +
+/// textured render, the camera framing the grid as the cloth bench's does.
 pub fn cloth_frame(a: &FramesArgs, t: Timing) -> Result<String, String> {
-    let n = 144;
+    let n = a.flames.unwrap_or(144).max(1);
     let target = Vec3::new(0.0, 1.0, 0.0);
-    let cam = Camera::new(target + Vec3::new(0.0, 8.0, 26.0), target, Vec3::Y, 40.0, 0.1, 1000.0).map_err(|e| e.to_string())?;
+    // 12 columns (144 flames) at the harness's distance; fewer columns than 3 framed as 3.
+    let s = (n as f32).sqrt().ceil().max(3.0) / 12.0;
+    let cam =
+        Camera::new(target + Vec3::new(0.0, 8.0, 26.0) * s, target, Vec3::Y, 40.0, 0.1, 1000.0).map_err(|e| e.to_string())?;
     let view = View::new(cam, 1280, 720).map_err(|e| e.to_string())?;
     let rp = RenderParams::default();
     let (times, _) = t.run_with(

@@ -1,6 +1,7 @@
 """How cost grows with the work (issue 45): time and peak memory against size for particle flames
 (100 → 10,000 flames, simulate + render 1280×720), cloth flames (16 → 1,024, a 24 fps frame's
-sub-steps + render) and batch reconstruction (eq. 22, 8 → 256 frames), each size a separate process
+sub-steps + render), fire spread (a plane of 242 → 247,808 faces: the surface built, then 96 steps)
+and batch reconstruction (eq. 22, 8 → 256 frames), each size a separate process
 of the harness's kernels (examples/kernels) under /usr/bin/time, so that peak RSS is that size's own.
 Fits the growth exponent k of time ∝ size^k over the three largest sizes (where the fixed cost of a
 1280×720 frame no longer dominates) and plots both against size on log-log axes.
@@ -57,8 +58,10 @@ def workloads(work):
     cloth = [(n, ["--reps", "3", "cloth-frame", "--flames", str(n), "--frames", str(f)])
              for n, f in ((16, 24), (64, 24), (144, 12), (256, 12), (576, 6), (1024, 3))]
     recon = [(b, ["--reps", "3", "reconstruct", *recon_inputs(work, b)]) for b in (8, 16, 32, 64, 128, 256)]
+    spread = [(2 * d * d, ["--reps", "3", "spread", "--divisions", str(d), "--steps", "96"]) for d in (11, 22, 44, 88, 176, 352)]
     return [("particle flames", "flames", "frame", particles),
             ("cloth flames", "flames", "frame", cloth),
+            ("fire spread (surface + 96 steps)", "mesh faces", "step", spread),
             ("batch reconstruction", "frames", "batch", recon)]
 
 
@@ -73,7 +76,7 @@ def plot(results, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(2, len(results), figsize=(4.2 * len(results), 7.0))
+    fig, axes = plt.subplots(2, len(results), figsize=(3.6 * len(results), 7.0))
     for col, (name, label, unit, rows) in enumerate(results):
         sizes = np.array([r["size"] for r in rows], dtype=float)
         ms = np.array([r["median_s"] * 1e3 for r in rows])

@@ -48,6 +48,8 @@ enum Op {
     ClothFrame(solo::FramesArgs),
     /// No peer: the burning cube (graphs/burning-cube.ron), mean frame over frames 48–95.
     Cube(solo::CubeArgs),
+    /// No peer: fire spread over a plane of a given number of faces, per step (scaling sweep).
+    Spread(solo::SpreadArgs),
 }
 
 fn main() {
@@ -63,6 +65,7 @@ fn main() {
         Op::Particles(a) => solo::particles(&a, t),
         Op::ClothFrame(a) => solo::cloth_frame(&a, t),
         Op::Cube(a) => solo::cube(&a, t),
+        Op::Spread(a) => solo::spread(&a, t),
     };
     match result {
         Ok(line) => println!("{line}"),

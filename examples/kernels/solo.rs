@@ -4,6 +4,7 @@
 //! nodes/particles/benches/spread.rs).
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use clap::Args;
 use glam::Vec3;
@@ -11,7 +12,9 @@ use pyrograph_core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Re
 use pyrograph_nodes_cloth::render::{RenderParams, Textures, render_cloth};
 use pyrograph_nodes_cloth::sim::{ClothParams, Simulation, grid_roots};
 use pyrograph_nodes_particles::flame::{FlameParams, Layout, layout_roots, simulate_frame};
+use pyrograph_nodes_particles::mesh::{build_mesh, plane};
 use pyrograph_nodes_particles::render::render_particles;
+use pyrograph_nodes_particles::spread::{Ignition, Spread, SpreadParams, Surface};
 use pyrograph_nodes_particles::swept::Exposure;
 use pyrograph_nodes_particles::types::WindField;
 use pyrograph_render::{Blend, Camera, Particles, View};
@@ -130,4 +133,41 @@ pub fn cube(a: &CubeArgs, t: Timing) -> Result<String, String> {
 fn per_frame(op: &str, times: &[f64], frames: usize, extra: serde_json::Value) -> Result<String, String> {
     let per: Vec<f64> = times.iter().map(|s| s / frames.max(1) as f64).collect();
     Ok(report(op, &per, extra))
+}
+
+#[derive(Args)]
+pub struct SpreadArgs {
+    /// Quads along each side of the 22 × 22 plane (2·d² triangles).
+    #[arg(long, default_value_t = 44)]
+    divisions: usize,
+    /// Spread steps (frames at 24 fps) per timed run.
+    #[arg(long, default_value_t = 48)]
+    steps: usize,
+}
+
+/// Fire spread over a 22 × 22 plane of `divisions`² quads (the spread bench's scene: 16 ignitions
+/// a quarter second apart, still air, d_s 0.02): building the surface and `steps` spread steps,
+/// reported per step. The front is the same length on every mesh; finer meshes give its control
+/// points more faces to cross.
+pub fn spread(a: &SpreadArgs, t: Timing) -> Result<String, String> {
+    let soup = plane(22.0, a.divisions.max(1));
+    let (times, points) = t.run(|| {
+        let mesh = build_mesh(&soup, 0, true).map_err(|e| e.to_string())?;
+        let surface = Arc::new(Surface::new(&mesh).map_err(|e| e.to_string())?);
+        let ignitions = (0..16)
+            .map(|k| {
+                let p = Vec3::new(-7.5 + 5.0 * (k % 4) as f32, 0.0, -7.5 + 5.0 * (k / 4) as f32);
+                let (face, bary, _) = surface.nearest(p);
+                Ignition { face, bary, time: 0.25 * k as f32 }
+            })
+            .collect();
+        let params = SpreadParams { d_s: 0.02, ..SpreadParams::default() };
+        let mut spread = Spread::new(surface, ignitions, params, 24.0).map_err(|e| e.to_string())?;
+        for _ in 0..a.steps {
+            spread.step(1.0 / 24.0, &|_| Vec3::ZERO);
+        }
+        Ok(spread.point_count())
+    })?;
+    let faces = 2 * a.divisions.max(1) * a.divisions.max(1);
+    per_frame("spread_step", &times, a.steps, serde_json::json!({ "faces": faces, "control_points": points }))
 }

@@ -92,6 +92,24 @@ pub fn finish(stage: &Stage) -> anyhow::Result<Vec<u8>> {
     Ok(stage.root_layer().export_to_string()?.into_bytes())
 }
 
+/// Point samples (points × frames, every prim together) one stage may hold: the stage is built
+/// whole in memory before it is written (openusd has no streaming writer), so a long clip of many
+/// particles is refused with the way round instead of filling memory.
+pub const MAX_POINT_SAMPLES: usize = 1 << 24;
+
+/// Adds `points` (one frame's) to `total` and refuses the stage once it passes
+/// [`MAX_POINT_SAMPLES`], naming the frame.
+pub fn count_samples(total: &mut usize, points: usize, frame: usize) -> Result<(), String> {
+    *total = total.saturating_add(points);
+    if *total <= MAX_POINT_SAMPLES {
+        return Ok(());
+    }
+    Err(format!(
+        "by frame {frame} the stage holds {total} point samples, more than the {MAX_POINT_SAMPLES} a stage built in \
+         memory may hold; write a shorter frame range (--frames) or fewer points per frame, as several stages"
+    ))
+}
+
 /// A USD prim name: an identifier (letters, digits, underscores; not starting with a digit).
 pub fn valid_prim_name(name: &str) -> bool {
     let mut chars = name.chars();

@@ -48,6 +48,7 @@ impl Cook for WriteClothUsd {
             TargetError::Exists(m) => NodeError::port(port!(WriteClothUsd, overwrite), m),
         })?;
         let clip = &self.cloth;
+        let mut samples = 0;
         let mut frames = Vec::with_capacity(clip.len());
         for i in 0..clip.len() {
             ctx.check_cancel()?;
@@ -55,12 +56,20 @@ impl Cook for WriteClothUsd {
                 .get(i, ctx)?
                 .downcast::<ClothState>()
                 .ok_or_else(|| NodeError::port(port!(WriteClothUsd, cloth), format!("frame {i} holds no cloth")))?;
-            if let Some(k) = state.positions.iter().chain(&state.roots).position(|p| p.iter().any(|v| !v.is_finite())) {
+            let bad = |points: &[[f32; 3]]| points.iter().position(|p| p.iter().any(|v| !v.is_finite()));
+            let what = match (bad(&state.positions), bad(&state.roots)) {
+                (Some(k), _) => Some(format!("mass {k}")),
+                (None, Some(k)) => Some(format!("flame root {k}")),
+                (None, None) => None,
+            };
+            if let Some(what) = what {
                 return Err(NodeError::port(
                     port!(WriteClothUsd, cloth),
-                    format!("frame {i}: mass {k} has a non-finite position; USD cannot hold it"),
+                    format!("frame {i}: {what} has a non-finite position; USD cannot hold it"),
                 ));
             }
+            pyrograph_usd::count_samples(&mut samples, state.positions.len(), i)
+                .map_err(|m| NodeError::port(port!(WriteClothUsd, cloth), m))?;
             frames.push(state);
             ctx.frame_progress(i + 1, clip.len());
         }

@@ -255,6 +255,16 @@ impl Cook for RenderFlames {
                 lists.push(list);
             }
             let holdouts = !lists.is_empty();
+            if holdouts && blend != Blend::Additive {
+                // The pass gives the light back its alpha (max of rgb over the opaque holdouts):
+                // right for added light, wrong for flames laid "over" (a dark opaque flame would
+                // turn transparent in front of the mesh only).
+                return Err(NodeError::port(
+                    port!(RenderFlames, blend),
+                    "the emission pass over a mesh or the ground needs additive flames; use blend additive, \
+                     or turn the ground off and leave the mesh unconnected for this pass",
+                ));
+            }
             lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
             lists.extend(particle_lists(&view, &self.flames, self.exposure, blend));
             let image = if holdouts { emission_image(&view, &lists) } else { render_image(&view, &lists, [0.0; 4]) };
@@ -462,6 +472,11 @@ mod tests {
 
     /// [`pass_image`] with a mesh in the scene.
     fn pass_image_with(pass: &str, ground: bool, mesh: Mesh) -> Arc<Image> {
+        pass_result(pass, ground, mesh, "additive").unwrap()
+    }
+
+    /// Cooks render_flames on a candle with `pass`, the ground or not, `mesh` and `blend`.
+    fn pass_result(pass: &str, ground: bool, mesh: Mesh, blend: &str) -> Result<Arc<Image>, NodeError> {
         let desc = RenderFlames::desc();
         let empty = || Value::custom(no_particles());
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
@@ -472,8 +487,23 @@ mod tests {
         set("ground", Value::Bool(ground));
         set("pass", Value::Enum(pass.into()));
         set("mesh", Value::custom(Arc::new(mesh)));
-        let out = RenderFlames::read(&Inputs::new(&desc, &values)).unwrap().cook(&CookCtx::default()).unwrap();
-        out.image
+        set("blend", Value::Enum(blend.into()));
+        Ok(RenderFlames::read(&Inputs::new(&desc, &values))?.cook(&CookCtx::default())?.image)
+    }
+
+    #[test]
+    fn the_emission_pass_over_holdouts_takes_additive_flames_only() {
+        match pass_result("emission", true, Mesh::default(), "over") {
+            Err(NodeError::Port { port, message }) => {
+                assert_eq!(port, "blend");
+                assert!(message.contains("additive"), "{message}");
+            }
+            other => panic!("{:?}", other.err()),
+        }
+        // Without holdouts the over-blended flames are their own emission, as the beauty is.
+        let (emission, beauty) =
+            (pass_result("emission", false, Mesh::default(), "over"), pass_result("beauty", false, Mesh::default(), "over"));
+        assert_eq!(emission.unwrap().data(), beauty.unwrap().data());
     }
 
     #[test]

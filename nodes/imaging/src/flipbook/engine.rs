@@ -46,6 +46,11 @@ pub struct MotionCode {
 impl MotionCode {
     /// R and G of a motion in source pixels.
     pub fn encode(&self, dx: f32, dy: f32) -> (f32, f32) {
+        if !(dx.is_finite() && dy.is_finite()) {
+            // Flow through NaN or infinite pixels (an EXR frame can hold them) means nothing: no
+            // motion, rather than a NaN the engine would sample the texture at.
+            return (0.5, 0.5);
+        }
         ((0.5 + dx / self.div.0).clamp(0.0, 1.0), (0.5 + dy / self.div.1).clamp(0.0, 1.0))
     }
 

@@ -4,6 +4,7 @@
 use pyrograph_core::{Channels, Image, NodeError, port};
 
 use super::FlipbookOptions;
+use super::engine::Convention;
 
 /// Largest number of mip levels a sheet can be laid out for (cells aligned to 256 pixels).
 pub const MAX_MIP_LEVELS: i64 = 8;
@@ -70,13 +71,30 @@ pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, Node
     let levels = opts.mip_levels.min(MAX_MIP_LEVELS as u32);
     let align = 1u32 << levels;
     let pad = if levels > 0 { opts.padding.max(align / 2) } else { opts.padding };
-    let (cols, rows) = (opts.cols as u32, opts.rows as u32);
-    let round = |v: u32| v.div_ceil(align) * align;
-    let mut cell = (round(source.0 + 2 * pad), round(source.1 + 2 * pad));
+    let (cols, rows) = (opts.cols.max(1) as u32, opts.rows.max(1) as u32);
+    // In u64 and checked against the pixel budget before anything is allocated: a wide frame,
+    // many cells and wide padding multiply past u32 and past any memory.
+    let round = |v: u64| v.div_ceil(u64::from(align)) * u64::from(align);
+    let wide = (round(u64::from(source.0) + 2 * u64::from(pad)), round(u64::from(source.1) + 2 * u64::from(pad)));
+    sheet_fits((wide.0 * u64::from(cols), wide.1 * u64::from(rows)))?;
+    let mut cell = (wide.0 as u32, wide.1 as u32);
     let mut frame = source;
     let mut sheet = (cell.0 * cols, cell.1 * rows);
     if opts.power_of_two {
         let target = (nearest_power_of_two(sheet.0), nearest_power_of_two(sheet.1));
+        sheet_fits((u64::from(target.0), u64::from(target.1)))?;
+        if opts.convention != Convention::Generic && (!target.0.is_multiple_of(cols) || !target.1.is_multiple_of(rows)) {
+            // The engines' materials read cell i at i/cols of the texture: cells must tile the sheet exactly.
+            return Err(NodeError::port(
+                port!(FlipbookOptions, power_of_two),
+                format!(
+                    "the power-of-two sheet {}x{} does not split into {cols} columns and {rows} rows of whole pixels, \
+                     and the engine's material reads cell i at i/cols of the texture, so frames would drift into their \
+                     neighbours; use rows and cols that are powers of two, or leave power_of_two off",
+                    target.0, target.1
+                ),
+            ));
+        }
         cell = (target.0 / cols, target.1 / rows);
         if cell.0 <= 2 * pad || cell.1 <= 2 * pad {
             return Err(NodeError::port(
@@ -84,7 +102,7 @@ pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, Node
                 "the power-of-two sheet leaves no room for the frames; lower padding",
             ));
         }
-        if cell.0 % align != 0 || cell.1 % align != 0 {
+        if !cell.0.is_multiple_of(align) || !cell.1.is_multiple_of(align) {
             return Err(NodeError::port(
                 port!(FlipbookOptions, mip_levels),
                 format!(
@@ -99,6 +117,25 @@ pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, Node
         sheet = target;
     }
     Ok(Layout { cell, frame, pad, sheet })
+}
+
+/// Refuses a sheet of `size` pixels over the pixel budget (`--max-pixels`) or too wide to address.
+fn sheet_fits(size: (u64, u64)) -> Result<(), NodeError> {
+    let budget = pyrograph_core::limits::max_pixels();
+    let pixels = size.0.saturating_mul(size.1);
+    if size.0 <= u64::from(u32::MAX / 2) && size.1 <= u64::from(u32::MAX / 2) && pixels <= budget {
+        return Ok(());
+    }
+    Err(NodeError::port(
+        port!(FlipbookOptions, cols),
+        format!(
+            "the sheet would be {}x{} pixels, more than the pixel budget of {budget}; use fewer rows and cols, less \
+             padding or fewer mip_levels, scale the frames down, or {}",
+            size.0,
+            size.1,
+            pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", pixels)
+        ),
+    ))
 }
 
 /// What fills a cell's padding.

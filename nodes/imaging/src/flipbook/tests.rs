@@ -298,3 +298,35 @@ fn engine_sheets_decode_to_the_flow_and_say_what_to_paste() {
         assert!(json.contains(&format!("\"convention\": \"{}\"", convention.name())), "{json}");
     }
 }
+
+#[test]
+fn sheets_past_the_pixel_budget_or_u32_are_refused_before_they_are_made() {
+    // 64 × 64 cells of 8 × 8 frames with 256 pixels of padding: a 33,280-pixel square sheet.
+    let opts = FlipbookOptions { rows: 64, cols: 64, padding: 256, ..Default::default() };
+    let e = layout((8, 8), &opts).unwrap_err().to_string();
+    assert!(e.contains("33280x33280") && e.contains("pixel budget") && e.contains("--max-pixels"), "{e}");
+    // A frame 2^26 pixels wide overflows u32 across 64 columns: refused, not wrapped.
+    let e = layout((1 << 26, 1), &FlipbookOptions { rows: 1, cols: 64, ..Default::default() }).unwrap_err().to_string();
+    assert!(e.contains("pixel budget"), "{e}");
+    // The power-of-two sheet is held to the budget too, and a sheet inside it is laid out.
+    assert!(layout((4000, 4000), &FlipbookOptions { rows: 4, cols: 4, power_of_two: true, ..Default::default() }).is_ok());
+}
+
+#[test]
+fn engine_sheets_must_split_into_whole_cells() {
+    // 48-pixel frames in 6 columns: a 288-pixel sheet, rounded to 256, is 42.67 pixels a cell.
+    let opts = FlipbookOptions { rows: 6, cols: 6, power_of_two: true, convention: Convention::Unity, ..Default::default() };
+    let e = layout((48, 48), &opts).unwrap_err().to_string();
+    assert!(e.contains("256x256") && e.contains("6 columns"), "{e}");
+    // The generic sheet keeps its old layout (whole cells, the remainder left over).
+    let generic = layout((48, 48), &FlipbookOptions { convention: Convention::Generic, ..opts }).unwrap();
+    assert_eq!((generic.cell, generic.sheet), ((42, 42), (256, 256)));
+}
+
+#[test]
+fn motion_through_non_finite_pixels_is_no_motion() {
+    let code = MotionCode { div: (16.0, -16.0), scale: 1.0 };
+    assert_eq!(code.encode(f32::NAN, 1.0), (0.5, 0.5));
+    assert_eq!(code.encode(2.0, f32::INFINITY), (0.5, 0.5));
+    assert_eq!(code.encode(4.0, 4.0), (0.75, 0.25));
+}

@@ -74,6 +74,18 @@ impl Cook for WriteUsd {
             ));
         }
         let clip = &self.particles;
+        if !self.spread.is_empty() && (self.spread.fps() - clip.fps()).abs() > 1e-6 * clip.fps().abs().max(1.0) {
+            return Err(NodeError::port(
+                port!(WriteUsd, spread),
+                format!(
+                    "the fire spread runs at {} fps and the particles at {} fps; the stage has one time code per frame, \
+                     so both must run at one rate",
+                    self.spread.fps(),
+                    clip.fps()
+                ),
+            ));
+        }
+        let mut samples = self.mesh.positions.len();
         let mut frames = Vec::with_capacity(clip.len());
         for i in 0..clip.len() {
             ctx.check_cancel()?;
@@ -82,18 +94,24 @@ impl Cook for WriteUsd {
                 .downcast::<Particles>()
                 .ok_or_else(|| NodeError::port(port!(WriteUsd, particles), format!("frame {i} holds no particles")))?;
             check_finite(&particles, i)?;
+            pyrograph_usd::count_samples(&mut samples, particles.particles.len(), i)
+                .map_err(|m| NodeError::port(port!(WriteUsd, particles), m))?;
             frames.push(particles);
             ctx.frame_progress(i + 1, clip.len());
         }
-        let mut fronts = Vec::with_capacity(self.spread.len());
-        for i in 0..self.spread.len() {
+        // The spread's frames past the particles' last would hold the flames still at their last
+        // sample: the stage ends with the particles.
+        let spread_frames = self.spread.len().min(clip.len());
+        let mut fronts = Vec::with_capacity(spread_frames);
+        for i in 0..spread_frames {
             ctx.check_cancel()?;
             let value = self.spread.get(i, ctx)?;
-            fronts.push(
-                value
-                    .downcast::<SpreadState>()
-                    .ok_or_else(|| NodeError::port(port!(WriteUsd, spread), format!("frame {i} holds no fire spread")))?,
-            );
+            let state = value
+                .downcast::<SpreadState>()
+                .ok_or_else(|| NodeError::port(port!(WriteUsd, spread), format!("frame {i} holds no fire spread")))?;
+            let points = state.boundaries.iter().map(|b| b.len() + 1).sum::<usize>() + state.roots.len();
+            pyrograph_usd::count_samples(&mut samples, points, i).map_err(|m| NodeError::port(port!(WriteUsd, spread), m))?;
+            fronts.push(state);
         }
         let scene = scene::Scene { flames: &frames, name: &self.name, mesh: &self.mesh, spread: &fronts, fps: clip.fps() };
         let bytes = scene.text().map_err(|e| NodeError::port(path_port, format!("building the USD stage: {e:#}")))?;
@@ -116,6 +134,7 @@ fn check_finite(p: &Particles, frame: usize) -> Result<(), NodeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pyrograph_core::Value;
     use pyrograph_render::particles::Particle;
 
     fn frame(n: usize, t: f32) -> Arc<Particles> {
@@ -188,6 +207,67 @@ mod tests {
             "def Points \"roots\"",
         ] {
             assert!(text.contains(needle), "{needle} missing in\n{text}");
+        }
+    }
+
+    /// A spread state whose one ring has `points` points, at time `t`.
+    fn spread_state(t: f32, points: usize) -> Arc<SpreadState> {
+        let ring = (0..points).map(|k| [k as f32, 0.0, 0.0]).collect();
+        Arc::new(SpreadState { time: t, boundaries: vec![ring], ..Default::default() })
+    }
+
+    /// The writer of `particles` (two frames at 24 fps) and `spread`, to a fresh path in the temp folder.
+    fn writer(spread: ClipOf<Arc<SpreadState>>, tag: &str) -> WriteUsd {
+        let frames = [frame(1, 0.0), frame(1, 1.0)].into_iter().map(Value::custom).collect();
+        let path = std::env::temp_dir().join(format!("pyrograph-usd-{tag}-{}.usda", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        WriteUsd {
+            particles: ClipOf::new(Clip::from_frames(PortType::of::<Particles>(), 24.0, frames)),
+            mesh: Arc::new(Mesh::default()),
+            spread,
+            path: OutputPath(path),
+            name: "flames".into(),
+            overwrite: false,
+        }
+    }
+
+    fn spread_clip(fps: f64, frames: usize) -> ClipOf<Arc<SpreadState>> {
+        let states = (0..frames).map(|i| Value::custom(spread_state(i as f32 / 24.0, 3))).collect();
+        ClipOf::new(Clip::from_frames(PortType::of::<SpreadState>(), fps, states))
+    }
+
+    #[test]
+    fn a_spread_at_another_rate_is_refused_and_a_longer_one_ends_with_the_particles() {
+        let e = writer(spread_clip(30.0, 2), "rate").cook(&CookCtx::default()).err().expect("refused").to_string();
+        assert!(e.contains("30 fps") && e.contains("24 fps") && e.contains("spread"), "{e}");
+        let w = writer(spread_clip(24.0, 5), "longer");
+        let path = w.path.0.clone();
+        let out = w.cook(&CookCtx::default()).expect("writes");
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(out.frames, 2);
+        assert!(text.contains("endTimeCode = 1"), "the stage ends at the particles' last frame:\n{text}");
+        assert!(!text.contains("2: ["), "no spread sample past the particles' last frame:\n{text}");
+    }
+
+    #[test]
+    fn stages_past_the_point_sample_budget_are_refused_naming_the_frame() {
+        let mut total = 0;
+        assert!(pyrograph_usd::count_samples(&mut total, pyrograph_usd::MAX_POINT_SAMPLES, 0).is_ok());
+        let e = pyrograph_usd::count_samples(&mut total, 1, 7).unwrap_err();
+        assert!(e.contains("by frame 7") && e.contains("--frames"), "{e}");
+        // Through the writer: a spread front of more points than the budget, refused on its port.
+        let huge = ClipOf::new(Clip::from_frames(
+            PortType::of::<SpreadState>(),
+            24.0,
+            vec![Value::custom(spread_state(0.0, pyrograph_usd::MAX_POINT_SAMPLES))],
+        ));
+        match writer(huge, "huge").cook(&CookCtx::default()) {
+            Err(NodeError::Port { port, message, .. }) => {
+                assert_eq!(port, "spread");
+                assert!(message.contains("point samples"), "{message}");
+            }
+            other => panic!("{:?}", other.err()),
         }
     }
 

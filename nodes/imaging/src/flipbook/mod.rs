@@ -328,11 +328,17 @@ pub fn sidecar_json(fb: &Flipbook, opts: &FlipbookOptions, sheet: &Sidecar) -> S
             fb.code.div.0, fb.code.div.1
         )
     };
+    // One literal per line of the file (the same bytes as before, checked by their SHA-256 in
+    // tests/flipbook_engines.rs).
     format!(
-        "{{\n  \"sheet\": {},\n  \"motion_sheet\": {},\n  \"rows\": {},\n  \"cols\": {},\n  \"frames\": {},\n  \"fps\": {},\n  \
-         \"order\": \"left-to-right, top-to-bottom, top-left origin\",\n  \"sheet_width\": {},\n  \"sheet_height\": {},\n  \
-         \"cell_width\": {},\n  \"cell_height\": {},\n  \"frame_width\": {},\n  \"frame_height\": {},\n  \"padding\": {},\n  \
-         \"alpha\": {},\n  \"motion_range_px\": {},\n{}  \"motion_encoding\": {}\n}}\n",
+        concat!(
+            "{{\n",
+            "  \"sheet\": {},\n  \"motion_sheet\": {},\n  \"rows\": {},\n  \"cols\": {},\n  \"frames\": {},\n  \"fps\": {},\n",
+            "  \"order\": \"left-to-right, top-to-bottom, top-left origin\",\n  \"sheet_width\": {},\n  \"sheet_height\": {},\n",
+            "  \"cell_width\": {},\n  \"cell_height\": {},\n  \"frame_width\": {},\n  \"frame_height\": {},\n  \"padding\": {},\n",
+            "  \"alpha\": {},\n  \"motion_range_px\": {},\n{}  \"motion_encoding\": {}\n",
+            "}}\n",
+        ),
         quote(sheet),
         motion.map_or("null".to_string(), quote),
         opts.rows,

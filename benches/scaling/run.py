@@ -1,12 +1,14 @@
 """How cost grows with the work (issue 45): time and peak memory against size for particle flames
 (100 → 10,000 flames, simulate + render 1280×720), cloth flames (16 → 1,024, a 24 fps frame's
-sub-steps + render), fire spread (a plane of 242 → 247,808 faces: the surface built, then 96 steps)
-and batch reconstruction (eq. 22, 8 → 256 frames), each size a separate process
-of the harness's kernels (examples/kernels) under /usr/bin/time, so that peak RSS is that size's own.
+sub-steps + render), fire spread (a plane of 242 → 247,808 faces: the surface built, then 96 steps),
+batch reconstruction (eq. 22, 8 → 256 frames) and the mask chain against resolution (480p → 4K: the
+peer harness's benches/maskchain/mask.ron rendered by the CLI over 48 PNG frames, read to written),
+each size a separate process of the harness's kernels (examples/kernels) or of the CLI under
+/usr/bin/time, so that peak RSS is that size's own.
 Fits the growth exponent k of time ∝ size^k over the three largest sizes (where the fixed cost of a
 1280×720 frame no longer dominates) and plots both against size on log-log axes.
 
-    cargo build --release --example kernels
+    cargo build --release --example kernels && cargo build --release
     python benches/scaling/run.py [--work DIR] [--plot docs/images/scaling.png]   # numpy, matplotlib
 
 Writes --work/scaling.jsonl (one line per size) and the plot; prints a Markdown table for BENCHMARKS.md.
@@ -24,6 +26,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "../.."))
 KERNELS = os.path.join(REPO, "target/release/examples/kernels")
+CLI = os.path.join(REPO, "target/release/pyrograph")
+FOOTAGE = os.environ.get("PYROGRAPH_FOOTAGE") or os.path.join(REPO, "../shared/footage")
+
+# The mask chain's sizes: 16:9 frames from 480p to 4K, 48 frames each (the candle-black clip scaled).
+MASK_SIZES = [(854, 480), (1280, 720), (1920, 1080), (2560, 1440), (3840, 2160)]
+MASK_FRAMES = 48
 
 # Reconstruction's frame size and basis: the training row's 205×335 frames, E 250.
 RECON_P, RECON_E = 205 * 335, 250
@@ -35,6 +43,37 @@ def timed(args):
     report = json.loads(out.stdout.strip().splitlines()[-1])
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out.stderr)
     return report, int(rss.group(1)) / 1024.0
+
+
+def mask_chain(work, size, reps=3):
+    """The CLI renders mask.ron over MASK_FRAMES frames of `size` (made once by ffmpeg), `reps`
+    times after one untimed run: (a report like the kernels' with seconds per frame, peak RSS MiB)."""
+    w, h = size
+    frames = os.path.join(work, f"candle_{w}x{h}_{MASK_FRAMES}")
+    if not os.path.isdir(frames):
+        candle = os.path.join(FOOTAGE, "candle-black/candle_flame.mp4")
+        if not os.path.exists(candle):
+            raise SystemExit(f"no footage at {candle}: set PYROGRAPH_FOOTAGE")
+        os.makedirs(frames + ".part", exist_ok=True)
+        subprocess.run(["ffmpeg", "-v", "error", "-nostdin", "-y", "-stream_loop", "-1", "-i", candle, "-an",
+                        "-vf", f"scale={w}:{h}:flags=bicubic", "-frames:v", str(MASK_FRAMES), "-start_number", "0",
+                        os.path.join(frames + ".part", "f_%04d.png")], check=True)
+        os.replace(frames + ".part", frames)
+    out = os.path.join(work, "mask_out")
+    cmd = ["/usr/bin/time", "-f", "%e %M", CLI, "render", os.path.join(REPO, "benches/maskchain/mask.ron"),
+           "--out", out, "--set", f'load.path="{frames}"', "--set", 'write.pattern="mask_####.png"']
+    times, rss = [], []
+    for i in range(reps + 1):
+        r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+        wall, kb = r.stderr.strip().splitlines()[-1].split()
+        if i > 0:
+            times.append(float(wall) / MASK_FRAMES)
+            rss.append(int(kb) / 1024.0)
+    written = len([f for f in os.listdir(out) if f.startswith("mask_")])
+    if written != MASK_FRAMES:
+        raise SystemExit(f"mask chain at {w}x{h} wrote {written} masks, want {MASK_FRAMES}")
+    threads = int(os.environ.get("RAYON_NUM_THREADS", os.cpu_count()))
+    return {"times_s": times, "median_s": float(np.median(times)), "threads": threads}, float(np.median(rss))
 
 
 def recon_inputs(work, frames):
@@ -59,10 +98,12 @@ def workloads(work):
              for n, f in ((16, 24), (64, 24), (144, 12), (256, 12), (576, 6), (1024, 3))]
     recon = [(b, ["--reps", "3", "reconstruct", *recon_inputs(work, b)]) for b in (8, 16, 32, 64, 128, 256)]
     spread = [(2 * d * d, ["--reps", "3", "spread", "--divisions", str(d), "--steps", "96"]) for d in (11, 22, 44, 88, 176, 352)]
+    masks = [(w * h, ("mask", (w, h))) for w, h in MASK_SIZES]
     return [("particle flames", "flames", "frame", particles),
             ("cloth flames", "flames", "frame", cloth),
             ("fire spread (surface + 96 steps)", "mesh faces", "step", spread),
-            ("batch reconstruction", "frames", "batch", recon)]
+            ("batch reconstruction", "frames", "batch", recon),
+            ("mask chain (PNG in, mask PNG out)", "pixels a frame", "frame", masks)]
 
 
 def growth(sizes, times):
@@ -76,7 +117,7 @@ def plot(results, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(2, len(results), figsize=(3.6 * len(results), 7.0))
+    fig, axes = plt.subplots(2, len(results), figsize=(3.4 * len(results), 7.0))
     for col, (name, label, unit, rows) in enumerate(results):
         sizes = np.array([r["size"] for r in rows], dtype=float)
         ms = np.array([r["median_s"] * 1e3 for r in rows])
@@ -104,15 +145,16 @@ def main():
     p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-scaling"))
     p.add_argument("--plot", default=os.path.join(REPO, "docs/images/scaling.png"))
     a = p.parse_args()
-    if not os.access(KERNELS, os.X_OK):
-        raise SystemExit(f"build first: cargo build --release --example kernels (no {KERNELS})")
+    for exe in (KERNELS, CLI):
+        if not os.access(exe, os.X_OK):
+            raise SystemExit(f"build first: cargo build --release --example kernels && cargo build --release (no {exe})")
     os.makedirs(a.work, exist_ok=True)
     results = []
     with open(os.path.join(a.work, "scaling.jsonl"), "a") as log:
         for name, label, unit, sizes in workloads(a.work):
             rows = []
             for size, args in sizes:
-                report, rss = timed(args)
+                report, rss = mask_chain(a.work, args[1]) if args[0] == "mask" else timed(args)
                 row = {"workload": name, "size": size, "median_s": report["median_s"], "times_s": report["times_s"],
                        "threads": report["threads"], "peak_rss_mib": round(rss, 1),
                        "when": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),

@@ -5,6 +5,7 @@ use eframe::egui::Pos2;
 
 use crate::annotate::Annotation;
 use crate::state::PaletteItem;
+use crate::state::flow::WireEnd;
 
 /// A gesture on the canvas, applied after the frame's canvas pass.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,10 +30,14 @@ pub enum Action {
     DropOutput(String, String),
     /// Add a palette item at a canvas position.
     Add(PaletteItem, Pos2),
+    /// Add a node of a type at a canvas position, wired to the pin a wire was dragged from.
+    AddWired(String, Pos2, WireEnd),
     /// Delete nodes.
     Remove(Vec<String>),
     /// Duplicate nodes.
     Duplicate(Vec<String>),
+    /// Bypass nodes, or turn their bypass off when all of them are bypassed.
+    Bypass(Vec<String>),
     /// Toggle showing every parameter as a pin.
     ToggleParamPins(String),
     /// Preview a node.

@@ -34,8 +34,8 @@ pub struct EditorApp {
     palette_query: String,
     dialog: Option<FileDialog>,
     pub(crate) texture: Option<(u64, egui::TextureHandle)>,
-    pub(crate) playing: bool,
-    pub(crate) last_advance: Instant,
+    /// The preview's player (play / pause, real time, frames dropped).
+    pub playback: crate::playback::Playback,
     title: String,
     notify_set: bool,
     first_frame: bool,
@@ -68,8 +68,7 @@ impl EditorApp {
             palette_query: String::new(),
             dialog: None,
             texture: None,
-            playing: false,
-            last_advance: Instant::now(),
+            playback: crate::playback::Playback::default(),
             title: String::new(),
             notify_set: false,
             first_frame: true,
@@ -103,7 +102,7 @@ impl EditorApp {
         if self.editor.poll_open().is_some() {
             self.canvas.frame_all();
             self.texture = None;
-            self.playing = false;
+            self.playback.set_playing(false);
             if let Some(id) = self.select_on_open.take() {
                 self.editor.select(&id);
             }
@@ -173,11 +172,16 @@ impl EditorApp {
                 Action::DropInput(n, p) => self.editor.disconnect_input(&n, &p),
                 Action::DropOutput(n, p) => self.editor.disconnect_output(&n, &p),
                 Action::Add(item, pos) => self.add_item(&item, pos),
+                Action::AddWired(type_name, pos, wire) => {
+                    // The reason for a refusal is in the status bar.
+                    let _ = self.editor.add_wired(&type_name, (pos.x, pos.y), &wire);
+                }
                 Action::Remove(ids) => self.editor.remove_nodes(&ids),
                 Action::Duplicate(ids) => {
                     self.editor.duplicate(&ids);
                 }
                 Action::ToggleParamPins(id) => self.canvas.toggle_param_pins(&id),
+                Action::Bypass(ids) => self.editor.toggle_bypass(&ids),
                 Action::Preview(id) => {
                     self.key_ui.clear_selection();
                     self.editor.select(&id);
@@ -266,14 +270,19 @@ impl EditorApp {
                 i.key_pressed(Key::Escape),
             )
         });
-        let (all, group, comment, map) = ctx.input_mut(|i| {
+        let (all, group, comment, map, bypass) = ctx.input_mut(|i| {
             (
                 i.consume_key(cmd, Key::A),
                 i.consume_key(cmd, Key::G),
                 i.consume_key(Modifiers::SHIFT, Key::C),
                 i.consume_key(Modifiers::NONE, Key::M),
+                i.consume_key(Modifiers::NONE, Key::B),
             )
         });
+        if bypass {
+            let sel = self.editor.selection().to_vec();
+            self.editor.toggle_bypass(&sel);
+        }
         if tab {
             self.open_palette(ctx);
         }
@@ -290,7 +299,7 @@ impl EditorApp {
             self.canvas.frame_all();
         }
         if space {
-            self.playing = !self.playing;
+            self.playback.toggle();
         }
         if esc {
             self.palette_open = None;

@@ -3,7 +3,10 @@
 //!
 //! The UI thread sends [`CookRequest`]s and polls [`CookOutcome`]s; it never waits for a cook.
 //! A new request cancels the one in flight (its finished nodes stay cached). Previews are
-//! converted to plain pixels on the worker, so the UI only uploads a texture.
+//! converted to plain pixels on the worker, so the UI only uploads a texture. While the preview
+//! plays, the worker reads ahead: once a frame's preview is sent it cooks the next frames of the
+//! clip into the frame cache, so the request for the next frame, which the UI makes only when it
+//! draws the current one (at most once a display refresh), finds it cooked.
 
 use std::collections::BTreeMap;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
@@ -12,7 +15,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use pyrograph_frontend::core::{
-    CancelToken, CookCtx, CookResult, CookSettings, Evaluator, Graph, Image, PortType, Progress, Value,
+    CancelToken, Clip, CookCtx, CookResult, CookSettings, Evaluator, Graph, Image, PortType, Progress, Value,
 };
 
 /// A callback the worker calls when something changed (the app asks egui to repaint).
@@ -113,6 +116,8 @@ struct Job {
     seq: u64,
     request: CookRequest,
     cancel: CancelToken,
+    /// Frames of the previewed clip to cook after the preview is sent.
+    read_ahead: usize,
 }
 
 /// The handle the UI thread keeps.
@@ -122,6 +127,7 @@ pub struct Cooker {
     status: Arc<Mutex<CookStatus>>,
     notify: Arc<Mutex<Option<Notify>>>,
     current: Option<CancelToken>,
+    read_ahead: usize,
     next_seq: u64,
     pending: u64,
     answered: u64,
@@ -159,6 +165,7 @@ impl Cooker {
             status,
             notify,
             current: None,
+            read_ahead: 0,
             next_seq: 1,
             pending: 0,
             answered: 0,
@@ -171,6 +178,12 @@ impl Cooker {
         *lock(&self.notify) = Some(notify);
     }
 
+    /// How many frames after a previewed clip frame the worker cooks ahead (0: none; the app
+    /// sets it while the preview plays).
+    pub fn set_read_ahead(&mut self, frames: usize) {
+        self.read_ahead = frames;
+    }
+
     /// Queues a request, cancelling the one in flight. Returns its sequence number.
     pub fn submit(&mut self, request: CookRequest) -> u64 {
         self.cancel();
@@ -179,7 +192,7 @@ impl Cooker {
         let cancel = CancelToken::new();
         self.current = Some(cancel.clone());
         if let Some(tx) = &self.jobs
-            && tx.send(Job { seq, request, cancel }).is_ok()
+            && tx.send(Job { seq, request, cancel, read_ahead: self.read_ahead }).is_ok()
         {
             self.pending = seq;
             lock(&self.status).running = true;
@@ -246,7 +259,8 @@ fn worker_loop(
             }
         }
     };
-    while let Ok(mut job) = jobs.recv() {
+    let mut queued: Option<Job> = None;
+    while let Some(mut job) = queued.take().or_else(|| jobs.recv().ok()) {
         // Only the newest request matters; older ones were cancelled by the UI.
         while let Ok(newer) = jobs.try_recv() {
             job = newer;
@@ -254,18 +268,43 @@ fn worker_loop(
         let total = cone_size(&job.request);
         *lock(&status) = CookStatus { running: true, node: None, frames: None, nodes_done: 0, nodes_total: total };
         ping();
-        let outcome = run_job(&mut eval, &job, &status, &ping);
+        let (outcome, clip) = run_job(&mut eval, &job, &status, &ping);
         {
             let mut s = lock(&status);
             s.node = None;
             s.frames = None;
             s.running = false;
         }
+        let frame = outcome.preview.as_ref().and_then(|p| p.request.as_ref()).map(|r| r.frame);
         if outcomes.send(outcome).is_err() {
             return;
         }
         ping();
+        if let (Some(clip), Some(frame)) = (clip.filter(|_| job.read_ahead > 0), frame) {
+            match read_ahead(&clip, frame, job.read_ahead, &jobs) {
+                Ok(next) => queued = next,
+                Err(()) => return,
+            }
+        }
     }
+}
+
+/// Cooks frames `frame + 1 …= frame + count` (wrapping) of `clip` into the frame cache, stopping
+/// as soon as a request arrives, which it returns (`Err` when the UI has gone). The frames are
+/// not cancelled by that request: each is the next one a playing preview asks for, so a frame
+/// under way is finished and found cooked; an edit waits at most for that one frame.
+fn read_ahead(clip: &Clip, frame: usize, count: usize, jobs: &Receiver<Job>) -> Result<Option<Job>, ()> {
+    let ctx = CookCtx::new();
+    for k in 1..=count.min(clip.len().saturating_sub(1)) {
+        match jobs.try_recv() {
+            Ok(job) => return Ok(Some(job)),
+            Err(TryRecvError::Disconnected) => return Err(()),
+            Err(TryRecvError::Empty) => {}
+        }
+        // A frame that fails fails again, with its message, when the preview asks for it.
+        let _ = clip.get((frame + k) % clip.len(), &ctx);
+    }
+    Ok(None)
 }
 
 fn cone_size(request: &CookRequest) -> usize {
@@ -280,12 +319,13 @@ fn cone_size(request: &CookRequest) -> usize {
     seen.len()
 }
 
+/// Cooks one job: its outcome, and the previewed clip (for reading ahead).
 fn run_job(
     eval: &mut Evaluator,
     job: &Job,
     status: &Arc<Mutex<CookStatus>>,
     ping: &(impl Fn() + Send + Sync + Clone + 'static),
-) -> CookOutcome {
+) -> (CookOutcome, Option<Clip>) {
     let start = Instant::now();
     let progress = {
         let status = status.clone();
@@ -321,6 +361,7 @@ fn run_job(
     }
     let targets: Vec<&str> = request.targets.iter().map(String::as_str).collect();
     let mut outcome = CookOutcome { seq: job.seq, render: request.render.is_some(), ..CookOutcome::default() };
+    let mut clip = None;
     match eval.cook(&request.graph, &targets, &ctx) {
         Ok(result) => {
             for (node, err) in result.errors() {
@@ -331,6 +372,9 @@ fn run_job(
                 }
             }
             if let Some(pr) = &request.preview {
+                if let Ok(Value::Clip(c)) = output_value(&result, &pr.node, pr.output) {
+                    clip = Some(c);
+                }
                 let preview = make_preview(&request.graph, &result, pr, &ctx);
                 if preview.error.as_deref().is_some_and(|e| e.contains("cancelled")) {
                     outcome.cancelled = true;
@@ -353,7 +397,7 @@ fn run_job(
         outcome.node_warnings.entry(w.node.as_deref().unwrap_or_default().to_string()).or_default().push(w.message);
     }
     outcome.elapsed = start.elapsed();
-    outcome
+    (outcome, clip)
 }
 
 /// The value of output `port` of `node` in a cook result.

@@ -254,7 +254,7 @@ impl EditorApp {
         {
             let last = clip_frames.map_or(f64::MAX, |n| (n - 1) as f64);
             let frame = view.from_screen(p).0.round().clamp(0.0, last);
-            self.playing = false;
+            self.playback.set_playing(false);
             self.editor.set_frame(frame as usize);
         }
         if bg.clicked() {

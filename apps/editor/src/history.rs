@@ -46,6 +46,15 @@ impl History {
         self.sealed = key.is_none();
     }
 
+    /// Makes the last two steps one (an edit made of two, as adding a node and wiring it): undo
+    /// then goes back to before the first.
+    pub fn join_last_two(&mut self) {
+        if self.undo.len() >= 2 {
+            self.undo.pop();
+        }
+        self.sealed = true;
+    }
+
     /// Ends the current coalescing run: the next edit is a new step whatever its key.
     pub fn seal(&mut self) {
         self.sealed = true;

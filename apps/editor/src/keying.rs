@@ -246,7 +246,7 @@ impl EditorApp {
             let shift = ui.input(|i| i.modifiers.shift);
             resp.on_hover_text(&label);
             if clicked {
-                self.playing = false;
+                self.playback.set_playing(false);
                 self.editor.set_frame(tick.frame.round().clamp(0.0, max) as usize);
                 self.key_ui.select(tick.scalar, shift);
             }

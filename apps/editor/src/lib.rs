@@ -34,6 +34,7 @@ pub mod overlay;
 pub mod palette;
 mod panels;
 pub mod param_widgets;
+pub mod playback;
 pub mod state;
 pub mod tangents;
 pub mod viewer;

@@ -91,12 +91,23 @@ impl Editor {
 /// The node palette: a search field and the matching node types and presets. Returns the item
 /// the user picked (click, or Enter for the first match).
 pub fn palette_ui(ui: &mut Ui, editor: &Editor, query: &mut String, focus: bool) -> Option<PaletteItem> {
+    search_list_ui(ui, query, focus, |q| editor.palette(q))
+}
+
+/// A search field over the list `items(query)` returns; the item picked (click, or Enter for
+/// the first).
+pub fn search_list_ui(
+    ui: &mut Ui,
+    query: &mut String,
+    focus: bool,
+    items: impl FnOnce(&str) -> Vec<PaletteItem>,
+) -> Option<PaletteItem> {
     let resp =
         ui.add(egui::TextEdit::singleline(query).hint_text("search nodes (name, category, doc)…").id_salt("palette-search"));
     if focus {
         resp.request_focus();
     }
-    let items = editor.palette(query);
+    let items = items(query);
     let enter = resp.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
     let mut picked = None;
     if enter {

@@ -114,15 +114,20 @@ impl EditorApp {
     fn scrubber(&mut self, ui: &mut egui::Ui, req: &crate::cook::PreviewRequest, len: usize) {
         let mut slider = None;
         ui.horizontal(|ui| {
-            if ui.button(if self.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
-                self.playing = !self.playing;
-                self.last_advance = Instant::now();
+            if ui.button(if self.playback.playing { "⏸" } else { "▶" }).on_hover_text("play / pause (Space)").clicked() {
+                self.playback.toggle();
+            }
+            let mut realtime = self.playback.realtime;
+            let tip = "On: play at the clip's frame rate, skipping frames the cook is late for. \
+                       Off: show every frame as soon as it has cooked.";
+            if ui.checkbox(&mut realtime, "real time").on_hover_text(tip).changed() {
+                self.playback.set_realtime(realtime);
             }
             let mut frame = req.frame.min(len - 1);
             let r = ui.add(egui::Slider::new(&mut frame, 0..=len - 1).show_value(false));
             slider = Some(r.rect);
             if r.changed() {
-                self.playing = false;
+                self.playback.set_playing(false);
                 self.editor.set_frame(frame);
             }
             ui.label(format!("frame {} / {}", frame, len - 1));
@@ -165,24 +170,18 @@ impl EditorApp {
     }
 
     pub(crate) fn advance_playback(&mut self, ctx: &egui::Context) {
-        if !self.playing {
-            return;
+        let (len, fps) = self.editor.preview().map_or((0, 24.0), |p| (p.clip_len.unwrap_or(0), p.fps));
+        let frame = self.editor.preview_request().map_or(0, |p| p.frame);
+        let (ask, wake) = self.playback.step(Instant::now(), frame, len, fps, self.editor.is_cooking());
+        // One frame ahead: the next frame cooks while this one is drawn, and an edit made while
+        // playing waits for at most that frame.
+        self.editor.set_read_ahead(usize::from(self.playback.playing));
+        if let Some(f) = ask {
+            self.editor.set_frame(f);
         }
-        let (len, fps) = match self.editor.preview() {
-            Some(p) => (p.clip_len.unwrap_or(0), if p.fps > 0.0 { p.fps } else { 24.0 }),
-            None => (0, 24.0),
-        };
-        if len == 0 {
-            self.playing = false;
-            return;
+        if let Some(wake) = wake {
+            ctx.request_repaint_after(wake);
         }
-        let period = 1.0 / fps;
-        if !self.editor.is_cooking() && self.last_advance.elapsed().as_secs_f64() >= period {
-            let frame = self.editor.preview_request().map_or(0, |p| p.frame);
-            self.editor.set_frame((frame + 1) % len);
-            self.last_advance = Instant::now();
-        }
-        ctx.request_repaint_after(std::time::Duration::from_secs_f64(period / 2.0));
     }
 
     pub(crate) fn preview_ui(&mut self, ui: &mut egui::Ui) {

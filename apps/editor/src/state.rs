@@ -23,6 +23,7 @@ pub use crate::layout::auto_layout;
 use crate::layout::relative_path;
 
 mod files;
+pub mod flow;
 mod keyframes;
 mod opening;
 mod preset_lib;
@@ -774,16 +775,14 @@ fn round_pos(p: (f32, f32)) -> (f32, f32) {
     (p.0.round(), p.1.round())
 }
 
-/// Whether two documents differ only in node positions (which do not affect cooking).
+/// Whether two documents differ only in node positions (which do not affect cooking; a bypass does).
 pub fn same_structure(a: &GraphDoc, b: &GraphDoc) -> bool {
     a.edges == b.edges
         && a.interface == b.interface
         && a.nodes.0.len() == b.nodes.0.len()
-        && a.nodes
-            .0
-            .iter()
-            .zip(&b.nodes.0)
-            .all(|((ia, na), (ib, nb))| ia == ib && na.type_name == nb.type_name && na.params == nb.params)
+        && a.nodes.0.iter().zip(&b.nodes.0).all(|((ia, na), (ib, nb))| {
+            ia == ib && na.type_name == nb.type_name && na.params == nb.params && na.bypass == nb.bypass
+        })
 }
 
 /// The node ids a diagnostic is about.

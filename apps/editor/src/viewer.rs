@@ -4,18 +4,21 @@
 use std::collections::{HashMap, HashSet};
 
 use eframe::egui::{self, Color32, Pos2, Rect, Ui, emath::TSTransform};
-use egui_snarl::ui::{BackgroundPattern, PinInfo, PinShape, SnarlStyle, SnarlViewer};
+use egui_snarl::ui::{AnyPins, BackgroundPattern, PinInfo, PinShape, SnarlStyle, SnarlViewer};
 use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
 use pyrograph_frontend::core::PortType;
 
 use crate::action::Action;
 use crate::annotate::Annotation;
 use crate::overlay::{AnnotationRects, paint_annotations};
-use crate::palette::{category_color, palette_ui};
+use crate::palette::{category_color, palette_ui, search_list_ui};
 use crate::state::Editor;
+use crate::state::flow::WireEnd;
 
 /// Badge and text colour of warnings (amber: the node cooked, but look at this).
 const WARNING: Color32 = Color32::from_rgb(255, 190, 70);
+/// Header of a bypassed node.
+const BYPASSED: Color32 = Color32::from_rgb(110, 92, 30);
 
 /// The smallest zoom (the view can show 10 times more canvas than at 1:1).
 pub const MIN_SCALE: f32 = 0.1;
@@ -141,8 +144,13 @@ impl SnarlViewer<String> for Viewer<'_> {
         _outputs: &[OutPin],
         snarl: &Snarl<String>,
     ) -> egui::Frame {
-        let cat = snarl.get_node(node).and_then(|id| self.editor.desc(id)).map(|d| d.category.clone()).unwrap_or_default();
-        default.fill(category_color(&cat))
+        let id = snarl.get_node(node);
+        let cat = id.and_then(|id| self.editor.desc(id)).map(|d| d.category.clone()).unwrap_or_default();
+        match id.is_some_and(|id| self.editor.is_bypassed(id)) {
+            // Bypassed: Houdini's yellow flag, as a dim amber header whatever the category.
+            true => default.fill(BYPASSED),
+            false => default.fill(category_color(&cat)),
+        }
     }
 
     fn show_header(&mut self, node: NodeId, _inputs: &[InPin], _outputs: &[OutPin], ui: &mut Ui, snarl: &mut Snarl<String>) {
@@ -161,6 +169,10 @@ impl SnarlViewer<String> for Viewer<'_> {
                 self.editor.desc(&id).map(|d| format!("{type_name}\n{}", d.doc)).unwrap_or_else(|| type_name.clone()),
             );
             ui.label(egui::RichText::new(type_name.rsplit('.').next().unwrap_or("")).small().color(Color32::from_gray(200)));
+            if self.editor.is_bypassed(&id) {
+                ui.label(egui::RichText::new("bypassed").small().strong().color(Color32::from_rgb(255, 220, 90)))
+                    .on_hover_text("B toggles; the first input of each output's type passes through");
+            }
         });
     }
 
@@ -226,6 +238,34 @@ impl SnarlViewer<String> for Viewer<'_> {
         }
     }
 
+    fn has_dropped_wire_menu(&mut self, src_pins: AnyPins, _snarl: &mut Snarl<String>) -> bool {
+        matches!(src_pins, AnyPins::Out([_]) | AnyPins::In([_]))
+    }
+
+    fn show_dropped_wire_menu(&mut self, pos: Pos2, ui: &mut Ui, src_pins: AnyPins, snarl: &mut Snarl<String>) {
+        let wire = match src_pins {
+            AnyPins::Out([pin]) => self.out_port(snarl, *pin).map(|(node, port, ty, _)| WireEnd::Output { node, port, ty }),
+            AnyPins::In([pin]) => self.in_port(snarl, *pin).map(|(node, port, ty, _)| WireEnd::Input { node, port, ty }),
+            _ => None,
+        };
+        let Some(wire) = wire else {
+            ui.close();
+            return;
+        };
+        let title = match &wire {
+            WireEnd::Output { node, port, ty } => format!("Add a node taking {node}.{port} ({ty})"),
+            WireEnd::Input { node, port, ty } => format!("Add a node feeding {node}.{port} ({ty})"),
+        };
+        ui.set_min_width(320.0);
+        ui.label(egui::RichText::new(title).strong());
+        let editor = self.editor;
+        if let Some(item) = search_list_ui(ui, self.query, true, |q| editor.wire_palette(q, &wire)) {
+            self.actions.push(Action::AddWired(item.type_name, pos, wire));
+            self.query.clear();
+            ui.close();
+        }
+    }
+
     fn has_node_menu(&mut self, _node: &String) -> bool {
         true
     }
@@ -239,6 +279,15 @@ impl SnarlViewer<String> for Viewer<'_> {
         }
         if ui.button("Duplicate").clicked() {
             self.actions.push(Action::Duplicate(vec![id.clone()]));
+            ui.close();
+        }
+        let bypass = if self.editor.is_bypassed(&id) { "Turn bypass off (B)" } else { "Bypass (B)" };
+        if ui
+            .button(bypass)
+            .on_hover_text("pass the first input of each output's type through; a writer writes nothing")
+            .clicked()
+        {
+            self.actions.push(Action::Bypass(vec![id.clone()]));
             ui.close();
         }
         if ui.button("Show/hide parameter pins").clicked() {

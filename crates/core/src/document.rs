@@ -3,9 +3,9 @@
 //! The document is its own set of plain structs, separate from the runtime graph: it keeps node
 //! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
 //! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`],
-//! [`migrate_v2`], [`migrate_v3`]), never serde aliases. A document is written in the oldest version
-//! that can hold it, so a graph without groups, comments, preset metadata or animated parameters
-//! stays readable by releases that know only version 1.
+//! [`migrate_v2`], [`migrate_v3`], [`migrate_v4`]), never serde aliases. A document is written in
+//! the oldest version that can hold it, so a graph without groups, comments, preset metadata,
+//! animated parameters or bypassed nodes stays readable by releases that know only version 1.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -20,8 +20,11 @@ use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 mod param_serde;
 
 /// The newest version this build reads and writes (2: canvas groups and comments; 3: preset
-/// metadata; 4: animated parameters, `keys(…)` and `expr(…)`).
-pub const CURRENT_VERSION: u32 = 4;
+/// metadata; 4: animated parameters, `keys(…)` and `expr(…)`; 5: bypassed nodes, `bypass: true`).
+pub const CURRENT_VERSION: u32 = 5;
+
+/// The version of documents with a bypassed node.
+pub const BYPASS_VERSION: u32 = 5;
 
 /// The version of documents with animated parameters (keyframes or expressions).
 pub const ANIMATION_VERSION: u32 = 4;
@@ -132,12 +135,20 @@ pub struct NodeDoc {
     /// Editor position, when the graph was laid out by hand.
     #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
     pub pos: Option<(f32, f32)>,
+    /// Bypassed (version 5): each output passes the node's first input of its type through,
+    /// and a writer writes nothing.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub bypass: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 impl NodeDoc {
     /// A node of `type_name` with default parameters.
     pub fn new(type_name: &str) -> Self {
-        NodeDoc { type_name: type_name.to_string(), params: BTreeMap::new(), pos: None }
+        NodeDoc { type_name: type_name.to_string(), params: BTreeMap::new(), pos: None, bypass: false }
     }
 
     /// Sets one parameter.
@@ -373,7 +384,11 @@ impl GraphDoc {
                 let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
                 Ok(migrate_v3(old))
             }
-            4 => ron_options().from_str(text).map_err(syntax_error),
+            4 => {
+                let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v4(old))
+            }
+            5 => ron_options().from_str(text).map_err(syntax_error),
             v => Err(Diagnostics::one(Diagnostic::new(
                 DiagnosticKind::Version,
                 Location::File,
@@ -393,10 +408,12 @@ impl GraphDoc {
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }
 
-    /// The oldest version that holds this document: 4 with animated parameters, 3 with preset
-    /// metadata, else 2 with groups or comments, else 1.
+    /// The oldest version that holds this document: 5 with a bypassed node, 4 with animated
+    /// parameters, 3 with preset metadata, else 2 with groups or comments, else 1.
     pub fn needed_version(&self) -> u32 {
-        if self.nodes.0.iter().any(|(_, n)| n.params.values().any(ParamValue::is_animated)) {
+        if self.nodes.0.iter().any(|(_, n)| n.bypass) {
+            BYPASS_VERSION
+        } else if self.nodes.0.iter().any(|(_, n)| n.params.values().any(ParamValue::is_animated)) {
             ANIMATION_VERSION
         } else if self.preset.is_some() {
             PRESET_VERSION
@@ -537,7 +554,7 @@ pub fn migrate_v0(old: v0::GraphDocV0) -> GraphDoc {
         .into_iter()
         .map(|n| {
             let pos = n.x.zip(n.y);
-            (n.id, NodeDoc { type_name: n.kind, params: n.settings, pos })
+            (n.id, NodeDoc { type_name: n.kind, params: n.settings, pos, bypass: false })
         })
         .collect();
     let edges = old.links.into_iter().map(|l| (l.from, l.to)).collect();
@@ -561,6 +578,12 @@ pub fn migrate_v2(mut old: GraphDoc) -> GraphDoc {
 /// Migrates version 3 to version 4: version 4 only adds animated parameter values (`keys(…)`,
 /// `expr(…)`), which no version 3 file holds.
 pub fn migrate_v3(mut old: GraphDoc) -> GraphDoc {
+    old.version = CURRENT_VERSION;
+    old
+}
+
+/// Migrates version 4 to version 5: version 5 only adds the optional `bypass` flag of a node.
+pub fn migrate_v4(mut old: GraphDoc) -> GraphDoc {
     old.version = CURRENT_VERSION;
     old
 }
@@ -610,187 +633,4 @@ pub fn split_endpoint(text: &str) -> Option<(&str, &str)> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const SAMPLE: &str = r#"(
-        version: 1,
-        nodes: {
-            "frames": (type: "imaging.load_sequence", params: {"path": "frames", "fps": 30.0}),
-            "gray": (type: "imaging.to_gray", pos: (420, 80)),
-        },
-        edges: [("frames.clip", "gray.image")],
-    )"#;
-
-    #[test]
-    fn parses_the_design_shape() {
-        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
-        assert_eq!(doc.nodes.0.len(), 2);
-        assert_eq!(doc.nodes.0[0].0, "frames");
-        assert_eq!(doc.node("frames").unwrap().params["fps"], ParamValue::Float(30.0));
-        assert_eq!(doc.node("gray").unwrap().pos, Some((420.0, 80.0)));
-        assert_eq!(doc.edges, vec![("frames.clip".to_string(), "gray.image".to_string())]);
-    }
-
-    #[test]
-    fn round_trips_through_text() {
-        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
-        let again = GraphDoc::from_ron(&doc.to_ron()).unwrap();
-        assert_eq!(doc, again);
-    }
-
-    #[test]
-    fn keeps_duplicate_ids_for_validation() {
-        let text = r#"(version: 1, nodes: {"a": (type: "x"), "a": (type: "y")})"#;
-        let doc = GraphDoc::from_ron(text).unwrap();
-        assert_eq!(doc.nodes.0.len(), 2);
-    }
-
-    #[test]
-    fn syntax_errors_carry_line_and_column() {
-        let err = GraphDoc::from_ron("(version: 1,\n nodes: {\"a\": (type: }\n)").unwrap_err();
-        match &err.0[0].location {
-            Location::Text { line, .. } => assert_eq!(*line, 2),
-            other => panic!("expected a text location, got {other:?}"),
-        }
-    }
-
-    #[test]
-    fn a_malformed_graph_is_described_in_the_files_terms_not_the_readers() {
-        let deep =
-            format!("(version: 1, nodes: {{\"a\": (type: \"x\", params: {{\"b\": {}1{}}})}})", "[".repeat(500), "]".repeat(500));
-        for text in [
-            "42",
-            "[]",
-            "Graph(version: 1)",
-            "",
-            "(version: 1, nodes: {\"a\": 3})",
-            "(version: 1, nodes: {\"a\": (kind: 1)})",
-            deep.as_str(),
-        ] {
-            let message = GraphDoc::from_ron(text).unwrap_err().0[0].message.clone();
-            let internal = ["VersionProbe", "GraphDoc", "NodeDoc", "NodeV0", "struct", "ron::", "serde_stacker"];
-            assert!(!internal.iter().any(|n| message.contains(n)), "{text:?}: {message}");
-            let says = ["a graph, (version", "a node, (type", "nested too deep"];
-            assert!(says.iter().any(|s| message.contains(s)), "{text:?}: {message}");
-        }
-    }
-
-    #[test]
-    fn newer_versions_are_refused_with_advice() {
-        let err = GraphDoc::from_ron("(version: 7, nodes: {})").unwrap_err();
-        assert_eq!(err.0[0].kind, DiagnosticKind::Version);
-        assert!(err.0[0].message.contains("upgrade"));
-    }
-
-    #[test]
-    fn migrates_the_unversioned_shape() {
-        let old = r#"(
-            nodes: [(id: "c", kind: "imaging.constant_color", settings: {"width": 4}, x: 1.0, y: 2.0)],
-            links: [(from: "c.image", to: "w.clip")],
-        )"#;
-        let doc = GraphDoc::from_ron(old).unwrap();
-        assert_eq!(doc.version, CURRENT_VERSION);
-        assert_eq!(doc.node("c").unwrap().type_name, "imaging.constant_color");
-        assert_eq!(doc.node("c").unwrap().params["width"], ParamValue::Int(4));
-        assert_eq!(doc.node("c").unwrap().pos, Some((1.0, 2.0)));
-        assert_eq!(doc.edges[0], ("c.image".to_string(), "w.clip".to_string()));
-    }
-
-    #[test]
-    fn cli_values_parse_as_ron_or_fall_back_to_text() {
-        assert_eq!(ParamValue::parse_cli("0.5"), ParamValue::Float(0.5));
-        assert_eq!(ParamValue::parse_cli("7"), ParamValue::Int(7));
-        assert_eq!(ParamValue::parse_cli("frames/a.png"), ParamValue::String("frames/a.png".into()));
-        assert_eq!(
-            ParamValue::parse_cli("(1, 0.5, 0)"),
-            ParamValue::List(vec![ParamValue::Int(1), ParamValue::Float(0.5), ParamValue::Int(0)])
-        );
-    }
-
-    #[test]
-    fn atomic_write_refuses_to_overwrite_unless_asked() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("g.ron");
-        write_atomic(&p, b"one", false).unwrap();
-        assert!(write_atomic(&p, b"two", false).is_err());
-        assert_eq!(std::fs::read(&p).unwrap(), b"one");
-        write_atomic(&p, b"two", true).unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"two");
-        let leftovers = std::fs::read_dir(dir.path()).unwrap().count();
-        assert_eq!(leftovers, 1, "no temp files left behind");
-    }
-
-    #[test]
-    fn endpoints_split_at_the_last_dot() {
-        assert_eq!(split_endpoint("a.b.port"), Some(("a.b", "port")));
-        assert_eq!(split_endpoint("nodot"), None);
-        assert_eq!(split_endpoint(".x"), None);
-    }
-
-    const ANNOTATED: &str = r##"(
-        version: 2,
-        nodes: {
-            "a": (type: "value.float", pos: (0, 0)),
-            "b": (type: "value.float", pos: (0, 120)),
-        },
-        groups: [(title: "inputs", color: "#3366aa", nodes: ["a", "b"])],
-        comments: [(text: "tune these\nfirst", pos: (-40, -80))],
-    )"##;
-
-    #[test]
-    fn groups_and_comments_round_trip_as_version_2() {
-        let doc = GraphDoc::from_ron(ANNOTATED).unwrap();
-        assert_eq!(doc.groups.len(), 1);
-        assert_eq!(doc.groups[0].nodes, vec!["a".to_string(), "b".to_string()]);
-        assert_eq!(doc.groups[0].color.as_deref(), Some("#3366aa"));
-        assert_eq!(doc.comments[0].text, "tune these\nfirst");
-        let text = doc.to_ron();
-        assert!(text.contains("version: 2"), "{text}");
-        assert_eq!(GraphDoc::from_ron(&text).unwrap(), doc);
-    }
-
-    #[test]
-    fn preset_metadata_round_trips_as_version_3_and_newer_is_refused() {
-        let text = r#"(version: 3, preset: (name: "candle row", description: "Five candles", tags: ["fire", "candle"],
-            revision: 2, author: "pyrograph", licence: "MIT", thumbnail: "thumbs/candle-row.png", requires: ["footage"],
-            samples: {"footage": "clips/candle.mp4"}, preview: "gray", thumbnail_frame: 30),
-            nodes: {"a": (type: "value.float")})"#;
-        let doc = GraphDoc::from_ron(text).unwrap();
-        let p = doc.preset.as_ref().unwrap();
-        assert_eq!((p.name.as_str(), p.revision, p.tags.len(), p.requires.len()), ("candle row", 2, 2, 1));
-        assert_eq!(p.thumbnail.as_deref(), Some("thumbs/candle-row.png"));
-        assert_eq!(p.samples["footage"], "clips/candle.mp4");
-        assert_eq!((p.preview.as_deref(), p.thumbnail_frame), (Some("gray"), Some(30)));
-        let out = doc.to_ron();
-        assert!(out.contains("version: 3,") && out.contains("preset: (") && !out.contains("Some("), "{out}");
-        assert_eq!(GraphDoc::from_ron(&out).unwrap(), doc);
-        let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 5")).unwrap_err();
-        assert_eq!(err.0[0].kind, DiagnosticKind::Version);
-        // Without metadata the same graph is written for older readers again.
-        let mut plain = doc.clone();
-        plain.preset = None;
-        assert!(plain.to_ron().contains("version: 1,"));
-    }
-
-    #[test]
-    fn documents_without_annotations_are_written_as_version_1_and_v1_files_migrate() {
-        let doc = GraphDoc::from_ron(SAMPLE).unwrap();
-        assert_eq!(doc.version, CURRENT_VERSION, "a version 1 file migrates on load");
-        let text = doc.to_ron();
-        assert!(text.contains("version: 1,"), "older readers can still open it: {text}");
-        assert!(!text.contains("groups") && !text.contains("comments"), "{text}");
-        let mut annotated = doc.clone();
-        annotated.comments.push(CommentDoc { text: "x".into(), pos: (1.0, 2.0), color: None });
-        assert!(annotated.to_ron().contains("version: 2,"));
-        annotated.comments.clear();
-        assert!(annotated.to_ron().contains("version: 1,"));
-    }
-
-    #[test]
-    fn ungrouping_a_deleted_node_keeps_the_group() {
-        let mut doc = GraphDoc::from_ron(ANNOTATED).unwrap();
-        doc.ungroup_node("a");
-        assert_eq!(doc.groups[0].nodes, vec!["b".to_string()]);
-    }
-}
+mod tests;

@@ -158,6 +158,8 @@ pub enum DiagnosticKind {
     /// An animated parameter that is malformed (keys out of order, an expression that does not
     /// parse) or set where nothing samples it over time.
     Animation,
+    /// A bypassed node with an output that none of its inputs can stand in for.
+    Bypass,
 }
 
 /// One problem found while loading or validating a graph, with its location.

@@ -222,6 +222,11 @@ impl<'a> Inputs<'a> {
         Inputs { desc, values }
     }
 
+    /// The value of input `i` (in `desc.inputs` order).
+    pub(crate) fn value(&self, i: usize) -> Option<&'a Value> {
+        self.values.get(i)
+    }
+
     /// The raw value of port `name` with the port's description (one lookup for both); the
     /// typed field readers of `params` build on it.
     pub(crate) fn get_port(&self, name: &str) -> Result<(&'a Value, &'a PortDesc), NodeError> {

@@ -59,6 +59,12 @@ impl Editor {
         self.current_frame()
     }
 
+    /// While the preview plays: how many frames after each previewed one the cook worker cooks
+    /// ahead into the frame cache (0 when it stops).
+    pub fn set_read_ahead(&mut self, frames: usize) {
+        self.cooker.set_read_ahead(frames);
+    }
+
     /// Frames per second of the previewed clip (24 until a clip has been cooked).
     pub fn fps(&self) -> f64 {
         self.preview.as_ref().map(|p| p.fps).filter(|f| *f > 0.0).unwrap_or(24.0)

@@ -84,12 +84,29 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
             continue;
         }
         if nd.type_name == INCLUDE_TYPE {
+            if nd.bypass {
+                diags.push(diag(
+                    DiagnosticKind::Bypass,
+                    Location::Node(id.clone()),
+                    "an included graph cannot be bypassed; bypass the node that takes its output, or nodes inside it",
+                ));
+                continue;
+            }
             if let Err(mut d) = super::include::flatten(id, nd, ctx, &mut parts) {
                 diags.append(&mut d);
             }
             continue;
         }
-        let Some(node) = instantiate(id, nd, ctx, &mut diags) else { continue };
+        let Some(mut node) = instantiate(id, nd, ctx, &mut diags) else { continue };
+        if nd.bypass {
+            match super::bypass::bypassed(node) {
+                Ok(b) => node = b,
+                Err(message) => {
+                    diags.push(diag(DiagnosticKind::Bypass, Location::Node(id.clone()), message));
+                    continue;
+                }
+            }
+        }
         let inputs = node_inputs(id, nd, node.desc(), ctx, &mut diags);
         let id: Arc<str> = Arc::from(id.as_str());
         let out_types = node.desc().outputs.iter().map(|p| p.ty.clone()).collect();

@@ -6,6 +6,7 @@
 //! [`Included`] record (its description and port map), so there is one graph and one evaluator.
 
 mod build;
+mod bypass;
 mod convert;
 mod include;
 mod include_limit;

@@ -1,0 +1,147 @@
+//! Flow edits through the UI (issue 46): bypass with the B key and the node menu, the preview
+//! of a bypassed node, and undo back to the document byte for byte.
+
+use eframe::egui::{self, Modifiers};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+mod common;
+
+use common::settle;
+use pyrograph_editor::{Editor, EditorApp};
+use pyrograph_frontend::core::{GraphDoc, NodeDoc, ParamValue};
+
+fn harness(app: EditorApp) -> Harness<'static, EditorApp> {
+    Harness::builder().with_size(egui::vec2(1400.0, 900.0)).build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app)
+}
+
+/// A small orange frame into a bloom.
+fn bloom_graph() -> GraphDoc {
+    let f = ParamValue::Float;
+    let mut doc = GraphDoc::new();
+    doc.add_node(
+        "color",
+        NodeDoc::new("imaging.constant_color")
+            .param("width", ParamValue::Int(64))
+            .param("height", ParamValue::Int(48))
+            .param("color", ParamValue::List(vec![f(0.8), f(0.5), f(0.2), f(1.0)])),
+    );
+    doc.add_node("bloom", NodeDoc::new("imaging.bloom"));
+    doc.connect("color.image", "bloom.image");
+    doc
+}
+
+/// The pixels the preview shows after selecting `node`.
+fn preview_of(h: &mut Harness<'_, EditorApp>, node: &str) -> Vec<u8> {
+    h.state_mut().editor.select(node);
+    settle(h);
+    let p = h.state().editor.preview().expect("a preview");
+    assert_eq!(p.request.as_ref().map(|r| r.node.as_str()), Some(node));
+    p.image.as_ref().unwrap_or_else(|| panic!("no image for {node}: {:?}", p.error)).rgba.clone()
+}
+
+/// The pixels the preview shows now.
+fn shown(h: &Harness<'_, EditorApp>) -> Option<Vec<u8>> {
+    h.state().editor.preview().and_then(|p| p.image.as_ref()).map(|i| i.rgba.clone())
+}
+
+#[test]
+fn bypassing_a_bloom_shows_its_input_and_undo_restores_the_document_byte_for_byte() {
+    let mut ed = Editor::with_default_registry();
+    ed.edit(None, |d| *d = bloom_graph());
+    ed.seal();
+    let original = ed.doc().to_ron();
+    let mut h = harness(EditorApp::new(ed));
+    settle(&mut h);
+    let source = preview_of(&mut h, "color");
+    let bloomed = preview_of(&mut h, "bloom");
+    assert!(bloomed != source, "the bloom changes the frame, so the test can tell");
+
+    // B with the bloom selected: bypassed, the preview is its input, the header says so.
+    h.key_press(egui::Key::B);
+    settle(&mut h);
+    assert!(h.state().editor.is_bypassed("bloom"));
+    assert!(h.state().editor.doc().to_ron().contains("bypass: true"));
+    assert!(shown(&h) == Some(source.clone()), "the preview is the bloom's input");
+    assert!(h.query_by_label("bypassed").is_some(), "the node's header shows it is bypassed");
+
+    // Undo: the document is the original byte for byte, and the bloom is back.
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    settle(&mut h);
+    assert_eq!(h.state().editor.doc().to_ron(), original);
+    assert!(shown(&h) == Some(bloomed), "the bloom is back");
+    assert!(h.query_by_label("bypassed").is_none());
+}
+
+#[test]
+fn a_node_that_cannot_be_bypassed_says_why_on_the_node() {
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    let mut doc = GraphDoc::new();
+    // A constant colour has no image input to pass through.
+    doc.add_node("color", NodeDoc::new("imaging.constant_color"));
+    ed.edit(None, |d| *d = doc);
+    ed.toggle_bypass(&["color".to_string()]);
+    let problems = ed.node_problems("color");
+    assert!(problems.iter().any(|p| p.contains("cannot be bypassed") && p.contains("output 'image'")), "{problems:?}");
+}
+
+/// A primary drag from `from` to `to` in small steps, as a hand moves a mouse.
+fn drag(h: &mut Harness<'_, EditorApp>, from: egui::Pos2, to: egui::Pos2) {
+    use egui::{Event, PointerButton};
+    h.event(Event::PointerMoved(from));
+    h.run_steps(1);
+    h.event(Event::PointerButton { pos: from, button: PointerButton::Primary, pressed: true, modifiers: Modifiers::NONE });
+    h.run_steps(1);
+    for k in 1..=10 {
+        h.event(Event::PointerMoved(from + (to - from) * (k as f32 / 10.0)));
+        h.run_steps(1);
+    }
+    h.event(Event::PointerButton { pos: to, button: PointerButton::Primary, pressed: false, modifiers: Modifiers::NONE });
+    h.run_steps(3);
+}
+
+#[test]
+fn a_wire_dragged_from_a_pin_into_empty_space_offers_the_nodes_that_take_it_and_wires_the_pick() {
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    let mut doc = GraphDoc::new();
+    let mut color = NodeDoc::new("imaging.constant_color");
+    color.pos = Some((0.0, 0.0));
+    doc.add_node("color", color);
+    ed.edit(None, |d| *d = doc);
+    ed.seal();
+    let original = ed.doc().to_ron();
+    let mut app = EditorApp::new(ed);
+    app.canvas.frame_all();
+    let mut h = harness(app);
+    h.run_steps(4);
+    // The output pin sits right of its label, inside the node's frame.
+    let node = h.state().canvas.node_screen_rect("color").expect("the node is on screen");
+    // Widgets on the canvas report their rectangles in canvas units: take them to the screen.
+    let to_screen = h.state().canvas.transform();
+    let label = h
+        .query_all_by_label("image")
+        .map(|n| to_screen.mul_rect(n.rect()))
+        .find(|r| node.contains_rect(*r))
+        .expect("the output's label, in the node");
+    let pin = egui::pos2((label.right() + node.right()) / 2.0, label.center().y);
+    let empty = pin + egui::vec2(220.0, 40.0);
+    drag(&mut h, pin, empty);
+    assert!(
+        h.query_by_label_contains("Add a node taking color.image").is_some(),
+        "dropping the wire on empty canvas opens the filtered palette"
+    );
+    assert!(h.query_by_label("imaging.bloom").is_some(), "bloom takes an image");
+    assert!(h.query_by_label("math.add").is_none(), "math.add cannot take an image");
+    h.event(egui::Event::Text("bloom".into()));
+    h.run_steps(2);
+    assert!(h.query_by_label("imaging.to_gray").is_none(), "typing narrows the list");
+    h.get_by_label("imaging.bloom").click();
+    h.run_steps(3);
+    let doc = h.state().editor.doc().clone();
+    assert_eq!(doc.node("bloom").map(|n| n.type_name.as_str()), Some("imaging.bloom"), "{}", doc.to_ron());
+    assert!(doc.edges.contains(&("color.image".to_string(), "bloom.image".to_string())), "{:?}", doc.edges);
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().editor.doc().to_ron(), original, "one undo takes the node and its wire back");
+}

@@ -16,7 +16,7 @@ use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use cli_presets::{PresetQuery, presets, render_preset};
 use pyrograph_frontend::core::{
     BuildOptions, CookCtx, CookResult, CookSettings, Diagnostics, Evaluator, FrameSet, Graph, GraphDoc, NodeError, ParamValue,
-    Progress, Registry, Warning,
+    Progress, Registry, TimeDep, Warning,
 };
 
 #[derive(Parser)]
@@ -437,13 +437,21 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
         return Err(Failure("error: --wedge-index and --sheet need --wedge or --wedge-zip".into()));
     }
     let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out, ..BuildOptions::default() };
-    let (_, graph) = load(registry, path, &o.set, &options)?;
-    let targets: Vec<String> = if o.nodes.is_empty() {
+    let (doc, graph) = load(registry, path, &o.set, &options)?;
+    let mut targets: Vec<String> = if o.nodes.is_empty() {
         let sinks = graph.sinks();
         if sinks.is_empty() { graph.leaves() } else { sinks }.iter().map(|s| s.to_string()).collect()
     } else {
         o.nodes.clone()
     };
+    // A bypassed writer writes nothing: say so rather than list the file it would have written.
+    targets.retain(|t| {
+        let bypassed = doc.node(t).is_some_and(|n| n.bypass) && graph.desc(t).is_some_and(|d| d.time == TimeDep::Sink);
+        if bypassed {
+            println!("{t}: bypassed, writes nothing");
+        }
+        !bypassed
+    });
     cook_graph(&graph, path, o, &targets)
 }
 

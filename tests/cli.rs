@@ -40,6 +40,7 @@ const BAD: &[(&str, &[&str])] = &[
     ("empty_file.ron", &["node 'load'", "empty.png"]),
     ("empty_graph_file.ron", &["empty_graph_file.ron", "malformed graph"]),
     ("newer_version.ron", &["graph version 9 is newer"]),
+    ("bypass_nothing_to_pass.ron", &["node 'card'", "cannot be bypassed: its output 'image' is Image"]),
     ("unset_variable.ron", &["node 'frames', port 'path'", "environment variable PYROGRAPH_TEST_UNSET_VARIABLE is not set"]),
 ];
 
@@ -310,4 +311,26 @@ fn check_warns_about_a_flame_model_fit_of_whole_frames() {
     let o = bin().args(["check", "--json", learning.to_str().unwrap()]).env("PYROGRAPH_FOOTAGE", dir.path()).output().unwrap();
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["warnings"].as_array().unwrap().iter().all(|w| w["node"] != "fit"), "{v}");
+}
+
+#[test]
+fn a_bypassed_writer_writes_nothing_and_the_same_writer_active_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = |bypass: bool| {
+        format!(
+            r#"(version: 5, nodes: {{
+                "card": (type: "imaging.constant_color", params: {{"width": 8, "height": 8}}),
+                "write": (type: "imaging.write_image", params: {{"path": "card.png"}}, bypass: {bypass}),
+            }}, edges: [("card.image", "write.image")])"#
+        )
+    };
+    let file = dir.path().join("g.ron");
+    let out = dir.path().join("out");
+    for bypass in [true, false] {
+        std::fs::write(&file, graph(bypass)).unwrap();
+        let o = run(&["render", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o));
+        assert_eq!(out.join("card.png").exists(), !bypass, "bypass {bypass}: {}", text(&o));
+        assert_eq!(text(&o).contains("write: bypassed, writes nothing"), bypass, "{}", text(&o));
+    }
 }

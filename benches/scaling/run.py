@@ -103,7 +103,7 @@ def workloads(work):
             ("cloth flames", "flames", "frame", cloth),
             ("fire spread (surface + 96 steps)", "mesh faces", "step", spread),
             ("batch reconstruction", "frames", "batch", recon),
-            ("mask chain (PNG in, mask PNG out)", "pixels a frame", "frame", masks)]
+            ("mask chain, 480p to 4K", "pixels a frame", "frame", masks)]
 
 
 def growth(sizes, times):
@@ -117,6 +117,7 @@ def plot(results, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
     fig, axes = plt.subplots(2, len(results), figsize=(3.4 * len(results), 7.0))
     for col, (name, label, unit, rows) in enumerate(results):
         sizes = np.array([r["size"] for r in rows], dtype=float)
@@ -135,6 +136,9 @@ def plot(results, path):
         bottom.set_xlabel(label)
         bottom.set_ylabel("peak RSS, MiB (whole process)")
         bottom.grid(True, which="both", alpha=0.3)
+        for ax in (top, bottom):
+            # Within about a decade matplotlib labels minor ticks too, and they run into each other.
+            ax.xaxis.set_minor_formatter(NullFormatter())
     fig.suptitle(f"pyrograph scaling, {platform.node()}, {datetime.date.today()}, 2 threads", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
@@ -144,27 +148,57 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-scaling"))
     p.add_argument("--plot", default=os.path.join(REPO, "docs/images/scaling.png"))
+    p.add_argument("--from", dest="rows", metavar="JSONL",
+                   help="plot and tabulate a previous run's scaling.jsonl (its latest row of each size) instead of running")
     a = p.parse_args()
+    results = replay(a.rows) if a.rows else measure(a.work)
+    plot(results, a.plot)
+    print(f"\nplot: {a.plot}\n")
+    table(results)
+
+
+def measure(work):
+    """Runs every workload at every size: [(name, size label, unit, rows)], logged to work/scaling.jsonl."""
     for exe in (KERNELS, CLI):
         if not os.access(exe, os.X_OK):
             raise SystemExit(f"build first: cargo build --release --example kernels && cargo build --release (no {exe})")
-    os.makedirs(a.work, exist_ok=True)
+    os.makedirs(work, exist_ok=True)
     results = []
-    with open(os.path.join(a.work, "scaling.jsonl"), "a") as log:
-        for name, label, unit, sizes in workloads(a.work):
+    with open(os.path.join(work, "scaling.jsonl"), "a") as log:
+        for name, label, unit, sizes in workloads(work):
             rows = []
             for size, args in sizes:
-                report, rss = mask_chain(a.work, args[1]) if args[0] == "mask" else timed(args)
-                row = {"workload": name, "size": size, "median_s": report["median_s"], "times_s": report["times_s"],
-                       "threads": report["threads"], "peak_rss_mib": round(rss, 1),
+                got, rss = mask_chain(work, args[1]) if args[0] == "mask" else timed(args)
+                row = {"workload": name, "label": label, "unit": unit, "size": size, "median_s": got["median_s"],
+                       "times_s": got["times_s"], "threads": got["threads"], "peak_rss_mib": round(rss, 1),
                        "when": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                        "load": os.getloadavg()[0]}
                 log.write(json.dumps(row) + "\n")
-                print(f"  {name} {size}: {report['median_s'] * 1e3:.2f} ms, {rss:.0f} MiB", flush=True)
+                print(f"  {name} {size}: {got['median_s'] * 1e3:.2f} ms, {rss:.0f} MiB", flush=True)
                 rows.append(row)
             results.append((name, label, unit, rows))
-    plot(results, a.plot)
-    print(f"\nplot: {a.plot}\n")
+    return results
+
+
+def replay(path):
+    """A previous run's results from its log: the latest row of each workload and size, in the
+    order the workloads first appear."""
+    latest, order = {}, []
+    with open(path) as f:
+        for line in f:
+            row = json.loads(line)
+            if row["workload"] not in order:
+                order.append(row["workload"])
+            latest.setdefault(row["workload"], {})[row["size"]] = row
+    results = []
+    for name in order:
+        rows = [latest[name][size] for size in sorted(latest[name])]
+        results.append((name, rows[0].get("label", "size"), rows[0].get("unit", "run"), rows))
+    return results
+
+
+def table(results):
+    """Prints the Markdown table for BENCHMARKS.md."""
     print("| workload | sizes | ms at each size | peak RSS, MiB | growth over the three largest |")
     print("| --- | --- | --- | --- | --- |")
     for name, label, unit, rows in results:

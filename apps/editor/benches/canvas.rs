@@ -1,4 +1,4 @@
-//! UI frames per second of the canvas on a generated 300-node graph, the way a user's hand
+//! UI frames per second of the canvas on generated graphs of 300 and 5,000 nodes, the way a user's hand
 //! drives it: panning (scroll) and zooming (pinch / Ctrl+scroll), with every node in view and
 //! zoomed in on a part. A frame is egui's whole UI pass over the editor plus tessellation into
 //! triangles, the CPU work of one frame (the GPU's drawing is not included).
@@ -46,10 +46,20 @@ impl Ui {
 }
 
 fn canvas(c: &mut Criterion) {
-    let mut group = c.benchmark_group("editor_300_nodes");
+    for nodes in [300, 5000] {
+        graph_of(c, nodes);
+    }
+}
+
+/// Pan and zoom with the whole graph in view, and pan zoomed in, on a generated graph of `nodes`.
+fn graph_of(c: &mut Criterion, nodes: usize) {
+    let mut group = c.benchmark_group(format!("editor_{nodes}_nodes"));
     group.sample_size(30);
-    let mut ui = Ui::new(300);
-    assert_eq!(ui.app.canvas.node_ids().len(), 300);
+    let mut ui = Ui::new(nodes);
+    assert_eq!(ui.app.editor.doc().nodes.0.len(), nodes);
+    // Every node is on the canvas up to the culling threshold; above it, the nearest ones.
+    let held = ui.app.canvas.node_ids().len();
+    assert!(held == nodes || held <= pyrograph_editor::culling::MAX_HELD, "{held} of {nodes} held");
     let mut k = 0u64;
     group.bench_function("pan_all_in_view", |b| {
         b.iter(|| {
@@ -71,7 +81,7 @@ fn canvas(c: &mut Criterion) {
         })
     });
     // Zoomed in on one corner: most nodes are off screen.
-    let mut near = Ui::new(300);
+    let mut near = Ui::new(nodes);
     for _ in 0..60 {
         near.step(vec![egui::Event::Zoom(1.08)]);
     }
@@ -89,7 +99,11 @@ fn canvas(c: &mut Criterion) {
     });
     group.finish();
     let scale = ui.app.canvas.transform().scaling;
-    eprintln!("all-in-view scale {scale:.3}, zoomed-in scale {:.3}", near.app.canvas.transform().scaling);
+    eprintln!(
+        "{nodes} nodes: all-in-view scale {scale:.3} ({held} held), zoomed-in scale {:.3} ({} held)",
+        near.app.canvas.transform().scaling,
+        near.app.canvas.node_ids().len()
+    );
 }
 
 criterion_group!(benches, canvas);

@@ -215,10 +215,17 @@ impl EditorApp {
         if idle {
             let moved = self.canvas.moved_nodes();
             if !moved.is_empty() {
+                let one = (moved.len() == 1).then(|| moved[0].0.clone());
                 for (id, p) in moved {
                     self.editor.move_node(&id, (p.x, p.y));
                 }
                 self.editor.seal();
+                // One unwired node dropped onto a wire is spliced into it, with the drag one undo step.
+                if let Some(id) = one
+                    && let Some((from, to)) = self.canvas.wire_through(self.editor.doc(), &id)
+                {
+                    let _ = self.editor.insert_on_wire(&id, &from, &to, true);
+                }
             }
             if !ctx.egui_wants_keyboard_input() {
                 self.editor.seal();
@@ -603,6 +610,12 @@ impl EditorApp {
         ui.checkbox(&mut self.key_ui.show_curves, "Curve editor (for animated parameters)");
         ui.separator();
         frame_cache_ui(ui);
+        let mut outside = crate::state::allow_outside_out();
+        let tip = "Let writer nodes write outside the graph's folder (absolute paths, paths climbing out with ..), \
+                   as the command line's --allow-outside-out does. Off by default and for each new session.";
+        if ui.checkbox(&mut outside, "Writes outside the graph's folder").on_hover_text(tip).changed() {
+            self.editor.set_allow_outside_out(outside);
+        }
     }
 
     /// The Add menu: the node palette, adding at the centre of the view.

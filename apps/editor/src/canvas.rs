@@ -43,6 +43,7 @@ pub struct Canvas {
     to_global: TSTransform,
     rect: Rect,
     node_rects: HashMap<String, Rect>,
+    pin_rows: HashMap<(String, String, bool), f32>,
     /// The search text of the canvas palette.
     pub palette_query: String,
     gesture: Option<Gesture>,
@@ -87,6 +88,7 @@ impl Canvas {
             to_global: TSTransform::IDENTITY,
             rect: Rect::NOTHING,
             node_rects: HashMap::new(),
+            pin_rows: HashMap::new(),
             palette_query: String::new(),
             gesture: None,
             annotation_rects: AnnotationRects::default(),
@@ -176,6 +178,35 @@ impl Canvas {
         self.snarl.wires().count()
     }
 
+    /// The wire (a document edge, `node.port` to `node.port`) that passes through node `id`'s
+    /// frame, the one nearest its centre; wires of `id` itself are not counted. Wires are traced
+    /// as egui-snarl draws them: a cubic from the output pin to the input pin with horizontal
+    /// tangents.
+    pub fn wire_through(&self, doc: &GraphDoc, id: &str) -> Option<(String, String)> {
+        let rect = *self.node_rects.get(id)?;
+        let mut best: Option<(f32, (String, String))> = None;
+        for (from, to) in &doc.edges {
+            let (Some((a_node, a_port)), Some((b_node, b_port))) = (split_endpoint(from), split_endpoint(to)) else { continue };
+            if a_node == id || b_node == id {
+                continue;
+            }
+            let ends = (self.node_rects.get(a_node), self.node_rects.get(b_node));
+            let rows = (
+                self.pin_rows.get(&(a_node.to_string(), a_port.to_string(), true)),
+                self.pin_rows.get(&(b_node.to_string(), b_port.to_string(), false)),
+            );
+            let ((Some(ra), Some(rb)), (Some(&ya), Some(&yb))) = (ends, rows) else { continue };
+            let nearest = wire_points(egui::pos2(ra.right(), ya), egui::pos2(rb.left(), yb))
+                .filter(|p| rect.contains(*p))
+                .map(|p| p.distance(rect.center()))
+                .fold(f32::INFINITY, f32::min);
+            if nearest.is_finite() && best.as_ref().is_none_or(|(d, _)| nearest < *d) {
+                best = Some((nearest, (from.clone(), to.clone())));
+            }
+        }
+        best.map(|(_, wire)| wire)
+    }
+
     /// Node ids shown on the canvas.
     pub fn node_ids(&self) -> Vec<String> {
         self.snarl.nodes().cloned().collect()
@@ -215,6 +246,7 @@ impl Canvas {
             self.shown_pos.remove(&id);
             self.pins.remove(&id);
             self.node_rects.remove(&id);
+            self.pin_rows.retain(|(n, _, _), _| *n != id);
         }
         self.param_pins.retain(|id| editor.node_doc(id).is_some());
         for &(id, pos) in &kept {
@@ -326,6 +358,8 @@ impl Canvas {
             pending: &mut self.pending_transform,
             to_global: &mut self.to_global,
             node_rects: &mut self.node_rects,
+            pin_rows: &mut self.pin_rows,
+            record_pins: ctx.input(|i| i.pointer.any_down()),
             rect: self.rect,
             selected: &selected,
             hold,
@@ -551,4 +585,20 @@ impl Canvas {
         }
         self.pins_changed = true;
     }
+}
+
+/// Points along a wire from `a` to `b` as egui-snarl draws it (a cubic with horizontal tangents),
+/// 33 samples.
+fn wire_points(a: Pos2, b: Pos2) -> impl Iterator<Item = Pos2> {
+    let k = ((b.x - a.x).abs() * 0.5).max(30.0);
+    let (c1, c2) = (a + egui::vec2(k, 0.0), b - egui::vec2(k, 0.0));
+    (0..=32).map(move |i| {
+        let t = i as f32 / 32.0;
+        let u = 1.0 - t;
+        let v = a.to_vec2() * (u * u * u)
+            + c1.to_vec2() * (3.0 * u * u * t)
+            + c2.to_vec2() * (3.0 * u * t * t)
+            + b.to_vec2() * (t * t * t);
+        v.to_pos2()
+    })
 }

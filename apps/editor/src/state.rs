@@ -13,8 +13,7 @@ use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::graph::preset_desc;
 use pyrograph_frontend::core::graph::value_to_param;
 use pyrograph_frontend::core::{
-    BuildOptions, CookSettings, Diagnostic, DiagnosticKind, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc,
-    Registry, TimeDep,
+    CookSettings, Diagnostic, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc, Registry, TimeDep,
 };
 
 use crate::cook::{CookOutcome, CookRequest, CookStatus, Cooker, Notify, Preview, PreviewRequest};
@@ -30,6 +29,7 @@ mod preset_lib;
 pub mod vector_keys;
 
 pub use keyframes::{AnimParam, value_text};
+pub use opening::allow_outside_out;
 pub use preset_lib::{SelectionPreset, filter_presets};
 
 /// A message for the status bar.
@@ -529,20 +529,8 @@ impl Editor {
         let mut cand = self.doc.clone();
         cand.edges.retain(|(_, b)| *b != to);
         cand.edges.push((from.clone(), to.clone()));
-        let before: HashSet<(String, String)> =
-            self.validation.diagnostics.iter().map(|d| (d.location.to_string(), d.message.clone())).collect();
-        let after = match Graph::build(&cand, &self.registry, &self.base_dir(), &BuildOptions::default()) {
-            Ok(_) => return Ok(cand),
-            Err(d) => d.0,
-        };
-        let refusing = [DiagnosticKind::TypeMismatch, DiagnosticKind::Cycle, DiagnosticKind::DuplicateEdge];
-        let new: Vec<&Diagnostic> = after
-            .iter()
-            .filter(|d| refusing.contains(&d.kind))
-            .filter(|d| !before.contains(&(d.location.to_string(), d.message.clone())))
-            .collect();
-        match new.first() {
-            Some(d) => Err(format!("cannot connect {from} -> {to}: {}", d.message)),
+        match self.refusal(&cand) {
+            Some(why) => Err(format!("cannot connect {from} -> {to}: {why}")),
             None => Ok(cand),
         }
     }

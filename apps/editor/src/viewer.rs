@@ -79,6 +79,11 @@ pub(crate) struct Viewer<'a> {
     pub pending: &'a mut Option<FrameTarget>,
     pub to_global: &'a mut TSTransform,
     pub node_rects: &'a mut HashMap<String, Rect>,
+    /// The height (canvas units) of each drawn pin's row: (node, port, is output) → y.
+    pub pin_rows: &'a mut HashMap<(String, String, bool), f32>,
+    /// Whether to record pin rows this frame: they are wanted only for dropping a dragged node
+    /// onto a wire, so only while a button is down.
+    pub record_pins: bool,
     pub rect: Rect,
     /// Nodes drawn as selected.
     pub selected: &'a HashSet<String>,
@@ -186,7 +191,10 @@ impl SnarlViewer<String> for Viewer<'_> {
 
     #[allow(refining_impl_trait)]
     fn show_input(&mut self, pin: &InPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
-        let Some((_, name, ty, doc)) = self.in_port(snarl, pin.id) else { return PinInfo::default() };
+        let Some((id, name, ty, doc)) = self.in_port(snarl, pin.id) else { return PinInfo::default() };
+        if self.record_pins {
+            self.pin_rows.insert((id, name.clone(), false), ui.max_rect().center().y);
+        }
         let text = egui::RichText::new(&name).small();
         let text = if ty.is_parameter() { text.italics() } else { text };
         ui.label(text).on_hover_text(format!("{name}: {ty}\n{doc}"));
@@ -195,7 +203,10 @@ impl SnarlViewer<String> for Viewer<'_> {
 
     #[allow(refining_impl_trait)]
     fn show_output(&mut self, pin: &OutPin, ui: &mut Ui, snarl: &mut Snarl<String>) -> PinInfo {
-        let Some((_, name, ty, doc)) = self.out_port(snarl, pin.id) else { return PinInfo::default() };
+        let Some((id, name, ty, doc)) = self.out_port(snarl, pin.id) else { return PinInfo::default() };
+        if self.record_pins {
+            self.pin_rows.insert((id, name.clone(), true), ui.max_rect().center().y);
+        }
         ui.label(egui::RichText::new(&name).small()).on_hover_text(format!("{name}: {ty}\n{doc}"));
         pin_info(&ty)
     }

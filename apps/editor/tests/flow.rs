@@ -145,3 +145,72 @@ fn a_wire_dragged_from_a_pin_into_empty_space_offers_the_nodes_that_take_it_and_
     h.run_steps(2);
     assert_eq!(h.state().editor.doc().to_ron(), original, "one undo takes the node and its wire back");
 }
+
+#[test]
+fn a_writer_outside_the_graph_folder_is_refused_until_the_preference_allows_it() {
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    let mut doc = GraphDoc::new();
+    doc.add_node("card", NodeDoc::new("imaging.constant_color"));
+    doc.add_node("write", NodeDoc::new("imaging.write_image").param("path", ParamValue::String("../elsewhere/card.png".into())));
+    doc.connect("card.image", "write.image");
+    ed.edit(None, |d| *d = doc);
+    let refused = |ed: &Editor| ed.node_problems("write").iter().any(|p| p.contains("outside"));
+    assert!(!pyrograph_editor::state::allow_outside_out(), "off by default");
+    assert!(refused(&ed), "{:?}", ed.node_problems("write"));
+    ed.set_allow_outside_out(true);
+    assert!(!refused(&ed) && ed.validation().graph.is_some(), "{:?}", ed.node_problems("write"));
+    ed.set_allow_outside_out(false);
+    assert!(refused(&ed));
+}
+
+#[test]
+fn a_node_dropped_onto_a_wire_is_spliced_into_it_in_one_undo_step() {
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    let mut doc = GraphDoc::new();
+    let at = |ty: &str, x: f32, y: f32| {
+        let mut n = NodeDoc::new(ty);
+        n.pos = Some((x, y));
+        n
+    };
+    doc.add_node("color", at("imaging.constant_color", 0.0, 0.0));
+    doc.add_node("gray", at("imaging.to_gray", 900.0, 0.0));
+    doc.add_node("bloom", at("imaging.bloom", 400.0, 500.0));
+    doc.connect("color.image", "gray.image");
+    ed.edit(None, |d| *d = doc);
+    ed.seal();
+    let original = ed.doc().to_ron();
+    let mut app = EditorApp::new(ed);
+    app.canvas.frame_all();
+    let mut h = harness(app);
+    h.run_steps(6);
+    let rect = |h: &Harness<'_, EditorApp>, id: &str| h.state().canvas.node_screen_rect(id).expect("on screen");
+    let (color, gray, bloom) = (rect(&h, "color"), rect(&h, "gray"), rect(&h, "bloom"));
+    // The wire runs from color's right edge to gray's left edge at the rows of their "image" pins.
+    let to_screen = h.state().canvas.transform();
+    let row = |h: &Harness<'_, EditorApp>, node: egui::Rect| {
+        h.query_all_by_label("image").map(|n| to_screen.mul_rect(n.rect())).find(|r| node.contains_rect(*r)).expect("a pin label")
+    };
+    let (ya, yb) = (row(&h, color).center().y, row(&h, gray).center().y);
+    let middle = egui::pos2((color.right() + gray.left()) / 2.0, (ya + yb) / 2.0);
+    // Grab bloom by its header and drop it with its centre on the wire's middle.
+    let grab = bloom.min + egui::vec2(20.0, 8.0);
+    drag(&mut h, grab, grab + (middle - bloom.center()));
+    h.run_steps(2);
+    let edges = h.state().editor.doc().edges.clone();
+    assert!(
+        edges.contains(&("color.image".into(), "bloom.image".into()))
+            && edges.contains(&("bloom.image".into(), "gray.image".into())),
+        "spliced: {edges:?}"
+    );
+    assert!(!edges.contains(&("color.image".into(), "gray.image".into())), "the old wire is gone: {edges:?}");
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().editor.doc().to_ron(), original, "one undo takes back the drag and the splice");
+    // Dropped away from any wire, a node only moves.
+    let bloom = rect(&h, "bloom");
+    let grab = bloom.min + egui::vec2(20.0, 8.0);
+    drag(&mut h, grab, grab + egui::vec2(40.0, 30.0));
+    assert_eq!(h.state().editor.doc().edges.len(), 1);
+}

@@ -1,8 +1,12 @@
-//! Flow edits on the canvas: bypassing nodes (Houdini's bypass flag, Nuke's disable), and a
-//! wire dragged from a pin into empty space, which offers the node types that can take it and
-//! wires the one picked (as Houdini, Blender and ComfyUI do).
+//! Flow edits on the canvas: bypassing nodes (Houdini's bypass flag, Nuke's disable), a wire
+//! dragged from a pin into empty space, which offers the node types that can take it and wires
+//! the one picked (as Houdini, Blender and ComfyUI do), and a node dropped onto a wire, which is
+//! spliced into it (as in Nuke and Houdini).
 
-use pyrograph_frontend::core::{NodeDesc, PortType, TimeDep};
+use std::collections::HashSet;
+
+use pyrograph_frontend::core::document::split_endpoint;
+use pyrograph_frontend::core::{BuildOptions, DiagnosticKind, Graph, GraphDoc, NodeDesc, PortType, TimeDep};
 
 use super::{Editor, PaletteItem};
 
@@ -46,7 +50,7 @@ pub fn wire_port(desc: &NodeDesc, wire: &WireEnd) -> Option<String> {
 impl Editor {
     /// Whether node `id` is bypassed.
     pub fn is_bypassed(&self, id: &str) -> bool {
-        self.doc().node(id).is_some_and(|n| n.bypass)
+        self.node_doc(id).is_some_and(|n| n.bypass)
     }
 
     /// Bypasses `ids`, or, when every one of them is bypassed already, turns bypass off for all
@@ -77,6 +81,57 @@ impl Editor {
             .filter(|item| item.preset.is_none())
             .filter(|item| self.registry().get(&item.type_name).is_some_and(|n| wire_port(n.desc(), wire).is_some()))
             .collect()
+    }
+
+    /// Why the type checker refuses `cand` (a type mismatch, a cycle or a doubled input that the
+    /// current document does not already have), or `None` when it takes it.
+    pub(super) fn refusal(&self, cand: &GraphDoc) -> Option<String> {
+        let before: HashSet<(String, String)> =
+            self.validation.diagnostics.iter().map(|d| (d.location.to_string(), d.message.clone())).collect();
+        let after = Graph::build(cand, &self.registry, &self.base_dir(), &BuildOptions::default()).err()?.0;
+        let refusing = [DiagnosticKind::TypeMismatch, DiagnosticKind::Cycle, DiagnosticKind::DuplicateEdge];
+        after
+            .into_iter()
+            .filter(|d| refusing.contains(&d.kind))
+            .find(|d| !before.contains(&(d.location.to_string(), d.message.clone())))
+            .map(|d| d.message)
+    }
+
+    /// Splices `node` into the wire `from -> to` (both `node.port`): the wire's source into the
+    /// node's first input that takes it, and the node's first output the wire's target takes into
+    /// the target. With `join`, the splice and the edit before it (the drag that dropped the node
+    /// there) are one undo step. Refused, with the reason, when no ports fit or the node is wired.
+    pub fn insert_on_wire(&mut self, node: &str, from: &str, to: &str, join: bool) -> Result<(), String> {
+        let ((src, _), (dst, _)) = split_endpoint(from).zip(split_endpoint(to)).ok_or("not a wire")?;
+        if self.doc.edges.iter().any(|(a, b)| a.starts_with(&format!("{node}.")) || b.starts_with(&format!("{node}."))) {
+            return Err(format!("'{node}' is wired already; only a node without wires drops onto a wire"));
+        }
+        if node == src || node == dst || !self.doc.edges.contains(&(from.to_string(), to.to_string())) {
+            return Err(format!("no wire {from} -> {to} to drop '{node}' onto"));
+        }
+        let desc = self.desc(node).cloned().ok_or_else(|| format!("'{node}' has no known ports"))?;
+        // Data inputs (images, clips) before parameters a wire could also feed.
+        let data = desc.inputs.iter().filter(|p| !p.ty.is_parameter());
+        for input in data.chain(desc.inputs.iter().filter(|p| p.ty.is_parameter())) {
+            for output in &desc.outputs {
+                let mut cand = self.doc.clone();
+                cand.edges.retain(|e| *e != (from.to_string(), to.to_string()));
+                cand.edges.push((from.to_string(), format!("{node}.{}", input.name)));
+                cand.edges.push((format!("{node}.{}", output.name), to.to_string()));
+                if self.refusal(&cand).is_none() {
+                    self.edit(None, |d| *d = cand);
+                    if join {
+                        self.history.join_last_two();
+                    }
+                    self.seal();
+                    self.set_status(format!("inserted {node} into {from} -> {to}"), false);
+                    return Ok(());
+                }
+            }
+        }
+        let why = format!("'{node}' has no input that takes {from} and output that {to} takes");
+        self.set_status(why.clone(), true);
+        Err(why)
     }
 
     /// Adds a node of `type_name` at `pos` wired to `wire`, as one undo step; returns its id.

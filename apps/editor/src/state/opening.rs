@@ -9,6 +9,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -43,8 +44,28 @@ pub(super) struct Checked {
 }
 
 /// Validates `doc`, whose relative paths resolve against `dir`, and describes its nodes.
+/// The editor preference for writers whose paths leave the graph's folder (`--allow-outside-out`
+/// on the command line): off unless the user turns it on, for this session only, so a graph or
+/// preset from elsewhere cannot write outside its folder because of a choice made last week.
+static ALLOW_OUTSIDE_OUT: AtomicBool = AtomicBool::new(false);
+
+/// Whether writers may write outside the graph's folder (the View menu's preference).
+pub fn allow_outside_out() -> bool {
+    ALLOW_OUTSIDE_OUT.load(Ordering::Relaxed)
+}
+
+impl Editor {
+    /// Sets the preference for writes outside the graph's folder and validates the graph again
+    /// under it.
+    pub fn set_allow_outside_out(&mut self, allow: bool) {
+        ALLOW_OUTSIDE_OUT.store(allow, Ordering::Relaxed);
+        self.revalidate();
+    }
+}
+
 pub(super) fn check(doc: &GraphDoc, registry: &Registry, dir: &Path) -> Checked {
-    let graph = Graph::build(doc, registry, dir, &BuildOptions::default());
+    let options = BuildOptions { allow_outside_out: allow_outside_out(), ..BuildOptions::default() };
+    let graph = Graph::build(doc, registry, dir, &options);
     let descs = resolve_descs(doc, registry, dir, graph.as_ref().ok());
     Checked { graph, descs }
 }

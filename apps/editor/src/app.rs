@@ -34,6 +34,8 @@ pub struct EditorApp {
     palette_query: String,
     dialog: Option<FileDialog>,
     pub(crate) texture: Option<(u64, egui::TextureHandle)>,
+    /// The B viewer's texture (A/B compare).
+    pub(crate) texture_b: Option<(u64, egui::TextureHandle)>,
     /// The preview's player (play / pause, real time, frames dropped).
     pub playback: crate::playback::Playback,
     title: String,
@@ -68,6 +70,7 @@ impl EditorApp {
             palette_query: String::new(),
             dialog: None,
             texture: None,
+            texture_b: None,
             playback: crate::playback::Playback::default(),
             title: String::new(),
             notify_set: false,

@@ -41,6 +41,8 @@ pub struct CookRequest {
     pub targets: Vec<String>,
     /// The output to turn into a preview, if any.
     pub preview: Option<PreviewRequest>,
+    /// A second output to preview beside it (the B viewer of an A/B compare).
+    pub compare: Option<PreviewRequest>,
     /// Render settings; `Some` for a render of the sinks.
     pub render: Option<CookSettings>,
 }
@@ -89,6 +91,8 @@ pub struct CookOutcome {
     pub node_warnings: BTreeMap<String, Vec<String>>,
     /// The preview, when one was asked for.
     pub preview: Option<Preview>,
+    /// The B viewer's preview, when one was asked for.
+    pub compare: Option<Preview>,
     /// Whether the cook was cancelled.
     pub cancelled: bool,
     /// Whether this was a render of the sinks.
@@ -374,6 +378,9 @@ fn run_job(
             if let Some(pr) = &request.preview {
                 if let Ok(Value::Clip(c)) = output_value(&result, &pr.node, pr.output) {
                     clip = Some(c);
+                }
+                if let Some(b) = &request.compare {
+                    outcome.compare = Some(make_preview(&request.graph, &result, b, &ctx));
                 }
                 let preview = make_preview(&request.graph, &result, pr, &ctx);
                 if preview.error.as_deref().is_some_and(|e| e.contains("cancelled")) {

@@ -20,6 +20,7 @@ pub mod app;
 pub mod browser;
 pub mod canvas;
 pub mod clipboard;
+mod compare_ui;
 pub mod cook;
 pub mod culling;
 pub mod curves;

@@ -207,6 +207,7 @@ impl EditorApp {
                     self.editor.set_preview_output(out);
                 }
             }
+            self.compare_header(ui);
         });
         if self.editor.is_cooking() {
             let st = self.editor.cook_status();
@@ -237,19 +238,12 @@ impl EditorApp {
         {
             self.scrubber(ui, &req, len);
         }
-        let serial = self.editor.preview_serial();
         if let Some(img) = &p.image {
-            let stale = self.texture.as_ref().is_none_or(|(s, _)| *s != serial);
-            if stale {
-                let ci = egui::ColorImage::from_rgba_unmultiplied(img.size, &img.rgba);
-                match &mut self.texture {
-                    Some((s, t)) => {
-                        t.set(ci, egui::TextureOptions::LINEAR);
-                        *s = serial;
-                    }
-                    None => self.texture = Some((serial, ui.ctx().load_texture("preview", ci, egui::TextureOptions::LINEAR))),
-                }
-            }
+            crate::compare_ui::upload_texture(ui.ctx(), &mut self.texture, "preview", self.editor.preview_serial(), img);
+        }
+        if self.editor.compare_request().is_some() {
+            self.compare_view(ui, &p);
+            return;
         }
         let size = p
             .image

@@ -21,13 +21,16 @@ use crate::history::History;
 pub use crate::layout::auto_layout;
 use crate::layout::relative_path;
 
+mod checks;
 mod files;
 pub mod flow;
 mod keyframes;
 mod opening;
 mod preset_lib;
 pub mod vector_keys;
+pub mod viewers;
 
+pub use checks::{diagnostic_nodes, same_structure};
 pub use keyframes::{AnimParam, value_text};
 pub use opening::allow_outside_out;
 pub use preset_lib::{SelectionPreset, filter_presets};
@@ -82,6 +85,8 @@ pub struct Editor {
     descs: HashMap<String, Arc<NodeDesc>>,
     revision: u64,
     cooker: Cooker,
+    /// The B viewer of an A/B compare.
+    compare: viewers::Compare,
     /// Cook errors per node from the latest finished cook.
     cook_errors: BTreeMap<String, String>,
     cook_warnings: BTreeMap<String, Vec<String>>,
@@ -138,6 +143,7 @@ impl Editor {
             descs: HashMap::new(),
             revision: 1,
             cooker: Cooker::new(),
+            compare: viewers::Compare::default(),
             cook_errors: BTreeMap::new(),
             cook_warnings: BTreeMap::new(),
             last_outcome: None,
@@ -624,6 +630,7 @@ impl Editor {
             && p.frame != frame
         {
             p.frame = frame;
+            self.follow_with_b(frame);
             self.request_preview();
         }
     }
@@ -643,7 +650,9 @@ impl Editor {
         }
         let output = req.output.min(desc.outputs.len().saturating_sub(1));
         let req = PreviewRequest { output, ..req };
-        Some(self.cooker.submit(CookRequest { graph, targets: vec![req.node.clone()], preview: Some(req), render: None }))
+        let compare = self.compare_target();
+        let targets = std::iter::once(req.node.clone()).chain(compare.iter().map(|b| b.node.clone())).collect();
+        Some(self.cooker.submit(CookRequest { graph, targets, preview: Some(req), compare, render: None }))
     }
 
     /// Cooks the writers (sinks): the render button.
@@ -654,7 +663,8 @@ impl Editor {
             return Err("the graph has no writer nodes to render".into());
         }
         self.set_status(format!("rendering {}", sinks.join(", ")), false);
-        Ok(self.cooker.submit(CookRequest { graph, targets: sinks, preview: None, render: Some(CookSettings::default()) }))
+        let render = Some(CookSettings::default());
+        Ok(self.cooker.submit(CookRequest { graph, targets: sinks, preview: None, compare: None, render }))
     }
 
     /// Cancels the running cook.
@@ -682,6 +692,7 @@ impl Editor {
                 self.preview = Some(p.clone());
                 self.preview_serial += 1;
             }
+            self.receive_compare(&outcome);
             if outcome.cancelled {
                 self.set_status("cook cancelled", false);
             } else if outcome.render {
@@ -761,26 +772,4 @@ impl Editor {
 /// Positions rounded to whole units, so files diff well.
 fn round_pos(p: (f32, f32)) -> (f32, f32) {
     (p.0.round(), p.1.round())
-}
-
-/// Whether two documents differ only in node positions (which do not affect cooking; a bypass does).
-pub fn same_structure(a: &GraphDoc, b: &GraphDoc) -> bool {
-    a.edges == b.edges
-        && a.interface == b.interface
-        && a.nodes.0.len() == b.nodes.0.len()
-        && a.nodes.0.iter().zip(&b.nodes.0).all(|((ia, na), (ib, nb))| {
-            ia == ib && na.type_name == nb.type_name && na.params == nb.params && na.bypass == nb.bypass
-        })
-}
-
-/// The node ids a diagnostic is about.
-pub fn diagnostic_nodes(d: &Diagnostic) -> Vec<String> {
-    match &d.location {
-        Location::Node(n) => vec![n.clone()],
-        Location::Port { node, .. } => vec![node.clone()],
-        Location::Edge { text, .. } => {
-            text.split(" -> ").filter_map(|e| split_endpoint(e.trim()).map(|(n, _)| n.to_string())).collect()
-        }
-        Location::File | Location::Text { .. } | Location::Group { .. } => Vec::new(),
-    }
 }

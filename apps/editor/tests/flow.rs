@@ -214,3 +214,34 @@ fn a_node_dropped_onto_a_wire_is_spliced_into_it_in_one_undo_step() {
     drag(&mut h, grab, grab + egui::vec2(40.0, 30.0));
     assert_eq!(h.state().editor.doc().edges.len(), 1);
 }
+
+#[test]
+fn pin_as_b_then_select_another_node_shows_both_side_by_side_and_as_a_wipe() {
+    use pyrograph_editor::state::viewers::CompareMode;
+    let mut ed = Editor::with_default_registry();
+    ed.edit(None, |d| *d = bloom_graph());
+    ed.seal();
+    let mut h = harness(EditorApp::new(ed));
+    settle(&mut h);
+    let source = preview_of(&mut h, "color");
+    let bloomed = preview_of(&mut h, "bloom");
+    h.get_by_label("Pin as B").click();
+    settle(&mut h);
+    let _ = preview_of(&mut h, "color");
+    let ed = &h.state().editor;
+    assert_eq!(ed.compare_request().map(|b| b.node.as_str()), Some("bloom"));
+    let b = ed.compare_preview().0.and_then(|p| p.image.as_ref()).map(|i| i.rgba.clone());
+    assert!(b == Some(bloomed), "B still shows the bloom");
+    assert!(shown(&h) == Some(source), "A shows the selected node");
+    assert!(h.query_by_label("B: bloom @ 0").is_some() && h.query_by_label("side by side").is_some());
+    // Wipe: one picture split at the middle.
+    h.get_by_label("wipe").click();
+    h.run_steps(2);
+    assert_eq!(h.state_mut().editor.compare_mut().mode, CompareMode::Wipe);
+    assert_eq!(h.state_mut().editor.compare_mut().wipe, 0.5);
+    // Closing B returns to the single preview.
+    h.get_by_label("×").click();
+    h.run_steps(2);
+    assert!(h.state().editor.compare_request().is_none());
+    assert!(h.query_by_label("Pin as B").is_some());
+}

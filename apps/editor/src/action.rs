@@ -38,6 +38,8 @@ pub enum Action {
     Duplicate(Vec<String>),
     /// Bypass nodes, or turn their bypass off when all of them are bypassed.
     Bypass(Vec<String>),
+    /// Replace an include by the nodes of its graph.
+    Unpack(String),
     /// Toggle showing every parameter as a pin.
     ToggleParamPins(String),
     /// Preview a node.

@@ -185,6 +185,11 @@ impl EditorApp {
                 }
                 Action::ToggleParamPins(id) => self.canvas.toggle_param_pins(&id),
                 Action::Bypass(ids) => self.editor.toggle_bypass(&ids),
+                Action::Unpack(id) => {
+                    if let Err(e) = self.editor.unpack(&id) {
+                        self.editor.set_status(e, true);
+                    }
+                }
                 Action::Preview(id) => {
                     self.key_ui.clear_selection();
                     self.editor.select(&id);

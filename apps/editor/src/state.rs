@@ -27,6 +27,7 @@ pub mod flow;
 mod keyframes;
 mod opening;
 mod preset_lib;
+mod unpack;
 pub mod vector_keys;
 pub mod viewers;
 

@@ -301,6 +301,12 @@ impl SnarlViewer<String> for Viewer<'_> {
             self.actions.push(Action::Bypass(vec![id.clone()]));
             ui.close();
         }
+        if self.editor.node_doc(&id).is_some_and(|n| n.type_name == pyrograph_frontend::core::builtin::INCLUDE_TYPE)
+            && ui.button("Unpack").on_hover_text("replace this include by the nodes of its graph, wired as it was").clicked()
+        {
+            self.actions.push(Action::Unpack(id.clone()));
+            ui.close();
+        }
         if ui.button("Show/hide parameter pins").clicked() {
             self.actions.push(Action::ToggleParamPins(id.clone()));
             ui.close();

@@ -245,3 +245,62 @@ fn pin_as_b_then_select_another_node_shows_both_side_by_side_and_as_a_wipe() {
     assert!(h.state().editor.compare_request().is_none());
     assert!(h.query_by_label("Pin as B").is_some());
 }
+
+/// Every frame of output `endpoint` (`node.port`, a clip of images) of `doc`, read from `file`'s
+/// folder, as raw samples.
+fn cooked_frames(doc: &GraphDoc, file: &std::path::Path, endpoint: &str) -> Vec<Vec<f32>> {
+    use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, Value};
+    let registry = pyrograph_frontend::registry();
+    let g = Graph::build_file(doc, file, &registry, &BuildOptions::default()).unwrap_or_else(|d| panic!("{d}"));
+    let ctx = CookCtx::new();
+    let Ok(Value::Clip(clip)) = Evaluator::new().output(&g, endpoint, &ctx) else { panic!("{endpoint} is not a clip") };
+    (0..clip.len())
+        .map(|i| match clip.get(i, &ctx) {
+            Ok(Value::Image(img)) => img.data().to_vec(),
+            other => panic!("frame {i} of {endpoint}: {other:?}"),
+        })
+        .collect()
+}
+
+#[test]
+fn unpacking_an_include_from_its_menu_cooks_the_same_frames_and_undoes_byte_for_byte() {
+    let file = pyrograph_testing::workspace().join("graphs/flame-cards.ron");
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    ed.open(&file).unwrap();
+    let original = ed.doc().to_ron();
+    let before = cooked_frames(ed.doc(), &file, "calm.clip");
+    let mut app = EditorApp::new(ed);
+    app.canvas.frame_all();
+    let mut h = harness(app);
+    h.run_steps(6);
+    let calm = h.state().canvas.node_screen_rect("calm").expect("on screen");
+    let at = calm.min + egui::vec2(20.0, 8.0);
+    h.event(egui::Event::PointerMoved(at));
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Secondary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    h.event(egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Secondary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    h.run_steps(3);
+    h.get_by_label("Unpack").click();
+    h.run_steps(3);
+    let doc = h.state().editor.doc().clone();
+    assert!(doc.node("calm").is_none(), "the include is gone");
+    assert!(doc.nodes.0.iter().any(|(id, _)| id.starts_with("calm_")), "its nodes are in: {}", doc.to_ron());
+    let (source, _) = doc.edges.iter().find(|(_, b)| b == "write_calm.clip").expect("the writer is still fed");
+    assert!(source.starts_with("calm_"), "fed by an unpacked node: {source}");
+    let after = cooked_frames(&doc, &file, source);
+    assert_eq!(after.len(), before.len());
+    assert!(after == before, "the unpacked nodes cook the include's frames, sample for sample");
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().editor.doc().to_ron(), original, "one undo step");
+}

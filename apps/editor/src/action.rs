@@ -40,6 +40,12 @@ pub enum Action {
     Bypass(Vec<String>),
     /// Replace an include by the nodes of its graph.
     Unpack(String),
+    /// Show the graph of an include in place of this level's.
+    StepInto(String),
+    /// Go up to this many levels inside (0: the top level).
+    StepTo(usize),
+    /// Move nodes into a new local subgraph.
+    Collapse(Vec<String>),
     /// Toggle showing every parameter as a pin.
     ToggleParamPins(String),
     /// Preview a node.

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use eframe::egui::{self, Color32, Key, Modifiers, RichText};
 
-use crate::action::Action;
 use crate::annotate::Annotation;
 use crate::browser::{PresetBrowser, SavePresetDialog};
 use crate::canvas::Canvas;
@@ -14,7 +13,9 @@ use crate::key_ui::KeyUi;
 use crate::palette::palette_ui;
 use crate::state::{Editor, diagnostic_nodes};
 
+mod actions;
 mod dump;
+mod scope_ui;
 
 /// Which file dialog is open (a plain path field: no native dialogs needed).
 #[derive(Clone, Debug, PartialEq)]
@@ -57,6 +58,8 @@ pub struct EditorApp {
     /// Keyframing: the selected keys, the curve editor's view and drag.
     pub key_ui: KeyUi,
     last_dump: String,
+    /// The breadcrumb, stepping into includes, and the "Save into preset" confirmation.
+    pub scope_ui: scope_ui::ScopeUi,
 }
 
 impl EditorApp {
@@ -84,6 +87,7 @@ impl EditorApp {
             browser: None,
             save_preset: None,
             key_ui: KeyUi::default(),
+            scope_ui: scope_ui::ScopeUi::default(),
         }
     }
 
@@ -140,6 +144,7 @@ impl EditorApp {
         if self.curves_wanted() {
             egui::Panel::bottom("curves").resizable(true).default_size(240.0).min_size(140.0).show(ui, |ui| self.curves_ui(ui));
         }
+        self.breadcrumb_panel(ui);
         let actions =
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| self.canvas.show(ui, &self.editor)).inner;
         if self.first_frame {
@@ -151,6 +156,7 @@ impl EditorApp {
         self.browser_window(&ctx);
         self.save_preset_window(&ctx);
         self.dialog_window(&ctx);
+        self.preset_confirm_window(&ctx);
         self.toast(&ctx);
 
         if self.editor.is_cooking() {
@@ -161,60 +167,6 @@ impl EditorApp {
         self.frames_drawn += 1;
         if self.frame_times.len() > 1000 {
             self.frame_times.drain(..500);
-        }
-    }
-
-    /// Applies canvas gestures through the editor.
-    pub fn apply(&mut self, actions: Vec<Action>) {
-        for a in actions {
-            match a {
-                Action::Connect { from, to } => {
-                    let _ = self.editor.connect(&from.0, &from.1, &to.0, &to.1);
-                }
-                Action::Disconnect { from, to } => self.editor.disconnect(&from, &to),
-                Action::DropInput(n, p) => self.editor.disconnect_input(&n, &p),
-                Action::DropOutput(n, p) => self.editor.disconnect_output(&n, &p),
-                Action::Add(item, pos) => self.add_item(&item, pos),
-                Action::AddWired(type_name, pos, wire) => {
-                    // The reason for a refusal is in the status bar.
-                    let _ = self.editor.add_wired(&type_name, (pos.x, pos.y), &wire);
-                }
-                Action::Remove(ids) => self.editor.remove_nodes(&ids),
-                Action::Duplicate(ids) => {
-                    self.editor.duplicate(&ids);
-                }
-                Action::ToggleParamPins(id) => self.canvas.toggle_param_pins(&id),
-                Action::Bypass(ids) => self.editor.toggle_bypass(&ids),
-                Action::Unpack(id) => {
-                    if let Err(e) = self.editor.unpack(&id) {
-                        self.editor.set_status(e, true);
-                    }
-                }
-                Action::Preview(id) => {
-                    self.key_ui.clear_selection();
-                    self.editor.select(&id);
-                }
-                Action::Select(ids) => {
-                    self.key_ui.clear_selection();
-                    self.editor.set_selection(ids);
-                }
-                Action::SelectAnnotation(a) => self.canvas.annotation = a,
-                Action::MoveComment(i, p) => {
-                    self.editor.move_comment(i, (p.x, p.y));
-                    self.editor.seal();
-                }
-            }
-        }
-    }
-
-    fn add_item(&mut self, item: &crate::state::PaletteItem, pos: egui::Pos2) {
-        let r = match &item.preset {
-            Some(file) => self.editor.add_preset(file, (pos.x, pos.y)),
-            None => self.editor.add_node(&item.type_name, (pos.x, pos.y)),
-        };
-        match r {
-            Ok(id) => self.editor.select(&id),
-            Err(e) => self.editor.set_status(e, true),
         }
     }
 
@@ -285,6 +237,11 @@ impl EditorApp {
                 i.key_pressed(Key::Escape),
             )
         });
+        let collapse = ctx.input_mut(|i| i.consume_key(cmd | Modifiers::SHIFT, Key::G));
+        if collapse {
+            let sel = self.editor.selection().to_vec();
+            self.apply(vec![crate::action::Action::Collapse(sel)]);
+        }
         let (all, group, comment, map, bypass) = ctx.input_mut(|i| {
             (
                 i.consume_key(cmd, Key::A),
@@ -298,6 +255,7 @@ impl EditorApp {
             let sel = self.editor.selection().to_vec();
             self.editor.toggle_bypass(&sel);
         }
+        self.scope_keys(ctx);
         if tab {
             self.open_palette(ctx);
         }

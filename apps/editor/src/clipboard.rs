@@ -32,6 +32,32 @@ pub(crate) fn is_anchored(path: &str) -> bool {
     path.contains("${") || Path::new(path).is_absolute()
 }
 
+/// Rewrites the relative input paths of `doc` and of its local subgraphs, written against
+/// folder `from`, to resolve the same against folder `to` (absolute when they leave it).
+pub(crate) fn rebase_paths(doc: &mut GraphDoc, registry: &Registry, from: &Path, to: &Path) {
+    map_paths(doc, registry, |p| {
+        if !is_anchored(p) {
+            *p = relative_path(&from.join(&*p), to);
+        }
+    });
+}
+
+/// Calls `f` on every input path parameter of `doc` and of its local subgraphs. Walked with a
+/// stack: local subgraphs nest as deep as the file's includes.
+pub(crate) fn map_paths(doc: &mut GraphDoc, registry: &Registry, mut f: impl FnMut(&mut String)) {
+    let mut stack = vec![doc];
+    while let Some(g) = stack.pop() {
+        for (_, nd) in &mut g.nodes.0 {
+            for name in input_path_params(registry, &nd.type_name) {
+                if let Some(ParamValue::String(p)) = nd.params.get_mut(&name) {
+                    f(p);
+                }
+            }
+        }
+        stack.extend(g.subgraphs.values_mut());
+    }
+}
+
 impl Editor {
     /// The clipboard text for nodes `ids` (unknown ids are skipped); `None` when none is known.
     pub fn copy_text(&self, ids: &[String]) -> Option<String> {
@@ -72,6 +98,17 @@ impl Editor {
             .filter(|g| !g.nodes.is_empty() && g.nodes.iter().all(|n| chosen.contains(n.as_str())))
             .cloned()
             .collect();
+        for id in &chosen {
+            if let Some(local) = self.doc().subgraphs.get(*id) {
+                let mut local = local.clone();
+                map_paths(&mut local, self.registry(), |p| {
+                    if !is_anchored(p) {
+                        *p = base.join(&*p).display().to_string();
+                    }
+                });
+                clip.subgraphs.insert(id.to_string(), local);
+            }
+        }
         Some(clip.to_ron())
     }
 
@@ -136,11 +173,23 @@ impl Editor {
             g.nodes = g.nodes.iter().filter_map(|n| rename.get(n).cloned()).collect();
         }
         let ids: Vec<String> = nodes.iter().map(|(id, _)| id.clone()).collect();
+        let mut locals = Vec::new();
+        for (id, local) in &clip.subgraphs {
+            let Some(new_id) = rename.get(id) else { continue };
+            let mut local = local.clone();
+            map_paths(&mut local, self.registry(), |p| {
+                if Path::new(p.as_str()).is_absolute() && !p.contains("${") {
+                    *p = relative_path(&PathBuf::from(&*p), &base);
+                }
+            });
+            locals.push((new_id.clone(), local));
+        }
         self.edit(None, |d| {
             for (id, nd) in nodes {
                 d.add_node(&id, nd);
             }
             d.edges.extend(edges);
+            d.subgraphs.extend(locals);
             d.groups.extend(groups.into_iter().filter(|g| !g.nodes.is_empty()));
         });
         self.set_selection(ids.clone());

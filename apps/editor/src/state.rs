@@ -13,7 +13,7 @@ use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::graph::preset_desc;
 use pyrograph_frontend::core::graph::value_to_param;
 use pyrograph_frontend::core::{
-    CookSettings, Diagnostic, Graph, GraphDoc, Location, NodeDesc, NodeDoc, ParamValue, PortDesc, Registry, TimeDep,
+    CookSettings, Diagnostic, Graph, GraphDoc, NodeDesc, NodeDoc, ParamValue, PortDesc, Registry, TimeDep,
 };
 
 use crate::cook::{CookOutcome, CookRequest, CookStatus, Cooker, Notify, Preview, PreviewRequest};
@@ -22,11 +22,13 @@ pub use crate::layout::auto_layout;
 use crate::layout::relative_path;
 
 mod checks;
+mod collapse;
 mod files;
 pub mod flow;
 mod keyframes;
 mod opening;
 mod preset_lib;
+mod scope;
 mod unpack;
 pub mod vector_keys;
 pub mod viewers;
@@ -35,6 +37,7 @@ pub use checks::{diagnostic_nodes, same_structure};
 pub use keyframes::{AnimParam, value_text};
 pub use opening::allow_outside_out;
 pub use preset_lib::{SelectionPreset, filter_presets};
+pub use scope::Crumb;
 
 /// A message for the status bar.
 #[derive(Clone, Debug)]
@@ -116,6 +119,8 @@ pub struct Editor {
     dirty: std::cell::Cell<Option<(u64, u64, bool)>>,
     /// Saves so far (a save changes what "dirty" compares with, not the revision).
     saves: u64,
+    /// The includes stepped into, outermost first; `doc` is then the innermost one's graph.
+    scope: Vec<scope::Level>,
 }
 
 impl Editor {
@@ -164,6 +169,7 @@ impl Editor {
             positions: None,
             dirty: std::cell::Cell::new(None),
             saves: 0,
+            scope: Vec::new(),
         };
         ed.revalidate();
         ed
@@ -194,7 +200,7 @@ impl Editor {
         match self.dirty.get() {
             Some((r, s, dirty)) if (r, s) == key => dirty,
             _ => {
-                let dirty = self.doc != self.saved;
+                let dirty = *self.root_doc() != self.saved;
                 self.dirty.set(Some((key.0, key.1, dirty)));
                 dirty
             }
@@ -230,7 +236,7 @@ impl Editor {
     /// Every problem attached to node `id`: validation first, then its cook error.
     pub fn node_problems(&self, id: &str) -> Vec<String> {
         let mut v = self.validation.by_node.get(id).cloned().unwrap_or_default();
-        if let Some(e) = self.cook_errors.get(id) {
+        if let Some(e) = self.cook_errors.get(&self.runtime_id(id)) {
             v.push(e.clone());
         }
         v
@@ -239,12 +245,25 @@ impl Editor {
     /// Warnings node `id` reported when it last cooked (kept while the cache serves it); for a
     /// preset, those of the nodes inside it too, each named.
     pub fn node_warnings(&self, id: &str) -> Vec<String> {
+        let id = self.runtime_id(id);
         let inner = format!("{id}/");
         self.cook_warnings
             .iter()
-            .filter(|(k, _)| *k == id || k.starts_with(&inner))
-            .flat_map(|(k, ws)| ws.iter().map(move |w| if k == id { w.clone() } else { format!("{k}: {w}") }))
+            .filter(|(k, _)| **k == id || k.starts_with(&inner))
+            .flat_map(|(k, ws)| {
+                let own = *k == id;
+                ws.iter().map(move |w| if own { w.clone() } else { format!("{k}: {w}") })
+            })
             .collect()
+    }
+
+    /// What node `id` of the shown level is called in the cooked graph (`calm/noise` inside
+    /// `calm`).
+    pub fn runtime_id(&self, id: &str) -> String {
+        match self.scope.is_empty() {
+            true => id.to_string(),
+            false => format!("{}{id}", self.scope_prefix()),
+        }
     }
 
     /// Cook errors of the latest cook by node.
@@ -343,7 +362,12 @@ impl Editor {
         let before = self.doc.clone();
         let r = f(&mut self.doc);
         if self.doc != before {
-            self.history.record(&before, key);
+            // History keeps whole top-level documents, whatever level was edited.
+            match self.scope.first() {
+                Some(top) => self.history.record(&top.parent, key),
+                None => self.history.record(&before, key),
+            }
+            self.sync_scope();
             self.after_change(&before);
         }
         r
@@ -356,7 +380,9 @@ impl Editor {
 
     /// Undoes the last edit.
     pub fn undo(&mut self) -> bool {
-        let Some(doc) = self.history.undo(&self.doc) else { return false };
+        let current = self.scope.first().map_or(&self.doc, |top| &top.parent);
+        let Some(root) = self.history.undo(current) else { return false };
+        let doc = self.set_root(root);
         let before = std::mem::replace(&mut self.doc, doc);
         self.after_change(&before);
         self.set_status("undo", false);
@@ -365,7 +391,9 @@ impl Editor {
 
     /// Redoes the last undone edit.
     pub fn redo(&mut self) -> bool {
-        let Some(doc) = self.history.redo(&self.doc) else { return false };
+        let current = self.scope.first().map_or(&self.doc, |top| &top.parent);
+        let Some(root) = self.history.redo(current) else { return false };
+        let doc = self.set_root(root);
         let before = std::mem::replace(&mut self.doc, doc);
         self.after_change(&before);
         self.set_status("redo", false);
@@ -442,6 +470,7 @@ impl Editor {
                 d.ungroup_node(id);
             }
             d.nodes.0.retain(|(id, _)| !set.contains(id.as_str()));
+            d.subgraphs.retain(|id, _| !set.contains(id.as_str()));
             d.edges.retain(|(a, b)| {
                 let na = split_endpoint(a).map(|x| x.0);
                 let nb = split_endpoint(b).map(|x| x.0);
@@ -478,11 +507,15 @@ impl Editor {
             }
         }
         let out: Vec<String> = new_nodes.iter().map(|(id, _)| id.clone()).collect();
+        // A local subgraph goes with its copy: the two are edited apart from then on.
+        let locals: Vec<(String, GraphDoc)> =
+            mapping.iter().filter_map(|(old, new)| Some((new.clone(), self.doc.subgraphs.get(old)?.clone()))).collect();
         self.edit(None, |d| {
             for (id, nd) in new_nodes {
                 d.add_node(&id, nd);
             }
             d.edges.extend(new_edges);
+            d.subgraphs.extend(locals);
         });
         out
     }
@@ -650,8 +683,9 @@ impl Editor {
             return None;
         }
         let output = req.output.min(desc.outputs.len().saturating_sub(1));
-        let req = PreviewRequest { output, ..req };
-        let compare = self.compare_target();
+        // Inside an include, the top-level graph cooks and its inner node is shown.
+        let req = PreviewRequest { output, node: self.runtime_id(&req.node), ..req };
+        let compare = self.compare_target().map(|b| PreviewRequest { node: self.runtime_id(&b.node), ..b });
         let targets = std::iter::once(req.node.clone()).chain(compare.iter().map(|b| b.node.clone())).collect();
         Some(self.cooker.submit(CookRequest { graph, targets, preview: Some(req), compare, render: None }))
     }
@@ -677,8 +711,16 @@ impl Editor {
     /// Takes finished cooks from the worker; returns whether anything arrived.
     pub fn poll(&mut self) -> bool {
         let mut any = false;
-        while let Some(outcome) = self.cooker.poll() {
+        while let Some(mut outcome) = self.cooker.poll() {
             any = true;
+            let prefix = self.scope_prefix();
+            for p in [&mut outcome.preview, &mut outcome.compare].into_iter().flatten() {
+                if let Some(r) = &mut p.request
+                    && let Some(id) = r.node.strip_prefix(&prefix)
+                {
+                    r.node = id.to_string();
+                }
+            }
             self.cook_errors = outcome.node_errors.clone();
             // A node that cooked again says its warnings afresh; one the cache served keeps its own.
             for id in &outcome.log {
@@ -722,39 +764,6 @@ impl Editor {
             }
             std::thread::sleep(Duration::from_millis(2));
         }
-    }
-
-    // ----- validation -----
-
-    /// Rebuilds the graph from the document and maps every problem to its node.
-    pub fn revalidate(&mut self) {
-        let checked = opening::check(&self.doc, &self.registry, &self.base_dir());
-        self.apply_validation(checked);
-    }
-
-    /// Adopts a validation of the current document (made here or by the loader thread).
-    fn apply_validation(&mut self, checked: opening::Checked) {
-        let (graph, diagnostics) = match checked.graph {
-            Ok(g) => (Some(Arc::new(g)), Vec::new()),
-            Err(d) => (None, d.0),
-        };
-        let mut by_node: BTreeMap<String, Vec<String>> = BTreeMap::new();
-        for d in &diagnostics {
-            for node in diagnostic_nodes(d) {
-                let text = match &d.location {
-                    Location::Port { port, .. } => format!("{port}: {}", d.message),
-                    _ => d.message.clone(),
-                };
-                by_node.entry(node).or_default().push(text);
-            }
-        }
-        self.descs = checked.descs;
-        self.validation = Validation { graph, diagnostics, by_node };
-        self.reindex();
-        let index = &self.index;
-        let (doc, revision) = (&self.doc, self.revision);
-        self.cook_errors.retain(|k, _| index.node(doc, revision, k).is_some());
-        self.cook_warnings.retain(|k, _| index.node(doc, revision, k.split('/').next().unwrap_or(k)).is_some());
     }
 
     /// Rebuilds the lookups by id, unless they are of the current revision.

@@ -178,7 +178,21 @@ impl SnarlViewer<String> for Viewer<'_> {
                 ui.label(egui::RichText::new("bypassed").small().strong().color(Color32::from_rgb(255, 220, 90)))
                     .on_hover_text("B toggles; the first input of each output's type passes through");
             }
+            if self.editor.is_local(&id) {
+                ui.label(egui::RichText::new("local").small().strong().color(Color32::from_rgb(120, 200, 255)))
+                    .on_hover_text("its graph is a copy kept in this file (double-click to step inside)");
+            }
         });
+        // Double-clicking an include's header steps inside it (Houdini's dive in). Read from the
+        // pointer, so the header's drag still moves the node; the header is laid out in canvas
+        // units, the pointer is on screen.
+        let header = self.to_global.mul_rect(ui.min_rect().expand(4.0));
+        if type_name == pyrograph_frontend::core::builtin::INCLUDE_TYPE
+            && ui.input(|i| i.pointer.button_double_clicked(egui::PointerButton::Primary))
+            && ui.input(|i| i.pointer.interact_pos()).is_some_and(|p| header.contains(p))
+        {
+            self.actions.push(Action::StepInto(id));
+        }
     }
 
     fn inputs(&mut self, node: &String) -> usize {
@@ -301,10 +315,25 @@ impl SnarlViewer<String> for Viewer<'_> {
             self.actions.push(Action::Bypass(vec![id.clone()]));
             ui.close();
         }
-        if self.editor.node_doc(&id).is_some_and(|n| n.type_name == pyrograph_frontend::core::builtin::INCLUDE_TYPE)
+        let include = self.editor.node_doc(&id).is_some_and(|n| n.type_name == pyrograph_frontend::core::builtin::INCLUDE_TYPE);
+        if include && ui.button("Step inside (I)").on_hover_text("show and edit its graph; the breadcrumb leads back").clicked() {
+            self.actions.push(Action::StepInto(id.clone()));
+            ui.close();
+        }
+        if include
             && ui.button("Unpack").on_hover_text("replace this include by the nodes of its graph, wired as it was").clicked()
         {
             self.actions.push(Action::Unpack(id.clone()));
+            ui.close();
+        }
+        let selected = self.editor.selection();
+        let chosen = if selected.contains(&id) { selected.to_vec() } else { vec![id.clone()] };
+        if ui
+            .button(format!("Collapse {} into a subgraph (Ctrl+Shift+G)", if chosen.len() > 1 { "selection" } else { "node" }))
+            .on_hover_text("move the nodes into a new include kept in this file; wires in and out become its ports")
+            .clicked()
+        {
+            self.actions.push(Action::Collapse(chosen));
             ui.close();
         }
         if ui.button("Show/hide parameter pins").clicked() {

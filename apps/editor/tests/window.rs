@@ -273,3 +273,48 @@ fn a_100000_node_chain_opens_in_a_real_window_without_freezing_it() {
         culled[0]
     );
 }
+
+fn scope(dump: &Value) -> Vec<String> {
+    dump["scope"].as_array().map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect()).unwrap_or_default()
+}
+
+/// A double-click on an include's header in a real window steps inside it (the include's
+/// nodes are on screen, the breadcrumb says where), and a click on the breadcrumb's first
+/// button steps back out.
+#[test]
+#[ignore = "needs Xvfb and xdotool: .ci/run installs them and runs it"]
+fn a_double_click_in_a_real_window_steps_into_an_include_and_the_breadcrumb_steps_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_procs, display, dump) = start_editor(&workspace().join("graphs/flame-cards.ron"), &[], dir.path());
+    let start = Instant::now();
+    let mut first = wait_for(&dump, "the nodes on screen", |v| v["nodes"].as_object().is_some_and(|n| n.len() == 4));
+    loop {
+        std::thread::sleep(Duration::from_millis(700));
+        let again = wait_for(&dump, "the nodes on screen", |_| true);
+        if again["nodes"] == first["nodes"] {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(90), "the layout never settled");
+        first = again;
+    }
+    // The header: a little inside the node's top-left corner.
+    let n = |k: &str| first["nodes"]["calm"][k].as_f64().unwrap();
+    let (x, y) = ((n("x") + 30.0) as i64, (n("y") + 20.0) as i64);
+    xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
+    std::thread::sleep(Duration::from_millis(200));
+    xdotool(&display, &["click", "--repeat", "2", "--delay", "80", "1"]);
+    let inside = wait_for(&dump, "inside calm", |v| scope(v) == ["calm"]);
+    let nodes = inside["nodes"].as_object().map(|m| m.keys().cloned().collect::<Vec<_>>()).unwrap_or_default();
+    assert!(nodes.iter().any(|k| k == "flame") && !nodes.iter().any(|k| k == "calm"), "the preset's nodes: {nodes:?}");
+    let crumbs = inside["crumbs"].as_array().cloned().unwrap_or_default();
+    assert_eq!(crumbs.len(), 2, "the file, then calm: {inside}");
+
+    let c = |k: &str| crumbs[0][k].as_f64().unwrap();
+    let (x, y) = ((c("x") + c("w") / 2.0) as i64, (c("y") + c("h") / 2.0) as i64);
+    xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
+    xdotool(&display, &["mousedown", "1"]);
+    std::thread::sleep(Duration::from_millis(120));
+    xdotool(&display, &["mouseup", "1"]);
+    let out = wait_for(&dump, "back at the top level", |v| scope(v).is_empty() && v["nodes"]["calm"].is_object());
+    assert_eq!(selection(&out), ["calm"], "the include stepped out of is selected");
+}

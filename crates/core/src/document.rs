@@ -3,7 +3,7 @@
 //! The document is its own set of plain structs, separate from the runtime graph: it keeps node
 //! order, string ids and parameters exactly as the author wrote them, so files diff and review well.
 //! Older shapes load through explicit migration functions ([`migrate_v0`], [`migrate_v1`],
-//! [`migrate_v2`], [`migrate_v3`], [`migrate_v4`]), never serde aliases. A document is written in
+//! [`migrate_v2`], [`migrate_v3`], [`migrate_v4`], [`migrate_v5`]), never serde aliases. A document is written in
 //! the oldest version that can hold it, so a graph without groups, comments, preset metadata,
 //! animated parameters or bypassed nodes stays readable by releases that know only version 1.
 
@@ -20,8 +20,12 @@ use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 mod param_serde;
 
 /// The newest version this build reads and writes (2: canvas groups and comments; 3: preset
-/// metadata; 4: animated parameters, `keys(…)` and `expr(…)`; 5: bypassed nodes, `bypass: true`).
-pub const CURRENT_VERSION: u32 = 5;
+/// metadata; 4: animated parameters, `keys(…)` and `expr(…)`; 5: bypassed nodes, `bypass: true`;
+/// 6: local subgraphs, `subgraphs: {…}`).
+pub const CURRENT_VERSION: u32 = 6;
+
+/// The version of documents with local subgraphs (an include's graph kept in the file).
+pub const SUBGRAPH_VERSION: u32 = 6;
 
 /// The version of documents with a bypassed node.
 pub const BYPASS_VERSION: u32 = 5;
@@ -309,6 +313,12 @@ pub struct GraphDoc {
     /// Canvas comments (version 2).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub comments: Vec<CommentDoc>,
+    /// Local subgraphs (version 6), by the id of the `graph.include` node that uses each: that
+    /// node cooks this graph instead of reading its `path`, which then only says what the copy
+    /// was made from (Houdini's unlocked asset, Nuke's group). Relative paths inside resolve
+    /// against this document's folder.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub subgraphs: BTreeMap<String, GraphDoc>,
 }
 
 impl Default for GraphDoc {
@@ -322,6 +332,7 @@ impl Default for GraphDoc {
             edges: Vec::new(),
             groups: Vec::new(),
             comments: Vec::new(),
+            subgraphs: BTreeMap::new(),
         }
     }
 }
@@ -366,6 +377,10 @@ impl GraphDoc {
 
     /// Parses a document from RON text, migrating older versions.
     pub fn from_ron(text: &str) -> Result<GraphDoc, Diagnostics> {
+        GraphDoc::parse_versioned(text).and_then(local_versions)
+    }
+
+    fn parse_versioned(text: &str) -> Result<GraphDoc, Diagnostics> {
         let probe: VersionProbe = ron_options().from_str(text).map_err(syntax_error)?;
         match probe.version {
             0 => {
@@ -388,15 +403,12 @@ impl GraphDoc {
                 let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
                 Ok(migrate_v4(old))
             }
-            5 => ron_options().from_str(text).map_err(syntax_error),
-            v => Err(Diagnostics::one(Diagnostic::new(
-                DiagnosticKind::Version,
-                Location::File,
-                format!(
-                    "graph version {v} is newer than this pyrograph understands (up to {CURRENT_VERSION}); \
-                     upgrade pyrograph"
-                ),
-            ))),
+            5 => {
+                let old: GraphDoc = ron_options().from_str(text).map_err(syntax_error)?;
+                Ok(migrate_v5(old))
+            }
+            6 => ron_options().from_str(text).map_err(syntax_error),
+            v => Err(too_new(v, "graph")),
         }
     }
 
@@ -408,10 +420,13 @@ impl GraphDoc {
         GraphDoc::from_ron(&text).map_err(|d| d.in_file(path))
     }
 
-    /// The oldest version that holds this document: 5 with a bypassed node, 4 with animated
-    /// parameters, 3 with preset metadata, else 2 with groups or comments, else 1.
+    /// The oldest version that holds this document: 6 with a local subgraph, 5 with a bypassed
+    /// node, 4 with animated parameters, 3 with preset metadata, else 2 with groups or comments,
+    /// else 1.
     pub fn needed_version(&self) -> u32 {
-        if self.nodes.0.iter().any(|(_, n)| n.bypass) {
+        if !self.subgraphs.is_empty() {
+            SUBGRAPH_VERSION
+        } else if self.nodes.0.iter().any(|(_, n)| n.bypass) {
             BYPASS_VERSION
         } else if self.nodes.0.iter().any(|(_, n)| n.params.values().any(ParamValue::is_animated)) {
             ANIMATION_VERSION
@@ -431,6 +446,15 @@ impl GraphDoc {
         if self.version != self.needed_version() {
             doc.to_mut().version = self.needed_version();
         }
+        // Each local subgraph says its own version too, so it can be copied out to a file as is.
+        // Walked with a stack: nesting is as deep as the file's includes of includes.
+        if doc.subgraphs.values().any(|g| g.version != g.needed_version() || !g.subgraphs.is_empty()) {
+            let mut stack: Vec<&mut GraphDoc> = doc.to_mut().subgraphs.values_mut().collect();
+            while let Some(g) = stack.pop() {
+                g.version = g.needed_version();
+                stack.extend(g.subgraphs.values_mut());
+            }
+        }
         // Serializing plain structs, maps and strings cannot fail.
         ron::ser::to_string_pretty(&*doc, config).unwrap_or_default() + "\n"
     }
@@ -448,6 +472,30 @@ impl GraphDoc {
     pub fn save(&self, path: &Path, overwrite: bool) -> std::io::Result<()> {
         write_atomic(path, self.to_ron().as_bytes(), overwrite)
     }
+}
+
+/// `what` is "graph" or "local subgraph 'x'".
+fn too_new(v: u32, what: &str) -> Diagnostics {
+    Diagnostics::one(Diagnostic::new(
+        DiagnosticKind::Version,
+        Location::File,
+        format!("{what} version {v} is newer than this pyrograph understands (up to {CURRENT_VERSION}); upgrade pyrograph"),
+    ))
+}
+
+/// Local subgraphs are read in their own versions (each no newer than its document's) and are
+/// [`CURRENT_VERSION`] in memory, as the document is. Walked with a stack: nesting is as deep as
+/// the file's includes of includes.
+fn local_versions(mut doc: GraphDoc) -> Result<GraphDoc, Diagnostics> {
+    let mut stack: Vec<(String, &mut GraphDoc)> = doc.subgraphs.iter_mut().map(|(k, g)| (k.clone(), g)).collect();
+    while let Some((name, g)) = stack.pop() {
+        if g.version > CURRENT_VERSION {
+            return Err(too_new(g.version, &format!("local subgraph '{name}':")));
+        }
+        g.version = CURRENT_VERSION;
+        stack.extend(g.subgraphs.iter_mut().map(|(k, g)| (format!("{name}/{k}"), g)));
+    }
+    Ok(doc)
 }
 
 /// Writes `Some(x)` as plain `x`, matching how authors write optional fields.
@@ -584,6 +632,12 @@ pub fn migrate_v3(mut old: GraphDoc) -> GraphDoc {
 
 /// Migrates version 4 to version 5: version 5 only adds the optional `bypass` flag of a node.
 pub fn migrate_v4(mut old: GraphDoc) -> GraphDoc {
+    old.version = CURRENT_VERSION;
+    old
+}
+
+/// Migrates version 5 to version 6: version 6 only adds the optional `subgraphs` table.
+pub fn migrate_v5(mut old: GraphDoc) -> GraphDoc {
     old.version = CURRENT_VERSION;
     old
 }

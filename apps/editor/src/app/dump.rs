@@ -46,6 +46,8 @@ impl EditorApp {
             "frames": self.frames_drawn,
             "slowest_frame_ms": self.frame_times.iter().copied().fold(0.0, f64::max),
             "culled": self.canvas.culled,
+            "scope": self.editor.scope().iter().map(|c| c.id.clone()).collect::<Vec<_>>(),
+            "crumbs": self.scope_ui.crumb_rects.iter().map(rect).collect::<Vec<_>>(),
         })
     }
 

@@ -25,6 +25,7 @@ impl Editor {
     pub fn new_document(&mut self) {
         self.cooker.cancel();
         self.path = None;
+        self.scope.clear();
         self.doc = GraphDoc::new();
         self.saved = GraphDoc::new();
         self.saves += 1;
@@ -44,11 +45,11 @@ impl Editor {
 
     /// Saves to `path` (atomically) and makes it the current file.
     pub fn save_as(&mut self, path: &Path) -> Result<(), String> {
-        match self.doc.save(path, true) {
+        match self.root_doc().save(path, true) {
             Ok(()) => {
                 let moved = self.path.as_deref() != Some(path);
                 self.path = Some(path.to_path_buf());
-                self.saved = self.doc.clone();
+                self.saved = self.root_doc().clone();
                 self.saves += 1;
                 self.push_recent(path);
                 self.set_status(format!("saved {}", path.display()), false);

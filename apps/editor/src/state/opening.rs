@@ -14,7 +14,7 @@ use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
 use pyrograph_frontend::core::builtin::{INCLUDE_PATH, INCLUDE_TYPE};
-use pyrograph_frontend::core::graph::{expand_vars, preset_desc};
+use pyrograph_frontend::core::graph::{expand_vars, local_desc, preset_desc};
 use pyrograph_frontend::core::{BuildOptions, Diagnostics, Graph, GraphDoc, NodeDesc, NodeDoc, ParamValue, Registry};
 
 use super::Editor;
@@ -77,7 +77,7 @@ fn resolve_descs(doc: &GraphDoc, registry: &Registry, dir: &Path, graph: Option<
     let mut out = HashMap::with_capacity(doc.nodes.0.len());
     for (id, nd) in &doc.nodes.0 {
         let desc = if nd.type_name == INCLUDE_TYPE {
-            include_desc(id, nd, registry, dir, graph)
+            include_desc(id, nd, doc.subgraphs.get(id), registry, dir, graph)
         } else {
             // One description per type, shared: a big graph has few types and many nodes.
             by_type
@@ -92,9 +92,19 @@ fn resolve_descs(doc: &GraphDoc, registry: &Registry, dir: &Path, graph: Option<
     out
 }
 
-fn include_desc(id: &str, nd: &NodeDoc, registry: &Registry, dir: &Path, graph: Option<&Graph>) -> Option<Arc<NodeDesc>> {
+fn include_desc(
+    id: &str,
+    nd: &NodeDoc,
+    local: Option<&GraphDoc>,
+    registry: &Registry,
+    dir: &Path,
+    graph: Option<&Graph>,
+) -> Option<Arc<NodeDesc>> {
     if let Some(d) = graph.and_then(|g| g.desc(id)) {
         return Some(Arc::new(d.clone()));
+    }
+    if let Some(local) = local {
+        return local_desc(local, registry, dir).ok().map(Arc::new);
     }
     match nd.params.get(INCLUDE_PATH) {
         Some(ParamValue::String(p)) => expand_vars(p).ok().and_then(|p| preset_desc(&dir.join(p), registry).ok()).map(Arc::new),
@@ -190,6 +200,7 @@ impl Editor {
         self.path = err.is_none().then(|| path.to_path_buf());
         self.saved = opened.saved;
         self.saves += 1;
+        self.scope.clear();
         self.doc = doc;
         self.history.clear();
         self.selection.clear();

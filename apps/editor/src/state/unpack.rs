@@ -24,9 +24,16 @@ impl Editor {
         if include.type_name != INCLUDE_TYPE {
             return Err(format!("'{id}' is a {}, not an included graph: there is nothing to unpack", include.type_name));
         }
-        let file = self.include_file(id, &include)?;
-        let inner = GraphDoc::load(&file).map_err(|d| format!("cannot unpack '{id}': {d}"))?;
-        let (doc, ids) = unpacked(self, id, &include, &inner, file.parent().unwrap_or(Path::new(".")))?;
+        // A local copy is unpacked as it is (its paths already resolve from here).
+        let (inner, inner_dir) = match self.doc().subgraphs.get(id) {
+            Some(local) => (local.clone(), None),
+            None => {
+                let file = self.include_file(id, &include)?;
+                let inner = GraphDoc::load(&file).map_err(|d| format!("cannot unpack '{id}': {d}"))?;
+                (inner, Some(file.parent().unwrap_or(Path::new(".")).to_path_buf()))
+            }
+        };
+        let (doc, ids) = unpacked(self, id, &include, &inner, inner_dir.as_deref())?;
         self.edit(None, |d| *d = doc);
         self.seal();
         self.set_selection(ids.clone());
@@ -50,7 +57,7 @@ fn unpacked(
     id: &str,
     include: &NodeDoc,
     inner: &GraphDoc,
-    inner_dir: &Path,
+    inner_dir: Option<&Path>,
 ) -> Result<(GraphDoc, Vec<String>), String> {
     let doc = ed.doc();
     let face = inner.interface.clone().unwrap_or_default();
@@ -82,8 +89,9 @@ fn unpacked(
         for name in input_path_params(ed.registry(), &nd.type_name) {
             if let Some(ParamValue::String(p)) = nd.params.get_mut(&name)
                 && !is_anchored(p)
+                && let Some(dir) = inner_dir
             {
-                *p = relative_path(&inner_dir.join(&*p), &base);
+                *p = relative_path(&dir.join(&*p), &base);
             }
         }
         nodes.push((rename[n.as_str()].clone(), nd));
@@ -113,6 +121,16 @@ fn unpacked(
         edges.push((a, b));
     }
     let mut out = doc.clone();
+    out.subgraphs.remove(id);
+    // The inner graph's own local subgraphs come along under their nodes' new ids.
+    for (n, local) in &inner.subgraphs {
+        let Some(new) = rename.get(n.as_str()) else { continue };
+        let mut local = local.clone();
+        if let Some(dir) = inner_dir {
+            crate::clipboard::rebase_paths(&mut local, ed.registry(), dir, &base);
+        }
+        out.subgraphs.insert(new.clone(), local);
+    }
     let at_index = out.nodes.0.iter().position(|(n, _)| n == id).unwrap_or(out.nodes.0.len());
     out.nodes.0.remove(at_index);
     let ids: Vec<String> = nodes.iter().map(|(n, _)| n.clone()).collect();

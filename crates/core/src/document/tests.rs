@@ -153,7 +153,7 @@ fn preset_metadata_round_trips_as_version_3_and_newer_is_refused() {
     let out = doc.to_ron();
     assert!(out.contains("version: 3,") && out.contains("preset: (") && !out.contains("Some("), "{out}");
     assert_eq!(GraphDoc::from_ron(&out).unwrap(), doc);
-    let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 6")).unwrap_err();
+    let err = GraphDoc::from_ron(&out.replace("version: 3", "version: 7")).unwrap_err();
     assert_eq!(err.0[0].kind, DiagnosticKind::Version);
     // Without metadata the same graph is written for older readers again.
     let mut plain = doc.clone();
@@ -198,4 +198,24 @@ fn a_bypassed_node_is_written_as_version_5_and_only_then() {
     let v4 = GraphDoc::from_ron(r#"(version: 4, nodes: {"a": (type: "value.float", params: {"value": expr("time")})})"#).unwrap();
     assert_eq!(v4.version, CURRENT_VERSION);
     assert!(v4.to_ron().contains("version: 4,"));
+}
+
+#[test]
+fn a_local_subgraph_is_written_as_version_6_each_node_on_its_line_and_only_then() {
+    let mut doc = GraphDoc::from_ron(SAMPLE).unwrap();
+    let inner = GraphDoc::from_ron(SAMPLE).unwrap();
+    doc.add_node("fire", NodeDoc::new("graph.include"));
+    doc.subgraphs.insert("fire".into(), inner);
+    let text = doc.to_ron();
+    assert!(text.starts_with("(\n    version: 6,"), "{text}");
+    assert!(text.contains("    subgraphs: {\n        \"fire\": (\n            version: 1,\n"), "{text}");
+    assert!(text.contains("\n                \"gray\": (type: \"imaging.to_gray\""), "one line per inner node: {text}");
+    let back = GraphDoc::from_ron(&text).unwrap();
+    assert_eq!(back, doc);
+    assert_eq!(back.subgraphs["fire"].version, CURRENT_VERSION, "in memory, every level is current");
+    doc.subgraphs.clear();
+    assert!(!doc.to_ron().contains("version: 6"));
+    let future = text.replace("            version: 1,", "            version: 99,");
+    let err = GraphDoc::from_ron(&future).unwrap_err().to_string();
+    assert!(err.contains("local subgraph 'fire': version 99 is newer"), "{err}");
 }

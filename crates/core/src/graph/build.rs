@@ -92,7 +92,7 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
                 ));
                 continue;
             }
-            if let Err(mut d) = super::include::flatten(id, nd, ctx, &mut parts) {
+            if let Err(mut d) = super::include::flatten(id, nd, doc.subgraphs.get(id), ctx, &mut parts) {
                 diags.append(&mut d);
             }
             continue;
@@ -146,12 +146,29 @@ pub(crate) fn build(doc: &GraphDoc, ctx: &LoadCtx) -> Result<Graph, Diagnostics>
         check_animated(&parts, &mut diags);
     }
     check_groups(doc, &known, &mut diags);
+    check_subgraphs(doc, &mut diags);
 
     if !diags.is_empty() {
         return Err(Diagnostics(diags));
     }
     let Parts { g, ids, includes } = parts;
     Ok(Graph { g, ids, order, dir: ctx.dir.clone(), file: None, interface, includes })
+}
+
+/// Every local subgraph belongs to an include node of the same id.
+fn check_subgraphs(doc: &GraphDoc, diags: &mut Vec<Diagnostic>) {
+    for id in doc.subgraphs.keys() {
+        let why = match doc.node(id) {
+            None => "there is no node with that id",
+            Some(nd) if nd.type_name != INCLUDE_TYPE => "that node is not a graph.include",
+            Some(_) => continue,
+        };
+        diags.push(diag(
+            DiagnosticKind::Include,
+            Location::Node(id.clone()),
+            format!("local subgraph '{id}' belongs to no included graph ({why}); delete it from `subgraphs` or rename it"),
+        ));
+    }
 }
 
 /// Groups name nodes that exist, each node in at most one group, and colours parse.

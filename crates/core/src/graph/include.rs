@@ -11,6 +11,7 @@ use super::{BuildOptions, Graph, GraphNode, Included, InputSource, LoadCtx, PATH
 use crate::builtin::{INCLUDE_PATH, INCLUDE_TYPE, include_desc};
 use crate::document::{GraphDoc, NodeDoc, ParamValue};
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
+
 use crate::node::{NodeDesc, PortDesc, TimeDep};
 use crate::registry::Registry;
 use crate::value::PortType;
@@ -81,10 +82,61 @@ fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc),
     Ok((sub, desc))
 }
 
-/// Adds the nodes of the file include `id` names to `parts` as `id/<inner id>`, sets the inner
-/// ports its parameters stand for, and records the include's port map.
-pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) -> Result<(), Vec<Diagnostic>> {
-    let built = load(id, nd, ctx)?;
+/// How deep local subgraphs may nest (a subgraph in a subgraph …): far beyond any graph made by
+/// hand or by collapsing, and well short of the stack a deeper build would need.
+const MAX_LOCAL_DEPTH: usize = 32;
+
+/// Builds include `id`'s local subgraph `local` (kept in the including document, its paths
+/// relative to that document's folder), with its description.
+fn load_local(id: &str, local: &GraphDoc, ctx: &LoadCtx) -> Result<Rc<(Graph, NodeDesc)>, Vec<Diagnostic>> {
+    let at = |message: String| diag(DiagnosticKind::Include, Location::Node(id.to_string()), message);
+    if ctx.local_depth >= MAX_LOCAL_DEPTH {
+        return Err(vec![at(format!("local subgraphs nest more than {MAX_LOCAL_DEPTH} deep here; unpack some of them"))]);
+    }
+    let child = LoadCtx { nested: true, local_depth: ctx.local_depth + 1, ..ctx.clone() };
+    let sub = build(local, &child).map_err(|d| {
+        d.0.into_iter()
+            .map(|d| {
+                let what = if d.kind == DiagnosticKind::Include { d.message } else { format!("{}: {}", d.location, d.message) };
+                at(format!("in its local subgraph: {what}"))
+            })
+            .collect::<Vec<_>>()
+    })?;
+    let desc = describe(local, &sub).map_err(|m| vec![at(format!("its local subgraph {m}"))])?;
+    Ok(Rc::new((sub, desc)))
+}
+
+/// The node description include `id` would have with local subgraph `local`, built on its own
+/// (for an editor showing pins while the graph around it has problems).
+pub fn local_desc(local: &GraphDoc, registry: &Registry, dir: &Path) -> Result<NodeDesc, Diagnostics> {
+    let options = BuildOptions { describe_only: true, ..BuildOptions::default() };
+    let ctx = LoadCtx {
+        registry,
+        root: dir.to_path_buf(),
+        dir: dir.to_path_buf(),
+        options: &options,
+        include_stack: Vec::new(),
+        nested: false,
+        local_depth: 0,
+        includes: Default::default(),
+    };
+    load_local("subgraph", local, &ctx).map(|built| built.1.clone()).map_err(Diagnostics)
+}
+
+/// Adds the nodes of the graph include `id` names (its local subgraph `local`, else its file)
+/// to `parts` as `id/<inner id>`, sets the inner ports its parameters stand for, and records the
+/// include's port map, and those of the includes inside it as `id/<inner include>`.
+pub(super) fn flatten(
+    id: &str,
+    nd: &NodeDoc,
+    local: Option<&GraphDoc>,
+    ctx: &LoadCtx,
+    parts: &mut Parts,
+) -> Result<(), Vec<Diagnostic>> {
+    let built = match local {
+        Some(local) => load_local(id, local, ctx)?,
+        None => load(id, nd, ctx)?,
+    };
     let (sub, desc) = (&built.0, &built.1);
     let mut diags = Vec::new();
     let sources = node_inputs(id, nd, desc, ctx, &mut diags);
@@ -111,6 +163,14 @@ pub(super) fn flatten(id: &str, nd: &NodeDoc, ctx: &LoadCtx, parts: &mut Parts) 
         if let (Some((a, b)), Some(w)) = (sub.g.edge_endpoints(e), sub.g.edge_weight(e)) {
             parts.g.add_edge(map[&a], map[&b], *w);
         }
+    }
+    for (inner_id, inc) in &sub.includes {
+        let moved = Included {
+            desc: inc.desc.clone(),
+            inputs: inc.inputs.iter().map(|r| r.map(|(i, p)| (map[&i], p))).collect(),
+            outputs: inc.outputs.iter().map(|(i, p)| (map[i], *p)).collect(),
+        };
+        parts.includes.insert(Arc::from(format!("{id}{PATH_SEP}{inner_id}")), moved);
     }
     let remap = |(_, idx, port): &(String, _, usize)| (map[idx], *port);
     // The include's own `path` input comes first and stands for no inner port.
@@ -144,6 +204,7 @@ pub fn preset_desc(path: &Path, registry: &Registry) -> Result<NodeDesc, Diagnos
         options: &options,
         include_stack: Vec::new(),
         nested: false,
+        local_depth: 0,
         includes: Default::default(),
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

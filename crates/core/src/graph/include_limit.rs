@@ -16,14 +16,27 @@ use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 struct Sizes {
     docs: HashMap<PathBuf, (GraphDoc, PathBuf)>,
     size: HashMap<PathBuf, u64>,
+    /// How many local subgraphs the count is inside.
+    depth: usize,
 }
 
-/// The include nodes of `doc` whose files exist, as (id, canonical path); the others are
-/// reported when the graph is built.
-fn includes(doc: &GraphDoc, dir: &Path) -> Vec<(String, PathBuf)> {
+/// What an include node reads: its local subgraph, or a file (canonical path).
+#[derive(Clone, PartialEq)]
+enum Target {
+    Local,
+    File(PathBuf),
+}
+
+/// The include nodes of `doc` with a local subgraph or a file that exists, as (id, target); the
+/// others are reported when the graph is built.
+fn includes(doc: &GraphDoc, dir: &Path) -> Vec<(String, Target)> {
     let mut out = Vec::new();
     for (id, nd) in &doc.nodes.0 {
         if nd.type_name != INCLUDE_TYPE {
+            continue;
+        }
+        if doc.subgraphs.contains_key(id) {
+            out.push((id.clone(), Target::Local));
             continue;
         }
         let Some(ParamValue::String(raw)) = nd.params.get(INCLUDE_PATH) else { continue };
@@ -33,19 +46,38 @@ fn includes(doc: &GraphDoc, dir: &Path) -> Vec<(String, PathBuf)> {
             continue;
         }
         if let Ok(canon) = std::fs::canonicalize(dir.join(expanded)) {
-            out.push((id.clone(), canon));
+            out.push((id.clone(), Target::File(canon)));
         }
     }
     out
 }
 
-/// Nodes of `doc` once flattened. Recursion here is once per level of distinct files, as
-/// building is; a cycle adds nothing (building reports it).
+/// Local subgraphs deeper than this are not counted (building refuses them).
+const MAX_DEPTH: usize = 40;
+
+/// Nodes of `doc` once flattened. Recursion here is once per level of distinct files or of
+/// local subgraphs, as building is; a cycle adds nothing (building reports it).
 fn size_of(doc: &GraphDoc, dir: &Path, sizes: &mut Sizes, stack: &mut Vec<PathBuf>) -> u64 {
     let own = doc.nodes.0.iter().filter(|(_, nd)| nd.type_name != INCLUDE_TYPE).count() as u64;
     includes(doc, dir)
         .into_iter()
-        .fold(own, |n, (_, canon)| if stack.contains(&canon) { n } else { n.saturating_add(file_size(&canon, sizes, stack)) })
+        .fold(own, |n, (id, target)| n.saturating_add(target_size(doc, dir, &id, &target, sizes, stack)))
+}
+
+/// Nodes behind include `id` of `doc`.
+fn target_size(doc: &GraphDoc, dir: &Path, id: &str, target: &Target, sizes: &mut Sizes, stack: &mut Vec<PathBuf>) -> u64 {
+    match target {
+        Target::File(canon) if stack.contains(canon) => 0,
+        Target::File(canon) => file_size(canon, sizes, stack),
+        Target::Local if sizes.depth >= MAX_DEPTH => 0,
+        Target::Local => {
+            let Some(local) = doc.subgraphs.get(id) else { return 0 };
+            sizes.depth += 1;
+            let s = size_of(local, dir, sizes, stack);
+            sizes.depth -= 1;
+            s
+        }
+    }
 }
 
 fn file_size(canon: &Path, sizes: &mut Sizes, stack: &mut Vec<PathBuf>) -> u64 {
@@ -81,18 +113,30 @@ pub(super) fn check(doc: &GraphDoc, dir: &Path) -> Result<(), Diagnostics> {
     }
     // Follow the biggest include at each level, a few levels down.
     let mut chain = Vec::new();
-    let (mut at, mut at_dir) = (doc, dir.to_path_buf());
+    // Owned copies, since counting a local subgraph's size borrows the counts mutably (the
+    // error path only).
+    let (mut at, mut at_dir) = (doc.clone(), dir.to_path_buf());
     while chain.len() < 6 {
+        let found = includes(&at, &at_dir);
+        let sized: Vec<(String, Target, u64)> = found
+            .iter()
+            .map(|(id, t)| (id.clone(), t.clone(), target_size(&at, &at_dir, id, t, &mut sizes, &mut Vec::new())))
+            .collect();
         // The first of the biggest (`max_by_key` keeps the last of equals, so walk backwards).
-        let biggest = includes(at, &at_dir).into_iter().rev().max_by_key(|(_, c)| sizes.size.get(c).copied().unwrap_or(0));
-        let Some((id, canon)) = biggest else { break };
-        let count = includes(at, &at_dir).iter().filter(|(_, c)| *c == canon).count();
-        chain.push((
-            id,
-            format!("{} ({} nodes each, included {count}×)", short(&canon), sizes.size.get(&canon).copied().unwrap_or(0)),
-        ));
-        let Some((next, next_dir)) = sizes.docs.get(&canon) else { break };
-        (at, at_dir) = (next, next_dir.clone());
+        let Some((id, target, size)) = sized.into_iter().rev().max_by_key(|(_, _, s)| *s) else { break };
+        match target {
+            Target::Local => {
+                chain.push((id.clone(), format!("the local subgraph of '{id}' ({size} nodes)")));
+                let Some(next) = at.subgraphs.remove(&id) else { break };
+                at = next;
+            }
+            Target::File(canon) => {
+                let count = found.iter().filter(|(_, t)| *t == Target::File(canon.clone())).count();
+                chain.push((id, format!("{} ({size} nodes each, included {count}×)", short(&canon))));
+                let Some((next, next_dir)) = sizes.docs.get(&canon).cloned() else { break };
+                (at, at_dir) = (next, next_dir);
+            }
+        }
     }
     let hint = crate::limits::raise_hint("--max-nodes", "PYROGRAPH_MAX_NODES", total);
     let Some((first, _)) = chain.first() else {

@@ -25,7 +25,7 @@ use crate::value::{PortType, Value};
 
 pub(crate) use build::build;
 pub use convert::{expand_vars, parse_hex_color, value_to_param};
-pub use include::preset_desc;
+pub use include::{local_desc, preset_desc};
 
 /// Separates an include's id from the ids of the nodes it brought in (`fire/noise`).
 pub const PATH_SEP: char = '/';
@@ -134,6 +134,8 @@ pub(crate) struct LoadCtx<'a> {
     /// Whether this builds an included file (checks that depend on how the includer connects
     /// it, such as where animated parameters are sampled, wait for the whole graph).
     pub nested: bool,
+    /// How many local subgraphs this build is inside.
+    pub local_depth: usize,
     /// The included files built so far in this load, shared by every level.
     pub includes: std::rc::Rc<IncludeCache>,
 }
@@ -165,7 +167,16 @@ impl Graph {
         let stack = vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())];
         let root = options.output_dir.clone().unwrap_or_else(|| dir.clone());
         include_limit::check(doc, &dir).map_err(|d| d.in_file(path))?;
-        let ctx = LoadCtx { registry, dir, options, include_stack: stack, root, nested: false, includes: Default::default() };
+        let ctx = LoadCtx {
+            registry,
+            dir,
+            options,
+            include_stack: stack,
+            root,
+            nested: false,
+            local_depth: 0,
+            includes: Default::default(),
+        };
         let mut graph = build(doc, &ctx).map_err(|d| d.in_file(path))?;
         graph.file = Some(path.to_path_buf());
         Ok(graph)
@@ -182,6 +193,7 @@ impl Graph {
             include_stack: Vec::new(),
             root,
             nested: false,
+            local_depth: 0,
             includes: Default::default(),
         };
         build(doc, &ctx)

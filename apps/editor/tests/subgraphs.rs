@@ -170,3 +170,35 @@ fn collapse_a_selection_into_a_subgraph_cooks_the_same_frame_and_undoes_byte_for
     h.run_steps(2);
     assert_eq!(h.state().editor.doc().to_ron(), original, "one undo step");
 }
+
+#[test]
+fn save_into_preset_asks_first_naming_the_graphs_that_use_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("presets")).unwrap();
+    let preset = dir.path().join("presets/p.ron");
+    let text = "(\n    version: 1,\n    interface: Some((outputs: {\"y\": \"v.value\"})),\n    nodes: {\"v\": (type: \"value.float\", params: {\"value\": 1.0})},\n)\n";
+    std::fs::write(&preset, text).unwrap();
+    let include = |name: &str| {
+        format!("(version: 1, nodes: {{\"{name}\": (type: \"graph.include\", params: {{\"path\": \"presets/p.ron\"}})}})")
+    };
+    std::fs::write(dir.path().join("main.ron"), include("p")).unwrap();
+    std::fs::write(dir.path().join("other.ron"), include("o")).unwrap();
+    let mut ed = Editor::with_default_registry();
+    ed.auto_cook = false;
+    ed.open(&dir.path().join("main.ron")).unwrap();
+    ed.step_into("p").unwrap();
+    ed.set_param("v", "value", ParamValue::Float(5.0)).unwrap();
+    ed.seal();
+    let mut h = harness(EditorApp::new(ed));
+    h.run_steps(3);
+    h.get_by_label("Save into preset…").click();
+    h.run_steps(3);
+    assert!(h.query_by_label_contains("1 other graph(s) use this preset").is_some());
+    assert!(h.query_by_label_contains("other.ron").is_some(), "the other graph is named");
+    assert_eq!(std::fs::read_to_string(&preset).unwrap(), text, "nothing written before the confirmation");
+    h.get_by_label("Write the preset file").click();
+    h.run_steps(3);
+    let written = GraphDoc::load(&preset).unwrap();
+    assert_eq!(written.node("v").unwrap().params["value"], ParamValue::Float(5.0));
+    assert!(!h.state().editor.is_local("p") && h.state().editor.scope().is_empty());
+}

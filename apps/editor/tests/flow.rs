@@ -6,7 +6,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 mod common;
 
-use common::settle;
+use common::{preview_of, settle};
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{GraphDoc, NodeDoc, ParamValue};
 
@@ -28,15 +28,6 @@ fn bloom_graph() -> GraphDoc {
     doc.add_node("bloom", NodeDoc::new("imaging.bloom"));
     doc.connect("color.image", "bloom.image");
     doc
-}
-
-/// The pixels the preview shows after selecting `node`.
-fn preview_of(h: &mut Harness<'_, EditorApp>, node: &str) -> Vec<u8> {
-    h.state_mut().editor.select(node);
-    settle(h);
-    let p = h.state().editor.preview().expect("a preview");
-    assert_eq!(p.request.as_ref().map(|r| r.node.as_str()), Some(node));
-    p.image.as_ref().unwrap_or_else(|| panic!("no image for {node}: {:?}", p.error)).rgba.clone()
 }
 
 /// The pixels the preview shows now.

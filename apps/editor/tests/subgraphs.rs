@@ -8,7 +8,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 mod common;
 
-use common::settle;
+use common::{preview_of, settle};
 use pyrograph_editor::{Editor, EditorApp};
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, NodeDoc, ParamValue, Value};
 
@@ -130,13 +130,6 @@ fn chain() -> GraphDoc {
     doc.add_node("gray", NodeDoc { pos: Some((600.0, 0.0)), ..NodeDoc::new("imaging.to_gray") });
     doc.connect("color.image", "bloom.image").connect("bloom.image", "gray.image");
     doc
-}
-
-fn preview_of(h: &mut Harness<'_, EditorApp>, node: &str) -> Vec<u8> {
-    h.state_mut().editor.select(node);
-    settle(h);
-    let p = h.state().editor.preview().expect("a preview");
-    p.image.as_ref().unwrap_or_else(|| panic!("no image for {node}: {:?}", p.error)).rgba.clone()
 }
 
 #[test]

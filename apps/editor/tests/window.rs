@@ -143,20 +143,7 @@ fn focus_editor(display: &str) {
 fn a_click_in_a_real_window_selects_the_node() {
     let dir = tempfile::tempdir().unwrap();
     let (_procs, display, dump) = start_editor(&workspace().join("graphs/burning-cube.ron"), &[], dir.path());
-    let start = Instant::now();
-
-    // The first frames lay the graph out and frame it; wait until every node has a place on
-    // screen that holds still.
-    let mut first = wait_for(&dump, "the nodes on screen", |v| v["nodes"].as_object().is_some_and(|n| n.len() == 6));
-    loop {
-        std::thread::sleep(Duration::from_millis(700));
-        let again = wait_for(&dump, "the nodes on screen", |_| true);
-        if again["nodes"] == first["nodes"] {
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(90), "the layout never settled");
-        first = again;
-    }
+    let first = settled(&dump, 6);
     assert!(selection(&first).is_empty());
 
     // A slow press and release on a node's body selects it.
@@ -274,6 +261,22 @@ fn a_100000_node_chain_opens_in_a_real_window_without_freezing_it() {
     );
 }
 
+/// The first frames lay the graph out and frame it: waits until all `count` nodes have a place
+/// on screen that holds still, and returns that dump.
+fn settled(dump: &Path, count: usize) -> Value {
+    let start = Instant::now();
+    let mut first = wait_for(dump, "the nodes on screen", |v| v["nodes"].as_object().is_some_and(|n| n.len() == count));
+    loop {
+        std::thread::sleep(Duration::from_millis(700));
+        let again = wait_for(dump, "the nodes on screen", |_| true);
+        if again["nodes"] == first["nodes"] {
+            return first;
+        }
+        assert!(start.elapsed() < Duration::from_secs(90), "the layout never settled");
+        first = again;
+    }
+}
+
 fn scope(dump: &Value) -> Vec<String> {
     dump["scope"].as_array().map(|a| a.iter().filter_map(|v| v.as_str().map(String::from)).collect()).unwrap_or_default()
 }
@@ -286,17 +289,7 @@ fn scope(dump: &Value) -> Vec<String> {
 fn a_double_click_in_a_real_window_steps_into_an_include_and_the_breadcrumb_steps_out() {
     let dir = tempfile::tempdir().unwrap();
     let (_procs, display, dump) = start_editor(&workspace().join("graphs/flame-cards.ron"), &[], dir.path());
-    let start = Instant::now();
-    let mut first = wait_for(&dump, "the nodes on screen", |v| v["nodes"].as_object().is_some_and(|n| n.len() == 4));
-    loop {
-        std::thread::sleep(Duration::from_millis(700));
-        let again = wait_for(&dump, "the nodes on screen", |_| true);
-        if again["nodes"] == first["nodes"] {
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(90), "the layout never settled");
-        first = again;
-    }
+    let first = settled(&dump, 4);
     // The header: a little inside the node's top-left corner.
     let n = |k: &str| first["nodes"]["calm"][k].as_f64().unwrap();
     let (x, y) = ((n("x") + 30.0) as i64, (n("y") + 20.0) as i64);

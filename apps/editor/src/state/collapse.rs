@@ -127,11 +127,10 @@ fn collapsed(
 
 #[cfg(test)]
 mod tests {
-    use std::time::Duration;
-
     use pyrograph_frontend::core::{GraphDoc, NodeDoc, ParamValue};
 
     use crate::Editor;
+    use crate::state::scope::tests::cooked;
 
     /// t (frame) → add (+100) → mul (×2) → out (+1); `add` also feeds `side` (−1).
     fn chain() -> GraphDoc {
@@ -149,19 +148,9 @@ mod tests {
     }
 
     fn all(ed: &mut Editor) -> Vec<String> {
-        let mut v: Vec<String> = (0..3).map(|f| summary(ed, "out", f)).collect();
-        v.push(summary(ed, "side", 4));
+        let mut v: Vec<String> = (0..3).map(|f| cooked(ed, "out", f)).collect();
+        v.push(cooked(ed, "side", 4));
         v
-    }
-
-    fn summary(ed: &mut Editor, node: &str, frame: usize) -> String {
-        ed.select(node);
-        ed.set_frame(frame);
-        ed.request_preview();
-        assert!(ed.wait_idle(Duration::from_secs(20)));
-        let p = ed.preview().expect("a preview");
-        assert!(p.error.is_none(), "{node}@{frame}: {:?}", p.error);
-        p.summary.clone()
     }
 
     #[test]

@@ -272,7 +272,7 @@ fn file_name(p: &Path) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use std::time::Duration;
 
     use pyrograph_frontend::core::{GraphDoc, ParamValue};
@@ -301,7 +301,8 @@ mod tests {
 )
 "#;
 
-    fn cooked(ed: &mut Editor, node: &str, frame: usize) -> String {
+    /// What the preview says of `node` at `frame` once cooked (a number's value).
+    pub(in crate::state) fn cooked(ed: &mut Editor, node: &str, frame: usize) -> String {
         ed.select(node);
         ed.set_frame(frame);
         ed.request_preview();

@@ -20,3 +20,14 @@ pub fn settle(h: &mut Harness<'_, EditorApp>) {
     }
     h.run_steps(2);
 }
+
+/// The pixels the preview shows after selecting `node` (which the preview must then show).
+// Not every test file previews pixels.
+#[allow(dead_code)]
+pub fn preview_of(h: &mut Harness<'_, EditorApp>, node: &str) -> Vec<u8> {
+    h.state_mut().editor.select(node);
+    settle(h);
+    let p = h.state().editor.preview().expect("a preview");
+    assert_eq!(p.request.as_ref().map(|r| r.node.as_str()), Some(node));
+    p.image.as_ref().unwrap_or_else(|| panic!("no image for {node}: {:?}", p.error)).rgba.clone()
+}

@@ -314,12 +314,7 @@ pub(super) mod tests {
 
     #[test]
     fn an_edit_inside_makes_a_local_copy_the_preset_file_keeps_its_bytes_and_undo_walks_back() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::create_dir_all(dir.path().join("presets")).unwrap();
-        let preset = dir.path().join("presets/p.ron");
-        std::fs::write(&preset, PRESET).unwrap();
-        let main = dir.path().join("main.ron");
-        std::fs::write(&main, MAIN).unwrap();
+        let (_dir, main, preset) = project();
         let mut ed = Editor::with_default_registry();
         ed.open(&main).unwrap();
         assert_eq!(cooked(&mut ed, "mul", 3), "26");

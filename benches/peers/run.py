@@ -354,8 +354,11 @@ SCALE = {"s": 1.0, "ms": 1e3, "µs": 1e6}
 TARGETS = {
     "preprocess": ("≤ OpenCV", lambda o, p, r: r <= 1.0),
     "video_png": ("≤ 1.5× ffmpeg", lambda o, p, r: r <= 1.5),
-    "endgrow": ("≤ 5 ms", lambda o, p, r: o <= 5e-3),
-    "reconstruct": ("≤ 10 ms a frame", lambda o, p, r: o / 64 <= 10e-3),
+    # Issue 45: End Growing ≤ 5 ms at 2 threads; products at BLAS parity at both thread counts;
+    # the pyramid bloom on one thread no slower than OpenCV's (its 2-thread rows use one core).
+    "endgrow_t2": ("≤ 5 ms", lambda o, p, r: o <= 5e-3),
+    "reconstruct": ("≤ numpy", lambda o, p, r: r <= 1.0),
+    "bloom_pyramid_t1": ("≤ OpenCV", lambda o, p, r: r <= 1.0),
     "train": ("≤ numpy", lambda o, p, r: r <= 1.0),
     "cloth-frame": ("≥ 60 fps", lambda o, p, r: o <= 1 / 60),
     "cloth": ("≥ 5× numpy", lambda o, p, r: r <= 0.2),
@@ -400,6 +403,7 @@ def host():
     return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), "cpu": cpu,
             "cores": os.cpu_count(), "numpy": np.__version__, "opencv": cv2.__version__,
             "ffmpeg": sh(["ffmpeg", "-version"]).stdout.split("\n")[0].split(" ")[2],
+            "products": kernel([KERNELS, "products"], {})["products"],
             "commit": subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
                                      text=True).stdout.strip()}
 
@@ -477,7 +481,7 @@ def main():
             "--mode", "exact", "--output", os.path.join(a.work, "bloom_exact.npy")])
     h = host()
     head = (f"Sitting {h['date']}, commit {h['commit']}: {h['cpu']}, {h['cores']} cores; numpy {h['numpy']}, "
-            f"OpenCV {h['opencv']}, ffmpeg {h['ffmpeg']}; {a.rounds} rounds, pyrograph first in odd rounds, the peer in even ones")
+            f"OpenCV {h['opencv']}, ffmpeg {h['ffmpeg']}; pyrograph's Eigenfires products: {h['products']}; {a.rounds} rounds, pyrograph first in odd rounds, the peer in even ones")
     print("# " + head, flush=True)
     lines, short = [], []
     failed = []

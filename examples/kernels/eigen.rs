@@ -63,6 +63,13 @@ pub struct ReconstructArgs {
     output: PathBuf,
 }
 
+/// The JSON line naming the library of the Eigenfires products (`PYROGRAPH_BLAS`, see
+/// `pyrograph_nodes_eigen::blas`).
+pub fn products() -> String {
+    let products = pyrograph_nodes_eigen::blas::openblas().map_or("faer (no OpenBLAS found)".to_string(), |b| b.config.clone());
+    serde_json::json!({ "op": "products", "products": products }).to_string()
+}
+
 pub fn reconstruct(a: &ReconstructArgs, t: Timing) -> Result<String, String> {
     let mean = read_f32(&a.mean)?;
     let u = read_f32(&a.basis)?;

@@ -50,6 +50,8 @@ enum Op {
     Cube(solo::CubeArgs),
     /// No peer: fire spread over a plane of a given number of faces, per step (scaling sweep).
     Spread(solo::SpreadArgs),
+    /// Which library does the Eigenfires products: the system's OpenBLAS (its configuration) or faer.
+    Products,
 }
 
 fn main() {
@@ -66,6 +68,7 @@ fn main() {
         Op::ClothFrame(a) => solo::cloth_frame(&a, t),
         Op::Cube(a) => solo::cube(&a, t),
         Op::Spread(a) => solo::spread(&a, t),
+        Op::Products => Ok(eigen::products()),
     };
     match result {
         Ok(line) => println!("{line}"),

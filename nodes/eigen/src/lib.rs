@@ -6,9 +6,11 @@
 //! of the thesis' numbers (its θ_min = 500 is about 2 here).
 #![deny(missing_docs)]
 
+pub mod blas;
 pub mod database;
 pub mod frame_store;
 pub mod motion;
+mod pages;
 pub mod pca;
 pub mod transition;
 pub mod values;

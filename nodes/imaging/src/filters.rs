@@ -88,30 +88,36 @@ pub fn convolve_separable(p: &Plane, kernel: &[f32]) -> Plane {
     out
 }
 
-/// Adds `gain ×` the bilinear upsampling of `level` (pyramid level `l`, pixel size 2^l) to `out`.
-fn add_upsampled(out: &mut Plane, level: &Plane, l: u32, gain: f32) {
-    let f = (1usize << l) as f32;
+/// The bilinear upsampling of `level` (pixel size 2 in the output's pixels) to `width × height`.
+/// Each output row is written once, straight into fresh memory (no zeroing pass first).
+fn upsampled(level: &Plane, width: usize, height: usize) -> Plane {
     let coords = |n_out: usize, n_in: usize| -> Vec<(usize, usize, f32)> {
         (0..n_out)
             .map(|x| {
-                let u = ((x as f32 + 0.5) / f - 0.5).clamp(0.0, (n_in - 1) as f32);
+                let u = ((x as f32 + 0.5) / 2.0 - 0.5).clamp(0.0, (n_in - 1) as f32);
                 let i0 = u.floor() as usize;
                 let i1 = (i0 + 1).min(n_in - 1);
                 (i0, i1, u - i0 as f32)
             })
             .collect()
     };
-    let xs = coords(out.width, level.width);
-    let ys = coords(out.height, level.height);
+    let xs = coords(width, level.width);
+    let ys = coords(height, level.height);
     let lw = level.width;
-    out.data.par_chunks_mut(out.width).zip(ys.par_iter()).for_each(|(row, &(y0, y1, fy))| {
-        let (r0, r1) = (&level.data[y0 * lw..(y0 + 1) * lw], &level.data[y1 * lw..(y1 + 1) * lw]);
-        let blended: Vec<f32> = r0.iter().zip(r1).map(|(a, b)| a + fy * (b - a)).collect();
-        for (o, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
-            let (a, b) = (blended[x0], blended[x1]);
-            *o += gain * (a + fx * (b - a));
-        }
-    });
+    let mut data = Vec::with_capacity(width * height);
+    if width > 0 {
+        data.spare_capacity_mut()[..width * height].par_chunks_mut(width).zip(ys.par_iter()).for_each(|(row, &(y0, y1, fy))| {
+            let (r0, r1) = (&level.data[y0 * lw..(y0 + 1) * lw], &level.data[y1 * lw..(y1 + 1) * lw]);
+            let blended: Vec<f32> = r0.iter().zip(r1).map(|(a, b)| a + fy * (b - a)).collect();
+            for (o, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
+                let (a, b) = (blended[x0], blended[x1]);
+                o.write(a + fx * (b - a));
+            }
+        });
+    }
+    // SAFETY: every row of the `width × height` values was written above.
+    unsafe { data.set_len(width * height) };
+    Plane { width, height, data }
 }
 
 /// The pyramid level for `sigma` and the sigma left to blur there (in that level's pixels).
@@ -135,20 +141,23 @@ pub fn level_for(sigma: f32) -> (u32, f32) {
 /// the next finer level, so the full-resolution plane is written once whatever the number of passes.
 pub fn gaussian_sum(p: &Plane, sigmas: &[f32], gain: f32) -> Plane {
     let plan: Vec<(u32, f32)> = sigmas.iter().map(|&s| level_for(s)).collect();
-    let max_level = plan.iter().map(|&(l, _)| l).max().unwrap_or(0);
-    let mut pyramid = vec![p.clone()];
-    for _ in 0..max_level {
-        let next = pyramid[pyramid.len() - 1].half();
-        pyramid.push(next);
+    let max_level = plan.iter().map(|&(l, _)| l).max().unwrap_or(0) as usize;
+    // Level 0 is `p` itself (not copied); levels 1..=max_level are made here.
+    let mut coarser: Vec<Plane> = Vec::with_capacity(max_level);
+    for l in 1..=max_level {
+        let next = if l == 1 { p.half() } else { coarser[l - 2].half() };
+        coarser.push(next);
     }
+    let level = |l: usize| if l == 0 { p } else { &coarser[l - 1] };
     let blurred: Vec<(u32, Plane)> =
-        plan.par_iter().map(|&(l, s)| (l, convolve_separable(&pyramid[l as usize], &gaussian_kernel(s)))).collect();
+        plan.par_iter().map(|&(l, s)| (l, convolve_separable(level(l as usize), &gaussian_kernel(s)))).collect();
     let mut acc: Option<Plane> = None;
-    for (l, level) in pyramid.iter().enumerate().rev() {
-        let mut sum = Plane::new(level.width, level.height);
-        if let Some(coarser) = &acc {
-            add_upsampled(&mut sum, coarser, 1, 1.0);
-        }
+    for l in (0..=max_level).rev() {
+        let (w, h) = (level(l).width, level(l).height);
+        let mut sum = match &acc {
+            Some(finer_of) => upsampled(finer_of, w, h),
+            None => Plane::new(w, h),
+        };
         for (_, b) in blurred.iter().filter(|(bl, _)| *bl as usize == l) {
             sum.data.par_iter_mut().zip(&b.data).for_each(|(o, v)| *o += gain * v);
         }

@@ -14,6 +14,7 @@ pub mod blocks;
 pub mod clips;
 pub mod nodes;
 pub mod projection;
+mod simd;
 pub mod training;
 
 pub use blocks::{BlockSource, ReadFrames, train_blocks};

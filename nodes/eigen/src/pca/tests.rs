@@ -8,8 +8,9 @@ use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
 use pyrograph_testing::lcg;
 
 use super::nodes::train_from_clips;
+use super::projection::{LIFT_BAND_ROWS, lift_onto, reconstruct_with};
 use super::projection::{project, reconstruct};
-use super::training::{LIFT_BAND_ROWS, lift, train};
+use super::training::{gram_matrix, lift_in_place, train};
 use crate::values::FrameRef;
 
 /// `m` random gray frames of `w × h` (one after another).
@@ -72,15 +73,35 @@ fn the_banded_lift_equals_one_product_and_covers_a_partial_last_band() {
     let (n, m, e) = (2 * LIFT_BAND_ROWS + 37, 6, 4);
     let a_data = random_frames(n as u32, 1, m, 11);
     let v_data = random_frames(m as u32, 1, e, 12);
+    let base = random_frames(n as u32, 1, 1, 13);
     let a = MatRef::from_column_major_slice(&a_data, n, m);
     let v = MatRef::from_column_major_slice(&v_data, m, e);
     let mut banded = vec![f32::NAN; n * e];
-    lift(MatMut::from_column_major_slice_mut(&mut banded, n, e), Accum::Replace, a, v);
+    lift_onto(MatMut::from_column_major_slice_mut(&mut banded, n, e), &base, a, v);
     let mut whole = vec![0.0_f32; n * e];
     matmul(MatMut::from_column_major_slice_mut(&mut whole, n, e), Accum::Replace, a, v, 1.0, Par::Seq);
     for (i, (x, y)) in banded.iter().zip(&whole).enumerate() {
+        let y = y + base[i % n];
         assert!((x - y).abs() <= 1e-5 * y.abs().max(1.0), "entry {i}: {x} vs {y}");
     }
+}
+
+#[test]
+fn the_lift_over_the_frames_equals_one_product() {
+    // More bands than one, a partial last band, and E < M so the frames past E are dropped.
+    let (n, m, e) = (3 * 256 + 41, 7, 5);
+    let a_data = random_frames(n as u32, 1, m, 21);
+    let v_data = random_frames(m as u32, 1, e, 22);
+    let v = MatRef::from_column_major_slice(&v_data, m, e);
+    let mut whole = vec![0.0_f32; n * e];
+    let a = MatRef::from_column_major_slice(&a_data, n, m);
+    matmul(MatMut::from_column_major_slice_mut(&mut whole, n, e), Accum::Replace, a, v, 1.0, Par::Seq);
+    let lifted = lift_in_place(a_data.clone(), n, m, v);
+    assert_eq!(lifted.len(), n * e);
+    for (i, (x, y)) in lifted.iter().zip(&whole).enumerate() {
+        assert!((x - y).abs() <= 1e-5 * y.abs().max(1.0), "entry {i}: {x} vs {y}");
+    }
+    assert!(lift_in_place(a_data, n, m, v.subcols(0, 0)).is_empty());
 }
 
 #[test]
@@ -158,4 +179,36 @@ fn reconstruction_with_fewer_components_is_the_projection_onto_them() {
         }
     }
     assert!(reconstruct(&db.basis, &db.weights, m).is_err());
+}
+
+/// Both product paths, OpenBLAS's (when the system has it) and faer's, give the same Gram
+/// matrix and the same reconstructions within f32 rounding; CI installs OpenBLAS, so without
+/// this the faer path, every machine's fallback, would go untested there.
+#[test]
+fn faer_and_openblas_products_agree() {
+    let (w, h, m) = (37, 29, 14);
+    let frames = random_frames(w, h, m, 5);
+    let n = (w * h) as usize;
+    let with_faer = gram_matrix(&frames, n, m, None);
+    let norm = (0..m).map(|i| with_faer[(i, i)]).fold(0.0, f64::max);
+    assert!(norm > 0.0);
+    let db = train(w, h, frames, sources(m), 0).unwrap();
+    let e = db.basis.components();
+    let via_faer = reconstruct_with(&db.basis, &db.weights, e, None).unwrap();
+    let Some(blas) = crate::blas::openblas() else {
+        eprintln!("OpenBLAS is not installed here: only faer's products ran");
+        return;
+    };
+    let via_blas = gram_matrix(&random_frames(w, h, m, 5), n, m, Some(blas));
+    for i in 0..m {
+        for j in 0..m {
+            let d = (via_blas[(i, j)] - with_faer[(i, j)]).abs();
+            assert!(d <= 1e-5 * norm, "L[{i}, {j}]: {} vs {}", via_blas[(i, j)], with_faer[(i, j)]);
+        }
+    }
+    let via_blas = reconstruct_with(&db.basis, &db.weights, e, Some(blas)).unwrap();
+    assert_eq!(via_blas.len(), via_faer.len());
+    for (k, (a, b)) in via_blas.iter().zip(&via_faer).enumerate() {
+        assert!((a - b).abs() <= 1e-5, "sample {k}: {a} vs {b}");
+    }
 }

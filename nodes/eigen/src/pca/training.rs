@@ -7,6 +7,8 @@ use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use rayon::prelude::*;
 
+use super::simd::{accumulate, accumulate4, scale, subtract, sum_of_squares};
+use crate::blas::{self, OpenBlas};
 use crate::values::{Basis, FrameRef, Weights};
 
 /// A trained Eigenfires database: the basis and the weights of its training frames.
@@ -27,50 +29,89 @@ pub(crate) fn par() -> Par {
     Par::rayon(0)
 }
 
-/// Pixel rows per task of the eigenfire lift.
-pub(super) const LIFT_BAND_ROWS: usize = 1024;
+/// `L = AᵀA` for the `m` columns of `a` (`n × m`, column-major), widened to f64. `L` is
+/// symmetric: only its lower triangle is computed (half the flops, BLAS's `syrk`), by OpenBLAS
+/// when the system has it, else by faer.
+pub(super) fn gram_matrix(a: &[f32], n: usize, m: usize, blas: Option<&OpenBlas>) -> Mat<f64> {
+    let mut lower = vec![0.0_f32; m * m];
+    if !blas.is_some_and(|b| b.gram_lower(n, m, a, &mut lower)) {
+        let a = MatRef::from_column_major_slice(a, n, m);
+        triangular::matmul(
+            MatMut::from_column_major_slice_mut(&mut lower, m, m),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            a.transpose(),
+            BlockStructure::Rectangular,
+            a,
+            BlockStructure::Rectangular,
+            1.0,
+            par(),
+        );
+    }
+    Mat::<f64>::from_fn(m, m, |i, j| f64::from(lower[i.max(j) + i.min(j) * m]))
+}
 
-/// `u = a · v` for a tall `a` (pixels × frames), split into bands of pixel rows that each rayon
-/// task multiplies on its own. At the thesis size (274,700 × 2,197 times 2,197 × 1,100) this ran
-/// 1.2–1.4× faster than handing the whole product to faer's parallel matmul, which splits the
-/// work inside each block instead; every band reads its slice of `a` once and writes its rows
-/// of `u` once. The same holds for reconstruction's `images += basis · weights`.
-pub(super) fn lift(u: MatMut<'_, f32>, accum: Accum, a: MatRef<'_, f32>, v: MatRef<'_, f32>) {
-    let mut bands = Vec::with_capacity(u.nrows().div_ceil(LIFT_BAND_ROWS));
-    let mut rest = u;
-    let mut r0 = 0;
+/// `U = A · V` written over `A` itself (pixels × frames, column-major, `frames.len() = n·m`):
+/// eigenfire `l` takes the place of frame `l`, and the returned buffer holds the first `e` of
+/// them. Each band of pixel rows is multiplied into a small scratch matrix and then copied over
+/// its own rows, which no other band reads, so the bands run in parallel. Writing over the
+/// frames saves a fresh `n·e` buffer: at 500 frames of 205×335 and E 250 its 69 MB cost 40–60 ms
+/// of page faults on one core, a third of the product itself, and the frames' pages need not be
+/// returned and taken again. The first `e` columns are given back with a shrinking `realloc`
+/// (a page remap for buffers this size, not a copy).
+pub(super) fn lift_in_place(mut frames: Vec<f32>, n: usize, m: usize, v: MatRef<'_, f32>) -> Vec<f32> {
+    let e = v.ncols();
+    debug_assert_eq!((frames.len(), v.nrows()), (n * m, m));
+    if e == 0 {
+        return Vec::new();
+    }
+    let mut bands = Vec::with_capacity(n.div_ceil(IN_PLACE_BAND_ROWS));
+    let mut rest = MatMut::from_column_major_slice_mut(&mut frames, n, m);
     while rest.nrows() > 0 {
-        let rows = LIFT_BAND_ROWS.min(rest.nrows());
+        let rows = IN_PLACE_BAND_ROWS.min(rest.nrows());
         let (band, below) = rest.split_at_row_mut(rows);
-        bands.push((r0, band));
+        bands.push(band);
         rest = below;
-        r0 += rows;
     }
-    bands.into_par_iter().for_each(|(r0, band)| {
-        let rows = band.nrows();
-        matmul(band, accum, a.subrows(r0, rows), v, 1.0, Par::Seq);
-    });
+    bands.into_par_iter().for_each_init(
+        || Mat::<f32>::zeros(IN_PLACE_BAND_ROWS, e),
+        |scratch, band| {
+            let rows = band.nrows();
+            let mut out = scratch.as_mut().subrows_mut(0, rows);
+            matmul(out.as_mut(), Accum::Replace, band.as_ref(), v, 1.0, Par::Seq);
+            band.subcols_mut(0, e).copy_from(out.as_ref());
+        },
+    );
+    frames.truncate(n * e);
+    frames.shrink_to_fit();
+    frames
 }
 
-/// Frees `data` on a short-lived thread: returning a few GB of centred frames to the system
-/// takes ~0.1 ms per MB of page unmapping, which the caller need not wait for.
-fn release_in_background(data: Vec<f32>) {
-    // When no thread can be started, the closure and with it `data` are dropped right here.
-    let _ = std::thread::Builder::new().name("pca-release".into()).spawn(move || drop(data));
-}
+/// Pixel rows per band of [`lift_in_place`]: its scratch (rows × E) stays in the L2 cache.
+const IN_PLACE_BAND_ROWS: usize = 256;
 
-/// `Σ x²` in f64, in eight independent partial sums (one running sum is a chain of dependent
-/// additions that runs at a quarter of the speed and does not vectorize).
-fn sum_of_squares(u: &[f32]) -> f64 {
-    let mut acc = [0.0_f64; 8];
-    let mut blocks = u.chunks_exact(8);
-    for block in blocks.by_ref() {
-        for (a, &x) in acc.iter_mut().zip(block) {
-            *a += f64::from(x) * f64::from(x);
+/// The mean of `m` frames of `n` samples (eq. 12), accumulated in f64. Each task sums a run of
+/// pixels over every frame, reading each frame's run front to back (the frames are streamed once,
+/// in long contiguous reads that the prefetcher follows), into an accumulator that stays in cache.
+fn mean_image(frames: &[f32], n: usize, m: usize) -> Vec<f32> {
+    let run = n.div_ceil(rayon::current_num_threads()).max(4096);
+    let mut mean = vec![0.0_f32; n];
+    mean.par_chunks_mut(run).enumerate().for_each(|(c, chunk)| {
+        let p0 = c * run;
+        let mut acc = vec![0.0_f64; chunk.len()];
+        let acc = &mut acc[..];
+        let col = |f: usize| &frames[f * n + p0..f * n + p0 + chunk.len()];
+        let mut f = 0;
+        while f + 4 <= m {
+            accumulate4(acc, [col(f), col(f + 1), col(f + 2), col(f + 3)]);
+            f += 4;
         }
-    }
-    let tail: f64 = blocks.remainder().iter().map(|&x| f64::from(x) * f64::from(x)).sum();
-    acc.iter().sum::<f64>() + tail
+        for f in f..m {
+            accumulate(acc, col(f));
+        }
+        chunk.iter_mut().zip(acc.iter()).for_each(|(o, a)| *o = (a / m as f64) as f32);
+    });
+    mean
 }
 
 /// Trains an Eigenfires basis (§4.2) on `frames`: `M = sources.len()` gray images of
@@ -91,48 +132,19 @@ pub fn train(
     }
 
     // Eq. 12: the mean image, accumulated in f64.
-    let mut mean = vec![0.0_f32; n];
-    mean.par_chunks_mut(4096).enumerate().for_each(|(c, chunk)| {
-        let p0 = c * 4096;
-        let mut acc = vec![0.0_f64; chunk.len()];
-        for f in 0..m {
-            let col = &frames[f * n + p0..f * n + p0 + chunk.len()];
-            acc.iter_mut().zip(col).for_each(|(a, &v)| *a += f64::from(v));
-        }
-        chunk.iter_mut().zip(&acc).for_each(|(o, a)| *o = (a / m as f64) as f32);
-    });
+    let mean = mean_image(&frames, n, m);
     // Φ_n = I_n − Ψ, in place.
-    frames.par_chunks_mut(n).for_each(|col| col.iter_mut().zip(&mean).for_each(|(v, &mu)| *v -= mu));
+    frames.par_chunks_mut(n).for_each(|col| subtract(col, &mean));
 
-    // Eq. 16: L = AᵀA (M × M) as one f32 matrix product (as numpy's float32 gram-trick peer does;
-    // faer's blocked kernels accumulate in registers, so the sum over N pixels stays accurate),
-    // then widened to f64 for the eigen decomposition.
-    // L is symmetric: only its lower triangle is computed (half the flops, as BLAS's syrk).
-    let a = MatRef::from_column_major_slice(&frames, n, m);
-    let mut gram32 = Mat::<f32>::zeros(m, m);
-    triangular::matmul(
-        gram32.as_mut(),
-        BlockStructure::TriangularLower,
-        Accum::Replace,
-        a.transpose(),
-        BlockStructure::Rectangular,
-        a,
-        BlockStructure::Rectangular,
-        1.0,
-        par(),
-    );
-    let gram = Mat::<f64>::from_fn(m, m, |i, j| f64::from(gram32[(i.max(j), i.min(j))]));
-    drop(gram32);
-
+    // Eq. 16: L = AᵀA (M × M), accumulated in f32 as numpy's float32 gram-trick peer does (the
+    // products' blocked kernels sum in registers, so the sum over N pixels stays accurate), then
+    // widened to f64 for the eigen decomposition.
+    let gram = gram_matrix(&frames, n, m, blas::openblas());
     let dec = decompose(&gram, max_components)?;
     drop(gram);
 
-    // Eq. 17: eigenfire_l = Σ_n V_ln Φ_n, normalised (eq. 14).
-    let mut eigenvectors = vec![0.0_f32; n * dec.e];
-    if dec.e > 0 {
-        lift(MatMut::from_column_major_slice_mut(&mut eigenvectors, n, dec.e), Accum::Replace, a, dec.v_scaled.as_ref());
-    }
-    release_in_background(frames);
+    // Eq. 17: eigenfire_l = Σ_n V_ln Φ_n, normalised (eq. 14), written over the frames.
+    let eigenvectors = lift_in_place(frames, n, m, dec.v_scaled.as_ref());
     finish(width, height, mean, eigenvectors, &dec, sources)
 }
 
@@ -220,7 +232,7 @@ pub(crate) fn finish(
         if norm > 0.0 {
             // One division per eigenfire, not per pixel (f64 division is 4–5× a multiply).
             let inv = 1.0 / norm;
-            u.iter_mut().for_each(|x| *x = (f64::from(*x) * inv) as f32);
+            scale(u, inv);
         }
     });
 

@@ -4,6 +4,7 @@ exceptions, Ctrl-C and the GIL."""
 import _thread
 import pathlib
 import subprocess
+import signal
 import threading
 import time
 
@@ -136,7 +137,17 @@ def slow_graph(frames=400):
     return g
 
 
-def test_keyboard_interrupt_cancels_and_the_next_cook_is_right():
+@pytest.fixture
+def ctrl_c_raises():
+    """Ctrl-C raises KeyboardInterrupt, as in an interactive Python, even when the test process
+    was started with SIGINT ignored (a shell's background job without job control, e.g. under
+    `nohup … &`): `_thread.interrupt_main` does nothing then, and a cook would run to its end."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+def test_keyboard_interrupt_cancels_and_the_next_cook_is_right(ctrl_c_raises):
     g = slow_graph()
     timer = threading.Timer(0.5, _thread.interrupt_main)
     timer.start()

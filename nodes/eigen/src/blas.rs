@@ -93,6 +93,11 @@ fn open(name: &std::ffi::OsStr) -> Option<OpenBlas> {
         let set_threads = *lib.get::<SetThreads>(b"openblas_set_num_threads\0").ok()?;
         let config = get_config();
         let config = if config.is_null() { String::new() } else { CStr::from_ptr(config).to_string_lossy().into_owned() };
+        // An ILP64 build (64-bit integers, named in its configuration) would read these
+        // declarations' 32-bit sizes wrongly.
+        if config.contains("USE64BITINT") {
+            return None;
+        }
         Some(OpenBlas { sgemm, ssyrk, set_threads, config, lock: Mutex::new(()), _lib: lib })
     }
 }

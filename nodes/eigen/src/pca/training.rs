@@ -94,7 +94,8 @@ const IN_PLACE_BAND_ROWS: usize = 256;
 /// pixels over every frame, reading each frame's run front to back (the frames are streamed once,
 /// in long contiguous reads that the prefetcher follows), into an accumulator that stays in cache.
 fn mean_image(frames: &[f32], n: usize, m: usize) -> Vec<f32> {
-    let run = n.div_ceil(rayon::current_num_threads()).max(4096);
+    // One run per thread, at most 64 Ki pixels (its f64 accumulator, 512 KiB, stays in L2).
+    let run = n.div_ceil(rayon::current_num_threads()).clamp(4096, 1 << 16);
     let mut mean = vec![0.0_f32; n];
     mean.par_chunks_mut(run).enumerate().for_each(|(c, chunk)| {
         let p0 = c * run;

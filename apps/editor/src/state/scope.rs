@@ -371,6 +371,18 @@ pub(super) mod tests {
         assert!(ed.doc().node(&a).is_some());
     }
 
+    /// An editor on `main` (no automatic cooks) whose include `p` has been made a local copy by
+    /// an edit inside it (`add.b` = 20), stepped back out.
+    fn with_local_copy_of_p(main: &std::path::Path) -> Editor {
+        let mut ed = Editor::with_default_registry();
+        ed.auto_cook = false;
+        ed.open(main).unwrap();
+        ed.step_into("p").unwrap();
+        ed.set_param("add", "b", ParamValue::Float(20.0)).unwrap();
+        ed.step_out();
+        ed
+    }
+
     fn project() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
         let dir = tempfile::tempdir().unwrap();
         std::fs::create_dir_all(dir.path().join("presets")).unwrap();
@@ -388,12 +400,7 @@ pub(super) mod tests {
         let other = dir.path().join("shots/other.ron");
         std::fs::write(&other, r#"(version: 1, nodes: {"x": (type: "graph.include", params: {"path": "../presets/p.ron"})})"#)
             .unwrap();
-        let mut ed = Editor::with_default_registry();
-        ed.auto_cook = false;
-        ed.open(&main).unwrap();
-        ed.step_into("p").unwrap();
-        ed.set_param("add", "b", ParamValue::Float(20.0)).unwrap();
-        ed.step_out();
+        let mut ed = with_local_copy_of_p(&main);
         let users = ed.preset_users(&preset);
         assert_eq!(users, [std::fs::canonicalize(&other).unwrap()], "main.ron itself is not listed");
         let file = ed.save_into_preset("p").unwrap();
@@ -410,12 +417,7 @@ pub(super) mod tests {
     #[test]
     fn a_local_copy_goes_with_duplicate_copy_and_paste_and_away_with_delete() {
         let (_dir, main, _preset) = project();
-        let mut ed = Editor::with_default_registry();
-        ed.auto_cook = false;
-        ed.open(&main).unwrap();
-        ed.step_into("p").unwrap();
-        ed.set_param("add", "b", ParamValue::Float(20.0)).unwrap();
-        ed.step_out();
+        let mut ed = with_local_copy_of_p(&main);
         let copies = ed.duplicate(&["p".into()]);
         assert_eq!(copies, ["p_copy"]);
         assert_eq!(ed.doc().subgraphs["p_copy"], ed.doc().subgraphs["p"]);

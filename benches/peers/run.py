@@ -5,13 +5,15 @@ stops the sitting if they do not; pyrograph runs first in odd rounds and the pee
 faster) and their median, the thread counts and, for whole processes, peak RSS.
 
     cargo build --release --example kernels && cargo build --release
+    cargo bench --no-run -p pyrograph-nodes-particles -p pyrograph-nodes-cloth   # the frame-rate rows
     ../shared/peers/setup.sh                      # the peers' venv, /tmp/peers-venv
     /tmp/peers-venv/bin/python benches/peers/run.py [--rounds 5] [--only bloom,endgrow] [--work DIR]
 
 Kernel rows time the kernel inside one process on each side (examples/kernels, benches/peers/kernels.py:
 `--warmup` untimed runs, then `--reps` timed, the round's value is their median); whole-process rows
 (`e2e`) time files in to files out with /usr/bin/time. Rows with no peer time the papers' frame-rate
-targets in the same sitting. Inputs are made once in --work from the shared footage (PYROGRAPH_FOOTAGE,
+targets in the same sitting with the crates' criterion benches (`cargo bench … -- --exact ID`, each round's
+value criterion's median; build them first with `cargo bench --no-run`), with the host's load. Inputs are made once in --work from the shared footage (PYROGRAPH_FOOTAGE,
 else ../shared/footage) or from seeded numpy. Writes --work/report.md (the full table, then the README's
 table with each row's target) and appends every run to --work/results.jsonl.
 """
@@ -59,6 +61,20 @@ def kernel(cmd, env):
     """Runs a kernel process; its JSON line."""
     out = sh(cmd, env).stdout.strip().splitlines()
     return json.loads(out[-1])
+
+
+def criterion(cmd, env):
+    """Runs one criterion benchmark (`--exact` id after `--`): its median estimate and 95 % interval,
+    and the host's 1-minute load average when it ended."""
+    before = os.getloadavg()[0]
+    sh(cmd, env, cwd=REPO)
+    bench_id = cmd[cmd.index("--exact") + 1]
+    target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(REPO, "target")
+    with open(os.path.join(target, "criterion", bench_id, "new", "estimates.json")) as f:
+        median = json.load(f)["median"]
+    ci = median["confidence_interval"]
+    return {"median_s": median["point_estimate"] / 1e9, "ci_s": [ci["lower_bound"] / 1e9, ci["upper_bound"] / 1e9],
+            "load_before": before, "load": os.getloadavg()[0], "timer": "criterion"}
 
 
 def process(cmd, env, cwd=None):
@@ -333,14 +349,19 @@ def rows(i, work):
         lambda o: (kernel, [KERNELS, "--reps", "5", "arp", "--frames", i["candle_frames"], *ar, "--output", o + ".npy"], threads_env(1)),
         lambda o: (kernel, kp + ["--reps", "5", "arp", *ar, "--output", o + ".npy"], threads_env(1)),
         check_arp, unit="µs", ours_first=True)
-    # No peer: the papers' frame-rate targets, timed in the same sitting.
-    for op, workload, size, frames in (
-            ("particles", "1,000 particle flames, simulate + render (swept long exposure)", "1280×720", 24),
-            ("cloth-frame", "144 cloth flames (node defaults), a 24 fps frame's sub-steps + render", "1280×720", 24),
-            ("cube", "burning cube (graphs/burning-cube.ron): spread + flames + render, mean of frames 48–95", "1280×720", 0)):
-        args = ["--frames", str(frames)] if frames else []
-        row(op, "solo", workload, size, 2, "—",
-            lambda o, op=op, args=args: (kernel, [KERNELS, "--reps", "3", op, *args], threads_env(2)),
+    # No peer: the papers' frame-rate targets, timed in the same sitting by the crates' criterion
+    # benches (each round's value is criterion's median estimate; the host's load is logged).
+    for op, workload, package, bench, bench_id in (
+            ("particles", "1,000 particle flames, simulate + render (swept long exposure)", "pyrograph-nodes-particles",
+             "flames", "flames_1280x720/simulate+render/1000"),
+            ("cloth-frame", "144 cloth flames (node defaults), a 24 fps frame's sub-steps + render", "pyrograph-nodes-cloth",
+             "cloth", "cloth_frame_1280x720/simulate_render/144"),
+            ("cube", "burning cube (graphs/burning-cube.ron): spread + flames + render, mean of frames 48–95",
+             "pyrograph-nodes-particles", "spread", "burning_cube_1280x720/frame")):
+        row(op, "solo", workload, "1280×720", 2, "—",
+            lambda o, package=package, bench=bench, bench_id=bench_id: (
+                criterion, ["cargo", "bench", "-q", "-p", package, "--bench", bench, "--", "--exact", bench_id,
+                            "--warm-up-time", "1", "--measurement-time", "3", "--noplot"], threads_env(2)),
             None, None, peer_threads="—")
     return out
 
@@ -381,14 +402,29 @@ def fmt(seconds, unit):
     return f"{v:,.3g} {unit}" if v < 1000 else f"{v:,.0f} {unit}"
 
 
+def timer(got):
+    """What timed a peerless row's rounds."""
+    return "criterion medians" if got[0][0]["ours"].get("timer") == "criterion" else "kernel medians"
+
+
+def load_range(got):
+    """The host's 1-minute load average before and after a row's rounds, where it was logged (a
+    2-thread benchmark itself lifts it towards 2 by its end)."""
+    ours = [g[0]["ours"] for g in got if "load" in g[0]["ours"]]
+    if not ours:
+        return ""
+    span = lambda xs: f"{min(xs):.1f}" if f"{min(xs):.1f}" == f"{max(xs):.1f}" else f"{min(xs):.1f}–{max(xs):.1f}"
+    return f"; host load {span([o['load_before'] for o in ours])} before, {span([o['load'] for o in ours])} after"
+
+
 def compact(r, got):
     """The README's row: workload and size, threads, medians, the median ratio and its rounds' range, target."""
     o = st.median(g[0]["ours"]["median_s"] for g in got)
     rss = lambda side: (f", {st.median(g[0][side]['peak_rss_mib'] for g in got):.0f} MiB"
                         if "peak_rss_mib" in got[0][0][side] else "")
     if not r["peer"]:
-        return (f"| {r['workload']}, {r['size']} | {r['threads']} | {fmt(o, 'ms')} ({1 / o:.1f} fps) | — | — | "
-                f"{target(r, o, None, None)} |")
+        return (f"| {r['workload']}, {r['size']} | {r['threads']} | {fmt(o, 'ms')} ({1 / o:.1f} fps; "
+                f"{timer(got)}{load_range(got)}) | — | — | {target(r, o, None, None)} |")
     p = st.median(g[0]["peer"]["median_s"] for g in got)
     ratios = [g[1] for g in got]
     peer = r["peer_name"]
@@ -428,7 +464,9 @@ def run_row(r, rounds, work, log):
             got.append((res, None, None))
             log.write(json.dumps({"row": r["id"], "round": k + 1, **res}) + "\n")
             ms = res["ours"]["median_s"] * 1e3
-            print(f"  {r['id']} round {k + 1}: pyrograph {ms:.4g} ms per frame ({1e3 / ms:.1f} fps)", flush=True)
+            load = (f", host load {res['ours']['load_before']:.2f} before, {res['ours']['load']:.2f} after"
+                    if "load" in res["ours"] else "")
+            print(f"  {r['id']} round {k + 1}: pyrograph {ms:.4g} ms per frame ({1e3 / ms:.1f} fps){load}", flush=True)
             continue
         agree = r["check"](os.path.join(base, "ours") + r["ext"], os.path.join(base, "peer") + r["ext"])
         ratio = res["ours"]["median_s"] / res["peer"]["median_s"]
@@ -449,8 +487,8 @@ def summary(r, got):
     if not r["peer"]:
         each = [g[0]["ours"]["median_s"] * 1e3 for g in got]
         m = st.median(each)
-        return (f"| {r['workload']} | {r['size']} | {r['threads']} / — | {m:.4g} ms ({1e3 / m:.1f} fps; rounds "
-                f"{', '.join(f'{x:.1f}' for x in each)}) | — | — | — |")
+        return (f"| {r['workload']} | {r['size']} | {r['threads']} / — | {m:.4g} ms ({1e3 / m:.1f} fps; "
+                f"{timer(got)}, rounds {', '.join(f'{x:.1f}' for x in each)}{load_range(got)}) | — | — | — |")
     med = lambda side: st.median(g[0][side]["median_s"] for g in got) * u
     ratios = [g[1] for g in got]
     rss = lambda side: (f" / {st.median(g[0][side]['peak_rss_mib'] for g in got):.0f} MiB"
@@ -479,6 +517,9 @@ def main():
     if any(r["group"] == "bloom" for r in todo):
         sh([PY, os.path.join(HERE, "kernels.py"), "--reps", "1", "--warmup", "0", "bloom", "--input", i["bloom_frame"],
             "--mode", "exact", "--output", os.path.join(a.work, "bloom_exact.npy")])
+    if any(r["group"] == "solo" for r in todo):
+        # Compiled before the first round, so no round waits for (or competes with) a build.
+        sh(["cargo", "bench", "--no-run", "-q", "-p", "pyrograph-nodes-particles", "-p", "pyrograph-nodes-cloth"], cwd=REPO)
     h = host()
     head = (f"Sitting {h['date']}, commit {h['commit']}: {h['cpu']}, {h['cores']} cores; numpy {h['numpy']}, "
             f"OpenCV {h['opencv']}, ffmpeg {h['ffmpeg']}; pyrograph's Eigenfires products: {h['products']}; {a.rounds} rounds, pyrograph first in odd rounds, the peer in even ones")

@@ -84,7 +84,13 @@ pub fn reconstruct(a: &ReconstructArgs, t: Timing) -> Result<String, String> {
         width: p as u32,
         height: 1,
         mean: mean.data,
-        eigenvectors: u.data,
+        // Where `database::load` puts a loaded basis (numpy's arrays get the same advice).
+        eigenvectors: {
+            let mut v = pyrograph_nodes_eigen::pages::with_capacity_huge(u.data.len());
+            v.extend_from_slice(&u.data);
+            drop(u);
+            v
+        },
         eigenvalues: vec![1.0; e],
         sources: Vec::new(),
     };

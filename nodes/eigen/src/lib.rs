@@ -10,7 +10,7 @@ pub mod blas;
 pub mod database;
 pub mod frame_store;
 pub mod motion;
-mod pages;
+pub mod pages;
 pub mod pca;
 pub mod transition;
 pub mod values;

@@ -1,11 +1,16 @@
-//! Large output buffers backed by huge pages where the system allows it.
+//! Large buffers backed by huge pages where the system allows it.
 //!
 //! A fresh 70 MB result (64 reconstructed 410×670 frames) is 17,000 pages of 4 KiB, each
 //! faulted in and zeroed on its first write: 24 ms on this project's machine, against 12 ms with
-//! transparent huge pages (2 MiB, 35 faults). numpy asks the same of the kernel for every array
-//! of 4 MiB or more (`madvise(MADV_HUGEPAGE)`); systems whose huge pages are off, or set to
-//! "always", are unaffected. Written by hand because it is one system call on memory the
-//! standard allocator owns, which no allocator crate exposes.
+//! transparent huge pages (2 MiB, 35 faults). And a product that reads a 1.2 GB basis in
+//! columns 1.1 MB apart ran 10–12 % faster with the basis on huge pages (fewer translation
+//! misses).
+//! numpy asks the kernel for huge pages for every array of 4 MiB or more
+//! (`madvise(MADV_HUGEPAGE)`); systems whose huge pages are off, or set to "always", are
+//! unaffected. Written by hand because it is one system call on memory the standard allocator
+//! owns, which no allocator crate exposes. Used where a buffer is written once and read many
+//! times (a loaded basis) or written in one sequential pass (a reconstruction's output): the
+//! first touch of a huge page may wait for the kernel to compact memory.
 
 /// An empty vector with room for `len` values whose pages are advised as huge before anything
 /// touches them.

@@ -325,8 +325,8 @@ def rows(i, work):
     for t in (2, 1):
         row(f"reconstruct_t{t}", "reconstruct", "batch reconstruction (eq. 22), 64 frames in one product",
             "410×670, E 1,100, 64 frames", t, "numpy W @ U then += mean, OpenBLAS sgemm",
-            lambda o, t=t: (kernel, [KERNELS, "--reps", "3", *rc, "--output", o + ".npy"], threads_env(t)),
-            lambda o, t=t: (kernel, kp + ["--reps", "3", *rc, "--output", o + ".npy"], threads_env(t)),
+            lambda o, t=t: (kernel, [KERNELS, "--reps", "7", *rc, "--output", o + ".npy"], threads_env(t)),
+            lambda o, t=t: (kernel, kp + ["--reps", "7", *rc, "--output", o + ".npy"], threads_env(t)),
             check_reconstruct)
     tr = ["train", "--frames", i["train_frames"], "--components", "250"]
     for t in (2, 1):

@@ -9,6 +9,8 @@ use crate::annotate::{Annotation, COMMENT_COLOR, GROUP_COLOR, hex_rgb, rgb_hex};
 use crate::app::EditorApp;
 use crate::keying::animated_row;
 use crate::param_widgets::{buffered_text, param_widget, raw_widget};
+use crate::state::{IncludeSetting, SetBy};
+use pyrograph_frontend::core::ParamValue;
 
 impl EditorApp {
     pub(crate) fn inspector(&mut self, ui: &mut egui::Ui) {
@@ -60,6 +62,10 @@ impl EditorApp {
                         .on_hover_text("driven by a connection");
                     ui.label("");
                     ui.end_row();
+                    continue;
+                }
+                if let Some(set) = self.editor.set_by_include(&id, &port.name) {
+                    include_setting_cell(ui, &set, nd.params.get(&port.name));
                     continue;
                 }
                 if !port.ty.is_parameter() {
@@ -144,10 +150,10 @@ impl EditorApp {
         ui: &mut egui::Ui,
         id: &str,
         port: &pyrograph_frontend::core::PortDesc,
-        set: Option<&pyrograph_frontend::core::ParamValue>,
+        set: Option<&ParamValue>,
         frame: f64,
         fps: f64,
-    ) -> Option<pyrograph_frontend::core::ParamValue> {
+    ) -> Option<ParamValue> {
         let widget_id = egui::Id::new(("param", id, &port.name));
         match self.editor.param_value(id, port) {
             Some(value) if value.is_animated() => animated_row(ui, widget_id, port, &value, frame, fps),
@@ -164,7 +170,7 @@ impl EditorApp {
             None => {
                 let mut s = String::new();
                 let changed = ui.add(egui::TextEdit::singleline(&mut s).hint_text("required")).changed();
-                changed.then(|| pyrograph_frontend::core::ParamValue::parse_cli(&s))
+                changed.then(|| ParamValue::parse_cli(&s))
             }
         }
     }
@@ -290,7 +296,7 @@ fn structured_widget(
     id: egui::Id,
     port: &pyrograph_frontend::core::PortDesc,
     value: &pyrograph_frontend::core::ParamValue,
-) -> Option<pyrograph_frontend::core::ParamValue> {
+) -> Option<ParamValue> {
     use pyrograph_frontend::core::PortType;
     match &port.ty {
         PortType::Ramp(width) => crate::gradient::ramp_widget(ui, id, &port.name, *width, value),
@@ -361,4 +367,28 @@ impl EditorApp {
             self.canvas.annotation = None;
         }
     }
+}
+
+/// The inspector row of a parameter the include one level up overrides (see
+/// `Editor::set_by_include`): what cooks and where to change it, in place of an editor that
+/// would change nothing.
+fn include_setting_cell(ui: &mut egui::Ui, set: &IncludeSetting, here: Option<&ParamValue>) {
+    let (text, what) = match &set.by {
+        SetBy::Value(v) => {
+            (format!("{v} (set by {}'s {})", set.include, set.exposed), format!("sets its parameter '{}' to {v}", set.exposed))
+        }
+        SetBy::Connection(from) => (
+            format!("from {from} (through {}'s {})", set.include, set.exposed),
+            format!("connects {from} to its parameter '{}'", set.exposed),
+        ),
+    };
+    let inner = here.map_or_else(|| "the default".to_string(), ToString::to_string);
+    ui.label("");
+    ui.label(RichText::new(text).italics().color(Color32::from_rgb(120, 210, 160))).on_hover_text(format!(
+        "The include '{}' one level up {what}, which overrides this graph's value ({inner}) when it cooks. \
+         Change it on the include, or unset it there to use this graph's value.",
+        set.include
+    ));
+    ui.label("");
+    ui.end_row();
 }

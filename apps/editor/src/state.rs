@@ -37,7 +37,7 @@ pub use checks::{diagnostic_nodes, same_structure};
 pub use keyframes::{AnimParam, value_text};
 pub use opening::allow_outside_out;
 pub use preset_lib::{SelectionPreset, filter_presets};
-pub use scope::Crumb;
+pub use scope::{Crumb, IncludeSetting, SetBy};
 
 /// A message for the status bar.
 #[derive(Clone, Debug)]

@@ -83,6 +83,13 @@ fn step_into_the_campfire_preset_change_an_inner_node_step_out_save_reload_and_c
             || h.query_by_label_contains("an edit here makes a local copy").is_some()
     );
 
+    // A parameter the include sets through the preset's exposed ones shows what cooks and where
+    // it comes from, not an editor that would change nothing: the render's width is fire's 96.
+    h.state_mut().editor.select("render");
+    h.run_steps(3);
+    assert!(h.query_by_label_contains("96 (set by fire's width)").is_some(), "the inspector marks render.width");
+    assert!(h.query_by_label_contains("(set by fire's frames)").is_none(), "render has no `frames`");
+
     // Change an inner node (one the preset does not expose): the flames' size.
     h.state_mut().editor.select("flames");
     h.state_mut().editor.set_param("flames", "size", ParamValue::Float(0.3)).unwrap();

@@ -39,6 +39,27 @@ pub(super) struct Level {
     preview: Option<PreviewRequest>,
 }
 
+/// How the include one level up sets one of this level's parameters (see
+/// [`Editor::set_by_include`]): Houdini shows such a parameter as driven by the asset's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IncludeSetting {
+    /// The include's id one level up.
+    pub include: String,
+    /// Its exposed parameter that maps to the inner one.
+    pub exposed: String,
+    /// What sets that exposed parameter on the include.
+    pub by: SetBy,
+}
+
+/// What sets an include's exposed parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SetBy {
+    /// A value (or keys, or an expression) in the include's parameters.
+    Value(ParamValue),
+    /// A connection into the include's parameter port, from this output (`"noise.value"`).
+    Connection(String),
+}
+
 /// One step of the breadcrumb.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Crumb {
@@ -74,6 +95,21 @@ impl Editor {
     /// Whether include `id` of this level keeps its graph in the document.
     pub fn is_local(&self, id: &str) -> bool {
         self.doc.subgraphs.contains_key(id)
+    }
+
+    /// What overrides parameter `param` of node `id` of this level when the whole graph cooks:
+    /// the include one level up, when it sets (or a connection drives) the exposed parameter
+    /// that maps to it. Editing the inner value then changes nothing until that is unset.
+    pub fn set_by_include(&self, id: &str, param: &str) -> Option<IncludeSetting> {
+        let level = self.scope.last()?;
+        let target = format!("{id}.{param}");
+        let (exposed, _) = self.doc.interface.as_ref()?.params.iter().find(|(_, inner)| **inner == target)?;
+        let port = format!("{}.{exposed}", level.id);
+        let by = match level.parent.edges.iter().find(|(_, to)| *to == port) {
+            Some((from, _)) => SetBy::Connection(from.clone()),
+            None => SetBy::Value(level.parent.node(&level.id)?.params.get(exposed)?.clone()),
+        };
+        Some(IncludeSetting { include: level.id.clone(), exposed: exposed.clone(), by })
     }
 
     /// Shows the graph of include `id` in place of this level's (its breadcrumb leads back).
@@ -277,6 +313,7 @@ pub(super) mod tests {
 
     use pyrograph_frontend::core::{GraphDoc, ParamValue};
 
+    use super::SetBy;
     use crate::Editor;
 
     const PRESET: &str = r#"(
@@ -369,6 +406,33 @@ pub(super) mod tests {
         assert!(ed.undo() && ed.undo(), "the edit inside, then the collapse");
         assert!(ed.scope().is_empty(), "the include is gone: the editor steps out");
         assert!(ed.doc().node(&a).is_some());
+    }
+
+    #[test]
+    fn a_parameter_the_include_sets_is_marked_with_its_value_or_its_connection() {
+        let (_dir, main, _preset) = project();
+        let mut ed = Editor::with_default_registry();
+        ed.open(&main).unwrap();
+        assert_eq!(ed.set_by_include("add", "b"), None, "not inside an include");
+        ed.step_into("p").unwrap();
+        assert_eq!(ed.set_by_include("add", "b"), None, "the include leaves `offset` unset");
+        assert!(ed.step_out());
+        ed.set_param("p", "offset", ParamValue::Float(5.0)).unwrap();
+        ed.seal();
+        ed.step_into("p").unwrap();
+        let set = ed.set_by_include("add", "b").expect("`offset` maps to add.b");
+        assert_eq!((set.include.as_str(), set.exposed.as_str()), ("p", "offset"));
+        assert_eq!(set.by, SetBy::Value(ParamValue::Float(5.0)));
+        assert_eq!(ed.set_by_include("t", "frames"), None, "not exposed");
+        assert_eq!(ed.set_by_include("add", "a"), None, "not exposed");
+        // What the mark says is what cooks: the include's 5, not the inner 10.
+        assert_eq!(cooked(&mut ed, "add", 3), "8");
+
+        assert!(ed.step_out());
+        let c = ed.add_node("value.float", (0.0, 400.0)).unwrap();
+        ed.connect(&c, "value", "p", "offset").unwrap();
+        ed.step_into("p").unwrap();
+        assert_eq!(ed.set_by_include("add", "b").unwrap().by, SetBy::Connection(format!("{c}.value")));
     }
 
     /// An editor on `main` (no automatic cooks) whose include `p` has been made a local copy by

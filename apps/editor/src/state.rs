@@ -362,12 +362,15 @@ impl Editor {
         let before = self.doc.clone();
         let r = f(&mut self.doc);
         if self.doc != before {
-            // History keeps whole top-level documents, whatever level was edited.
-            match self.scope.first() {
-                Some(top) => self.history.record(&top.parent, key),
+            // History keeps whole top-level documents, whatever level was edited (a move inside
+            // an unedited preset changes none: see `sync_scope`).
+            let top = self.scope.first().map(|top| top.parent.clone());
+            self.sync_scope();
+            match top {
+                Some(top) if self.scope.first().is_some_and(|now| now.parent != top) => self.history.record(&top, key),
+                Some(_) => {}
                 None => self.history.record(&before, key),
             }
-            self.sync_scope();
             self.after_change(&before);
         }
         r

@@ -198,17 +198,27 @@ impl Editor {
         Ok(())
     }
 
-    /// Writes this level's document into the levels above (after an edit).
+    /// Writes this level's document into the levels above (after an edit). Moving nodes or
+    /// comments inside an include that still reads its preset file only rearranges the view: it
+    /// makes no local copy (nothing in the file changes, so the graph is not marked edited and
+    /// the moves are not kept), as Houdini asks for an explicit unlock before an asset's
+    /// contents change.
     pub(super) fn sync_scope(&mut self) {
         let mut cur = self.doc.clone();
-        for level in self.scope.iter_mut().rev() {
-            let local = level.parent.subgraphs.contains_key(&level.id) || level.pristine.as_ref() != Some(&cur);
+        let mut moved_only = false;
+        for (depth, level) in self.scope.iter_mut().rev().enumerate() {
+            let local = level.parent.subgraphs.contains_key(&level.id)
+                || !level.pristine.as_ref().is_some_and(|p| same_but_layout(p, &cur));
             if !local {
                 // Unedited below here: the levels above are unchanged too.
-                return;
+                moved_only = depth == 0 && level.pristine.as_ref() != Some(&cur);
+                break;
             }
             level.parent.subgraphs.insert(level.id.clone(), cur);
             cur = level.parent.clone();
+        }
+        if moved_only {
+            self.set_status("moves inside a preset are not kept: edit a value to make a local copy", false);
         }
     }
 
@@ -305,6 +315,20 @@ impl Editor {
 
 fn file_name(p: &Path) -> String {
     p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// Whether two documents differ at most in where their nodes and comments sit on the canvas.
+fn same_but_layout(a: &GraphDoc, b: &GraphDoc) -> bool {
+    if a == b {
+        return true;
+    }
+    let unplaced = |d: &GraphDoc| {
+        let mut d = d.clone();
+        d.nodes.0.iter_mut().for_each(|(_, n)| n.pos = None);
+        d.comments.iter_mut().for_each(|c| c.pos = (0.0, 0.0));
+        d
+    };
+    unplaced(a) == unplaced(b)
 }
 
 #[cfg(test)]
@@ -433,6 +457,32 @@ pub(super) mod tests {
         ed.connect(&c, "value", "p", "offset").unwrap();
         ed.step_into("p").unwrap();
         assert_eq!(ed.set_by_include("add", "b").unwrap().by, SetBy::Connection(format!("{c}.value")));
+    }
+
+    #[test]
+    fn moving_nodes_inside_a_preset_makes_no_local_copy_and_no_undo_step_a_value_does() {
+        let (_dir, main, _preset) = project();
+        let mut ed = Editor::with_default_registry();
+        ed.auto_cook = false;
+        ed.open(&main).unwrap();
+        let opened = ed.doc().to_ron();
+        ed.step_into("p").unwrap();
+        ed.move_node("add", (300.0, 120.0));
+        ed.seal();
+        assert_eq!(ed.doc().node("add").unwrap().pos, Some((300.0, 120.0)), "the view shows the move");
+        assert!(!ed.scope()[0].local && !ed.is_dirty(), "a move is no edit of the preset");
+        assert!(ed.status().unwrap().text.contains("not kept"), "{:?}", ed.status());
+        assert!(!ed.undo(), "nothing to undo");
+        ed.set_param("add", "b", ParamValue::Float(20.0)).unwrap();
+        ed.seal();
+        assert!(ed.scope()[0].local && ed.is_dirty(), "a value makes the local copy, moves and all");
+        assert_eq!(ed.root_doc().subgraphs["p"].node("add").unwrap().pos, Some((300.0, 120.0)));
+        ed.move_node("t", (10.0, 10.0));
+        ed.seal();
+        assert_eq!(ed.root_doc().subgraphs["p"].node("t").unwrap().pos, Some((10.0, 10.0)), "moves in a copy are kept");
+        assert!(ed.undo() && ed.undo());
+        assert!(ed.step_to(0) || ed.scope().is_empty());
+        assert_eq!(ed.doc().to_ron(), opened);
     }
 
     /// An editor on `main` (no automatic cooks) whose include `p` has been made a local copy by

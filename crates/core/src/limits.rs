@@ -18,9 +18,14 @@ pub const DEFAULT_MAX_NODES: u64 = 1_000_000;
 /// Pixels an image may declare by default: 16384 × 16384.
 pub const DEFAULT_MAX_PIXELS: u64 = 1 << 28;
 
+/// Active voxels a volume may hold by default (a simulation, a VDB read): 64 Mi, about 4 GiB of
+/// simulation state.
+pub const DEFAULT_MAX_VOXELS: u64 = 1 << 26;
+
 /// 0 means "not set here: the environment variable, else the default".
 static MAX_NODES: AtomicU64 = AtomicU64::new(0);
 static MAX_PIXELS: AtomicU64 = AtomicU64::new(0);
+static MAX_VOXELS: AtomicU64 = AtomicU64::new(0);
 /// Canonical folders reads are confined to; empty means reads are not confined.
 static READ_ROOTS: RwLock<Vec<PathBuf>> = RwLock::new(Vec::new());
 
@@ -44,6 +49,20 @@ pub fn max_pixels() -> u64 {
         0 => from_env("PYROGRAPH_MAX_PIXELS").unwrap_or(DEFAULT_MAX_PIXELS),
         n => n,
     }
+}
+
+/// Active voxels a volume may hold (a simulation's active region, a VDB file's grids):
+/// `--max-voxels`, else `PYROGRAPH_MAX_VOXELS`, else [`DEFAULT_MAX_VOXELS`].
+pub fn max_voxels() -> u64 {
+    match MAX_VOXELS.load(Ordering::Relaxed) {
+        0 => from_env("PYROGRAPH_MAX_VOXELS").unwrap_or(DEFAULT_MAX_VOXELS),
+        n => n,
+    }
+}
+
+/// Sets the voxel budget for this process (`None`: back to the environment or the default).
+pub fn set_max_voxels(n: Option<u64>) {
+    MAX_VOXELS.store(n.unwrap_or(0).max(u64::from(n.is_some())), Ordering::Relaxed);
 }
 
 /// Sets the node limit for this process (`None`: back to the environment or the default).

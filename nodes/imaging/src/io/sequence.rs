@@ -199,7 +199,8 @@ pub fn list_pattern(path: &Path, pattern: &FramePattern) -> Result<Vec<PathBuf>,
 }
 
 /// [`list_pattern`] with each file's frame number.
-fn list_pattern_numbered(path: &Path, pattern: &FramePattern) -> Result<Vec<(u64, PathBuf)>, IoError> {
+/// The existing files matching `pattern` in the folder of `path`, with their frame numbers, in order.
+pub fn list_pattern_numbered(path: &Path, pattern: &FramePattern) -> Result<Vec<(u64, PathBuf)>, IoError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -1,0 +1,176 @@
+//! Advection that keeps detail: the MacCormack scheme with Selle et al.'s clamp (Selle, Fedkiw,
+//! Kim, Liu & Rossignac 2008, "An Unconditionally Stable MacCormack Method"): a semi-Lagrangian
+//! step forward, one backward from its result, half the round trip's error added back, and the
+//! result clamped to the values the forward step interpolated between, so it makes no new
+//! extremes. Scalars ride the voxel-centred velocity; each velocity component rides the velocity
+//! at its own face.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::state::SimState;
+use crate::grid::sample::corners;
+use crate::grid::{NONE, Topology, VOXELS, slot};
+
+/// Moves `fields` along per-voxel displacements `d` (index units over the step, pointing
+/// downstream): the value at voxel `x` comes from `x − d`. Returns the advected fields.
+pub fn maccormack<const N: usize>(top: &Topology, fields: [&[f32]; N], d: &[Vec3]) -> [Vec<f32>; N] {
+    let n = top.voxels();
+    // Forward: φ̂(x) = φ(x − d).
+    let mut hat: [Vec<f32>; N] = std::array::from_fn(|_| vec![0.0; n]);
+    {
+        let mut outs: Vec<&mut [f32]> = hat.iter_mut().map(|v| v.as_mut_slice()).collect();
+        per_brick(&mut outs, |b, o| {
+            let base = top.origin(b).as_vec3();
+            for i in 0..VOXELS {
+                let p = base + local(i) - d[b * VOXELS + i];
+                let c = corners(top, b, p);
+                for k in 0..N {
+                    o[k][i] = c.sample(fields[k]);
+                }
+            }
+        });
+    }
+    // Backward from φ̂ and the correction, clamped to the forward step's interpolation range.
+    let mut new: [Vec<f32>; N] = std::array::from_fn(|_| vec![0.0; n]);
+    {
+        let mut outs: Vec<&mut [f32]> = new.iter_mut().map(|v| v.as_mut_slice()).collect();
+        let hat = &hat;
+        per_brick(&mut outs, |b, o| {
+            let base = top.origin(b).as_vec3();
+            for i in 0..VOXELS {
+                let at = b * VOXELS + i;
+                let x = base + local(i);
+                let fwd = corners(top, b, x - d[at]);
+                let back = corners(top, b, x + d[at]);
+                for ((o, hat), field) in o.iter_mut().zip(hat.iter()).zip(fields.iter()) {
+                    let round_trip = back.sample(hat);
+                    let corrected = hat[at] + 0.5 * (field[at] - round_trip);
+                    let (lo, hi) = fwd.range(field);
+                    o[i] = corrected.clamp(lo, hi);
+                }
+            }
+        });
+    }
+    new
+}
+
+/// Runs `f(brick, outputs of that brick)` over every brick in parallel.
+fn per_brick(outs: &mut [&mut [f32]], f: impl Fn(usize, &mut [&mut [f32]]) + Sync) {
+    let bricks = outs.first().map_or(0, |o| o.len() / VOXELS);
+    let mut per: Vec<Vec<&mut [f32]>> = (0..bricks).map(|_| Vec::with_capacity(outs.len())).collect();
+    for o in outs.iter_mut() {
+        for (b, chunk) in o.chunks_mut(VOXELS).enumerate() {
+            per[b].push(chunk);
+        }
+    }
+    per.par_iter_mut().enumerate().for_each(|(b, o)| f(b, o));
+}
+
+/// Voxel `i`'s position inside its brick.
+#[inline(always)]
+pub fn local(i: usize) -> Vec3 {
+    Vec3::new((i & 7) as f32, ((i >> 3) & 7) as f32, (i >> 6) as f32)
+}
+
+/// Advects the four scalar fields and the velocity through the velocity over `dt` seconds.
+pub fn advect(state: &mut SimState, dt: f32) {
+    let top = state.top.clone();
+    let scale = dt / state.voxel_size;
+    let centred = state.centred_velocity();
+    let d: Vec<Vec3> = centred.par_iter().map(|v| Vec3::from_array(*v) * scale).collect();
+    let [a, b, c, e] = &state.scalars;
+    state.scalars = maccormack(&top, [a, b, c, e], &d);
+    // Each component at its own face: the velocity there is the mean of the two voxel centres
+    // the face separates.
+    let mut vel: [Vec<f32>; 3] = Default::default();
+    for (axis, out) in vel.iter_mut().enumerate() {
+        let d: Vec<Vec3> = (0..top.voxels())
+            .into_par_iter()
+            .map(|at| {
+                let (b, i) = (at / VOXELS, at % VOXELS);
+                let here = Vec3::from_array(centred[at]);
+                let below = lower_neighbor(&top, b, i, axis).map_or(here, |n| Vec3::from_array(centred[n]));
+                0.5 * (here + below) * scale
+            })
+            .collect();
+        let [moved] = maccormack(&top, [&state.vel[axis]], &d);
+        *out = moved;
+    }
+    state.vel = vel;
+}
+
+/// The flat index of the voxel below brick `b`'s voxel `i` along `axis`, if active.
+#[inline(always)]
+pub fn lower_neighbor(top: &Topology, b: usize, i: usize, axis: usize) -> Option<usize> {
+    let shift = 3 * axis;
+    if (i >> shift) & 7 > 0 {
+        return Some(b * VOXELS + i - (1 << shift));
+    }
+    let d = [-((axis == 0) as i32), -((axis == 1) as i32), -((axis == 2) as i32)];
+    let nb = top.neighbors(b)[slot(d[0], d[1], d[2])];
+    (nb != NONE).then(|| nb as usize * VOXELS + i + (7 << shift))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::IVec3;
+
+    fn block(n: i32) -> Topology {
+        let mut c = Vec::new();
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    c.push(IVec3::new(x, y, z));
+                }
+            }
+        }
+        Topology::new(c)
+    }
+
+    #[test]
+    fn a_uniform_shift_by_whole_voxels_moves_a_blob_exactly() {
+        let top = block(3);
+        let mut f = vec![0.0; top.voxels()];
+        let at = |v: IVec3| {
+            let b = top.find(v >> 3).unwrap() as usize;
+            b * VOXELS + crate::grid::voxel((v.x & 7) as usize, (v.y & 7) as usize, (v.z & 7) as usize)
+        };
+        f[at(IVec3::new(10, 11, 12))] = 1.0;
+        f[at(IVec3::new(11, 11, 12))] = 0.5;
+        let d = vec![Vec3::new(2.0, 1.0, 0.0); top.voxels()];
+        let [moved] = maccormack(&top, [&f], &d);
+        assert!((moved[at(IVec3::new(12, 12, 12))] - 1.0).abs() < 1e-6);
+        assert!((moved[at(IVec3::new(13, 12, 12))] - 0.5).abs() < 1e-6);
+        assert!((moved.iter().sum::<f32>() - 1.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_fractional_shift_makes_no_new_extremes_and_keeps_more_peak_than_semi_lagrangian() {
+        let top = block(4);
+        // A smooth bump moved half a voxel per step for 16 steps.
+        let mut f = vec![0.0; top.voxels()];
+        for (b, c) in top.coords().iter().enumerate() {
+            for i in 0..VOXELS {
+                let p = (*c * 8).as_vec3() + local(i);
+                f[b * VOXELS + i] = (-(p - Vec3::splat(10.0)).length_squared() / 8.0).exp();
+            }
+        }
+        let d = vec![Vec3::new(0.5, 0.0, 0.0); top.voxels()];
+        let (mut mc, mut sl) = (f.clone(), f.clone());
+        for _ in 0..16 {
+            [mc] = maccormack(&top, [&mc], &d);
+            sl = (0..top.voxels())
+                .map(|at| {
+                    let (b, i) = (at / VOXELS, at % VOXELS);
+                    corners(&top, b, top.origin(b).as_vec3() + local(i) - d[at]).sample(&sl)
+                })
+                .collect();
+        }
+        let peak = |v: &[f32]| v.iter().cloned().fold(0.0f32, f32::max);
+        assert!(mc.iter().all(|v| (0.0..=1.0 + 1e-6).contains(v)), "no new extremes");
+        println!("peak after 16 half-voxel steps: MacCormack {} semi-Lagrangian {}", peak(&mc), peak(&sl));
+        assert!(peak(&mc) > peak(&sl) + 0.1, "{} vs {}", peak(&mc), peak(&sl));
+    }
+}

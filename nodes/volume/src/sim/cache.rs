@@ -1,0 +1,115 @@
+//! The stepping cache behind `volume.simulate`'s clip: frame `i` of the clip is the state after
+//! `i + 1` frames of simulation (so frame 0 already shows the first frame's emission), stepped on
+//! demand from the nearest state the cache holds.
+
+use std::sync::Arc;
+
+use pyrograph_core::stepping::SteppingCache;
+use pyrograph_core::{CookCtx, FrameSource, NodeError, Value};
+use pyrograph_nodes_particles::types::WindField;
+use pyrograph_nodes_particles::wind::WindSampler;
+
+use super::params::SimParams;
+use super::state::SimState;
+use super::step::{Setup, SimError, substep, substeps};
+use crate::grid::{SimStats, Volume};
+use crate::source::VolumeSource;
+
+/// Frames between kept checkpoints.
+const CHECKPOINT_EVERY: usize = 8;
+/// Bytes of checkpoints one clip keeps.
+const CHECKPOINT_BUDGET: usize = 512 << 20;
+
+/// Everything a simulation reads besides its state.
+pub struct Simulation {
+    /// The parameters (animated ones sampled per sub-step).
+    pub params: SimParams,
+    /// Frames per second.
+    pub fps: f64,
+    /// The emitters.
+    pub sources: Vec<Arc<VolumeSource>>,
+    /// The wind, if any.
+    pub wind: Option<WindField>,
+    /// Colliders, noise, bounds, solver settings.
+    pub setup: Setup,
+}
+
+impl Simulation {
+    /// Steps `state` over frame `frame` (1-based: the sub-steps covering seconds
+    /// `(frame − 1) / fps .. frame / fps`).
+    pub fn step_frame(&self, state: &mut SimState, frame: usize, ctx: &CookCtx) -> Result<(), NodeError> {
+        let fps = self.fps;
+        let start = (frame - 1) as f64;
+        let splats_at = |t: f64| -> Result<Vec<_>, NodeError> {
+            let mut all = Vec::new();
+            for s in &self.sources {
+                all.extend(s.splats(t, fps, ctx)?);
+            }
+            Ok(all)
+        };
+        let first = splats_at(start)?;
+        let p = &self.params;
+        let n = substeps(state, &first, (1.0 / fps) as f32, p.cfl, p.min_substeps, p.max_substeps);
+        let dt = (1.0 / (fps * f64::from(n))) as f32;
+        let still = match &self.wind {
+            Some(w) if w.animation.is_none() => Some(WindSampler::at_rate(w, fps)),
+            _ => None,
+        };
+        let mut stats = SimStats { substeps: n, ..SimStats::default() };
+        for s in 0..n {
+            ctx.check_cancel()?;
+            let t = start + f64::from(s) / f64::from(n);
+            let splats = if s == 0 { first.clone() } else { splats_at(t)? };
+            let step_params = p.at(t, fps)?;
+            let sampled = match (&self.wind, &still) {
+                (Some(w), None) => Some(WindSampler::at_rate(&w.at_frame(t, fps)?, fps)),
+                _ => None,
+            };
+            let wind = still.as_ref().or(sampled.as_ref());
+            let projection = substep(state, &self.setup, &step_params, &splats, wind, dt).map_err(sim_error)?;
+            stats.max_divergence = projection.max_divergence;
+            stats.pressure_iterations = projection.iterations;
+        }
+        state.stats = stats;
+        Ok(())
+    }
+}
+
+/// A simulation error as the node reports it (the voxel budget names its limit).
+fn sim_error(e: SimError) -> NodeError {
+    NodeError::msg(e.to_string())
+}
+
+/// A `Clip<Volume>` source.
+pub struct VolumeFrames {
+    frames: usize,
+    sim: Simulation,
+    cache: SteppingCache<SimState>,
+}
+
+impl VolumeFrames {
+    /// `frames` frames of `sim`, starting from an empty grid at voxel size `voxel_size`.
+    pub fn new(sim: Simulation, frames: usize, voxel_size: f32) -> Self {
+        let cache = SteppingCache::new(SimState::new(voxel_size), CHECKPOINT_EVERY, CHECKPOINT_BUDGET);
+        VolumeFrames { frames, sim, cache }
+    }
+
+    /// Frames of simulation stepped so far.
+    pub fn frames_stepped(&self) -> usize {
+        self.cache.frames_stepped()
+    }
+
+    /// The volume at clip frame `index`.
+    pub fn volume(&self, index: usize, ctx: &CookCtx) -> Result<Volume, NodeError> {
+        self.cache.at(index + 1, ctx, |s, frame| self.sim.step_frame(s, frame, ctx), SimState::snapshot)
+    }
+}
+
+impl FrameSource for VolumeFrames {
+    fn len(&self) -> usize {
+        self.frames
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        Ok(Value::custom(Arc::new(self.volume(index, ctx)?)))
+    }
+}

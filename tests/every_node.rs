@@ -147,6 +147,18 @@ fn supply(doc: &mut GraphDoc, ty: &PortType, consumer: &str, files: &Files) -> O
             }
             "s_spread.spread".to_string()
         }
+        "VolumeSource" => {
+            add(doc, "s_vsource", NodeDoc::new("volume.source"));
+            "s_vsource.source".to_string()
+        }
+        "Volume" | "Clip<Volume>" => {
+            add(doc, "s_vsource", NodeDoc::new("volume.source"));
+            let sim = NodeDoc::new("volume.simulate").param("frames", int(2)).param("voxel_size", ParamValue::Float(0.1));
+            if add(doc, "s_sim", sim) {
+                doc.connect("s_vsource.source", "s_sim.source");
+            }
+            "s_sim.volume".to_string()
+        }
         "ClothState" | "Clip<ClothState>" => {
             add(doc, "s_cloth", NodeDoc::new("cloth.mass_spring_flame").param("frames", int(6)).param("count", int(2)));
             "s_cloth.cloth".to_string()
@@ -183,6 +195,7 @@ struct Files {
     sequence: PathBuf,
     database: PathBuf,
     include: PathBuf,
+    vdb: PathBuf,
 }
 
 fn cook(registry: &Registry, doc: &GraphDoc, out: &Path, target: &str) -> Result<(), String> {
@@ -215,7 +228,11 @@ fn make_files(registry: &Registry) -> Files {
     doc.connect("flame.clip", "gray.image").connect("flame.clip", "write.clip");
     doc.connect("gray.image", "train.clip1");
     doc.connect("train.basis", "save.basis").connect("train.weights", "save.weights");
-    for target in ["write", "save"] {
+    doc.add_node("smoke", NodeDoc::new("volume.source"));
+    doc.add_node("sim", NodeDoc::new("volume.simulate").param("frames", int(2)).param("voxel_size", ParamValue::Float(0.1)));
+    doc.add_node("cache", NodeDoc::new("volume.write_vdb").param("pattern", path(&dir.path().join("vdb/smoke_####.vdb"))));
+    doc.connect("smoke.source", "sim.source").connect("sim.volume", "cache.volume");
+    for target in ["write", "save", "cache"] {
         cook(registry, &doc, dir.path(), target).unwrap_or_else(|e| panic!("making the test files: {target}: {e}"));
     }
     let root = workspace();
@@ -224,6 +241,7 @@ fn make_files(registry: &Registry) -> Files {
         sequence: frames,
         database: dir.path().join("db"),
         include: root.join("graphs/candles.ron"),
+        vdb: dir.path().join("vdb/smoke_####.vdb"),
         _dir: dir,
     }
 }
@@ -248,6 +266,7 @@ fn every_registered_node_cooks_with_its_defaults() {
                     "imaging.load_sequence" => &files.sequence,
                     "eigen.load_database" => &files.database,
                     "graph.include" => &files.include,
+                    "volume.load_vdb" => &files.vdb,
                     _ => panic!("{name}.{}: no test file for this required path; add one to make_files", port.name),
                 };
                 doc.node_mut("n").unwrap().params.insert(port.name.clone(), path(file));

@@ -224,7 +224,9 @@ impl Evaluator {
         let cooked = if gn.lifted {
             Ok(lift(gn, values, fingerprint))
         } else {
-            guarded(|| gn.node.cook(&Inputs::new(desc, &values), &node_ctx)).and_then(|out| check_outputs(gn, out))
+            guarded(|| gn.node.cook(&Inputs::new(desc, &values), &node_ctx))
+                .and_then(|out| check_outputs(gn, out))
+                .map(|out| out.into_iter().map(|v| name_clip(gn, v)).collect())
         };
         node_ctx.report(Progress::NodeFinished { node: gn.id.clone(), ok: cooked.is_ok() });
         match cooked {
@@ -259,6 +261,15 @@ fn wrap(gn: &GraphNode, e: NodeError) -> NodeError {
         other => {
             NodeError::InNode { node: gn.id.to_string(), type_name: gn.node.desc().type_name.clone(), source: Box::new(other) }
         }
+    }
+}
+
+/// A clip a node made names that node in its frames' errors (a simulation's frame computed when
+/// a writer downstream pulls it).
+fn name_clip(gn: &GraphNode, v: Value) -> Value {
+    match v {
+        Value::Clip(c) => Value::Clip(c.named(&gn.id, &gn.node.desc().type_name)),
+        v => v,
     }
 }
 

@@ -24,6 +24,8 @@ struct Inner<S> {
     current: Option<(usize, S)>,
     checkpoints: BTreeMap<usize, S>,
     bytes: usize,
+    /// Callers stepping right now: the frame each started from and the frame it steps to.
+    in_flight: Vec<(usize, usize)>,
 }
 
 /// Frames of a simulation, stepped on demand from the nearest earlier state it holds.
@@ -39,7 +41,7 @@ impl<S: Checkpoint> SteppingCache<S> {
     /// A cache whose frame 0 is `initial`, keeping a checkpoint every `every` frames while they
     /// fit in `budget` bytes.
     pub fn new(initial: S, every: usize, budget: usize) -> Self {
-        let inner = Inner { current: None, checkpoints: BTreeMap::new(), bytes: 0 };
+        let inner = Inner { current: None, checkpoints: BTreeMap::new(), bytes: 0, in_flight: Vec::new() };
         SteppingCache { initial, every: every.max(1), budget, inner: Mutex::new(inner), stepped: AtomicUsize::new(0) }
     }
 
@@ -50,6 +52,14 @@ impl<S: Checkpoint> SteppingCache<S> {
 
     fn lock(&self) -> Result<MutexGuard<'_, Inner<S>>, NodeError> {
         self.inner.lock().map_err(|_| NodeError::msg("the stepping cache was poisoned by an earlier panic"))
+    }
+
+    /// Whether a caller is stepping right now from a frame at or before `index`: a caller wanting
+    /// frame `index` does better to wait for it (for the later state it leaves, or for the frame
+    /// itself when it steps past it and the simulation keeps the frames it passes) than to step
+    /// again from an earlier state.
+    pub fn busy_before(&self, index: usize) -> bool {
+        self.lock().is_ok_and(|c| c.in_flight.iter().any(|(from, _)| *from <= index))
     }
 
     /// `finish` of the state at frame `index`. `step` advances a state by one frame; it is given
@@ -63,7 +73,7 @@ impl<S: Checkpoint> SteppingCache<S> {
     ) -> Result<R, NodeError> {
         let (mut frame, mut state) = {
             let mut c = self.lock()?;
-            match c.current.take() {
+            let picked = match c.current.take() {
                 Some((f, s)) if f <= index => (f, s),
                 other => {
                     c.current = other;
@@ -73,29 +83,49 @@ impl<S: Checkpoint> SteppingCache<S> {
                         .map(|(f, s)| (*f, s.clone()))
                         .unwrap_or_else(|| (0, self.initial.clone()))
                 }
-            }
+            };
+            c.in_flight.push((picked.0, index));
+            picked
         };
-        while frame < index {
-            ctx.check_cancel()?;
-            step(&mut state, frame + 1)?;
-            frame += 1;
-            self.stepped.fetch_add(1, Ordering::Relaxed);
-            if frame % self.every == 0 {
-                let mut c = self.lock()?;
-                let bytes = state.bytes();
-                if !c.checkpoints.contains_key(&frame) && c.bytes + bytes <= self.budget {
-                    c.bytes += bytes;
-                    c.checkpoints.insert(frame, state.clone());
-                }
-            }
-        }
-        let out = finish(&state);
+        let flight = (frame, index);
+        let result = self.advance(&mut frame, &mut state, index, ctx, &mut step);
         let mut c = self.lock()?;
+        if let Some(k) = c.in_flight.iter().position(|f| *f == flight) {
+            c.in_flight.swap_remove(k);
+        }
+        result?;
+        let out = finish(&state);
         // Another caller may have left a later state meanwhile; keep the later one.
         if c.current.as_ref().is_none_or(|(f, _)| *f <= frame) {
             c.current = Some((frame, state));
         }
         Ok(out)
+    }
+
+    /// Steps `state` from `frame` to `index`, keeping checkpoints on the way.
+    fn advance(
+        &self,
+        frame: &mut usize,
+        state: &mut S,
+        index: usize,
+        ctx: &CookCtx,
+        step: &mut impl FnMut(&mut S, usize) -> Result<(), NodeError>,
+    ) -> Result<(), NodeError> {
+        while *frame < index {
+            ctx.check_cancel()?;
+            step(state, *frame + 1)?;
+            *frame += 1;
+            self.stepped.fetch_add(1, Ordering::Relaxed);
+            if (*frame).is_multiple_of(self.every) {
+                let mut c = self.lock()?;
+                let bytes = state.bytes();
+                if !c.checkpoints.contains_key(frame) && c.bytes + bytes <= self.budget {
+                    c.bytes += bytes;
+                    c.checkpoints.insert(*frame, state.clone());
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -127,6 +157,31 @@ mod tests {
         // Frame 6 restarts from the checkpoint at 4: two steps.
         assert_eq!(cache.at(6, &ctx, step, |s| s.0.len()).unwrap(), 6);
         assert_eq!(cache.frames_stepped(), 11);
+    }
+
+    #[test]
+    fn a_caller_stepping_from_an_earlier_frame_is_seen_as_busy() {
+        let cache = SteppingCache::new(Counter(Vec::new()), 4, 1 << 20);
+        let ctx = CookCtx::default();
+        assert!(!cache.busy_before(3));
+        let seen = cache.at(
+            6,
+            &ctx,
+            |_, _| {
+                assert!(cache.busy_before(0) && cache.busy_before(9), "stepping from 0 is busy before every frame");
+                Ok(())
+            },
+            |_| (),
+        );
+        assert!(seen.is_ok());
+        assert!(!cache.busy_before(9), "nobody steps once it returned");
+        let later = cache.at(8, &ctx, |_, _| {
+            assert!(!cache.busy_before(5), "stepping from 6 is not busy before 5");
+            Ok(())
+        }, |_| ());
+        assert!(later.is_ok());
+        let _ = cache.at(12, &ctx, |_, f| if f == 10 { Err(NodeError::msg("diverged")) } else { Ok(()) }, |_| ());
+        assert!(!cache.busy_before(20), "a failed step leaves no one in flight");
     }
 
     #[test]

@@ -16,6 +16,7 @@ pub use pyrograph_nodes_eigen as eigen;
 pub use pyrograph_nodes_flame_model as flame_model;
 pub use pyrograph_nodes_imaging as imaging;
 pub use pyrograph_nodes_particles as particles;
+pub use pyrograph_nodes_volume as volume;
 pub use pyrograph_render as render;
 
 /// A registry with every node type pyrograph ships.
@@ -26,5 +27,6 @@ pub fn registry() -> core::Registry {
     particles::register(&mut r);
     cloth::register(&mut r);
     flame_model::register(&mut r);
+    volume::register(&mut r);
     r
 }

@@ -56,6 +56,18 @@ pub fn sample(attr: &Attribute, t: usize, value: Value) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// An `asset` value: a file the stage refers to.
+pub fn asset(path: &str) -> Value {
+    Value::AssetPath(sdf::AssetPath::new(path))
+}
+
+/// A schema relationship `name` of `prim` targeting the prims at `targets`.
+pub fn relationship(stage: &Stage, prim: &str, name: &str, targets: &[&str]) -> anyhow::Result<()> {
+    let paths = targets.iter().map(|t| sdf::Path::new(t)).collect::<anyhow::Result<Vec<_>>>()?;
+    stage.create_relationship(format!("{prim}.{name}").as_str())?.set_custom(false)?.set_targets(paths)?;
+    Ok(())
+}
+
 /// Points as USD vectors.
 pub fn vec3s<'a>(points: impl IntoIterator<Item = &'a [f32; 3]>) -> Value {
     Value::Vec3fVec(points.into_iter().map(|&p| Vec3f::from(p)).collect())

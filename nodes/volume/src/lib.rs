@@ -7,11 +7,15 @@
 #![deny(missing_docs)]
 
 pub mod grid;
+pub mod preview;
 pub mod sim;
 pub mod source;
 pub mod vdb;
 
 use pyrograph_core::Registry;
+
+#[cfg(test)]
+mod tests;
 
 /// Adds every volume node type.
 pub fn register(registry: &mut Registry) {
@@ -19,4 +23,5 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<sim::Simulate>();
     registry.declare::<vdb::nodes::WriteVdb>();
     registry.declare::<vdb::nodes::LoadVdb>();
+    registry.declare::<preview::Preview>();
 }

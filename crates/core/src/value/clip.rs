@@ -64,6 +64,33 @@ impl FrameSource for VecSource {
     }
 }
 
+/// A clip's source whose frames' errors name the node that made the clip.
+struct Named {
+    inner: Arc<dyn FrameSource>,
+    node: String,
+    type_name: String,
+}
+
+impl FrameSource for Named {
+    fn len(&self) -> usize {
+        self.inner.len()
+    }
+    fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
+        self.inner.frame(index, ctx).map_err(|e| match e {
+            e @ (NodeError::InNode { .. } | NodeError::Cancelled | NodeError::Upstream(_)) => e,
+            e @ NodeError::Frame { .. } => NodeError::InNode { node: self.node.clone(), type_name: self.type_name.clone(), source: Box::new(e) },
+            e => NodeError::InNode {
+                node: self.node.clone(),
+                type_name: self.type_name.clone(),
+                source: Box::new(NodeError::Frame { frame: index, source: Box::new(e) }),
+            },
+        })
+    }
+    fn frame_key(&self, index: usize) -> Option<u64> {
+        self.inner.frame_key(index)
+    }
+}
+
 impl Clip {
     /// A lazy clip. `fingerprint` must change whenever the frames could.
     pub fn new(element: PortType, fps: f64, fingerprint: u64, source: Arc<dyn FrameSource>) -> Self {
@@ -87,6 +114,15 @@ impl Clip {
         let mut h = Fingerprinter::new();
         frames.iter().for_each(|f| h.write_u64(f.fingerprint()));
         Clip::new(element, fps, h.finish(), Arc::new(VecSource(frames)))
+    }
+
+    /// The same clip (same frames, fingerprint and cache entries) whose frames' errors name
+    /// `node` of type `type_name`, the node that made it: a simulation's frame that fails while
+    /// a writer downstream pulls it is that simulation's error, not the writer's. Errors already
+    /// naming a node (an upstream clip's) pass unchanged.
+    pub fn named(self, node: &str, type_name: &str) -> Clip {
+        let source = Arc::new(Named { inner: self.source, node: node.to_string(), type_name: type_name.to_string() });
+        Clip { source, ..self }
     }
 
     /// The per-frame type.

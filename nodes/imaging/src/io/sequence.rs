@@ -479,17 +479,23 @@ pub fn write_frames(
         std::fs::create_dir_all(&dir).map_err(|e| IoError::Path(format!("cannot create {}: {e}", dir.display())))?;
     }
     let done = AtomicUsize::new(0);
-    targets.par_iter().try_for_each(|(i, path)| {
-        ctx.check_cancel()?;
-        let bytes = encode(*i).map_err(|e| match e {
-            e @ NodeError::Frame { .. } => e,
-            e => NodeError::Frame { frame: *i, source: Box::new(e) },
+    // Frames go in windows of two per thread, in order: at most that many are in flight, and a
+    // simulation upstream is asked for its frames in order (it steps through them once, the other
+    // threads waiting for the frames it passes) while the frames it gave are encoded beside it.
+    let window = 2 * rayon::current_num_threads().max(1);
+    for chunk in targets.chunks(window) {
+        chunk.par_iter().try_for_each(|(i, path)| {
+            ctx.check_cancel()?;
+            let bytes = encode(*i).map_err(|e| match e {
+                e @ NodeError::Frame { .. } => e,
+                e => NodeError::Frame { frame: *i, source: Box::new(e) },
+            })?;
+            write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+            ctx.record_written(path);
+            ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
+            Ok::<(), IoError>(())
         })?;
-        write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
-        ctx.record_written(path);
-        ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
-        Ok::<(), IoError>(())
-    })?;
+    }
     Ok(targets.into_iter().map(|(_, p)| p).collect())
 }
 

@@ -29,28 +29,31 @@ pub fn gather(top: &Topology, field: &[f32], b: usize, fill: f32, tile: &mut [f3
             tile[at..at + 8].copy_from_slice(row);
         }
     }
-    let faces: [(usize, i32, i32, i32); 6] = [
-        (slot(-1, 0, 0), 0, -1, 7),
-        (slot(1, 0, 0), 0, 8, 0),
-        (slot(0, -1, 0), 1, -1, 7),
-        (slot(0, 1, 0), 1, 8, 0),
-        (slot(0, 0, -1), 2, -1, 7),
-        (slot(0, 0, 1), 2, 8, 0),
-    ];
-    for (s, axis, dst, src) in faces {
+    // The faces across x: one value per row, strided.
+    for (s, dst, src) in [(slot(-1, 0, 0), -1, 7usize), (slot(1, 0, 0), 8, 0)] {
         let nb = n[s];
-        for a in 0..8i32 {
-            for c in 0..8i32 {
-                let (tx, ty, tz, sx, sy, sz) = match axis {
-                    0 => (dst, a, c, src, a, c),
-                    1 => (a, dst, c, a, src, c),
-                    _ => (a, c, dst, a, c, src),
-                };
-                tile[t(tx, ty, tz)] = if nb == NONE {
-                    fill
-                } else {
-                    field[nb as usize * VOXELS + voxel(sx as usize, sy as usize, sz as usize)]
-                };
+        for z in 0..8 {
+            for y in 0..8 {
+                tile[t(dst, y as i32, z as i32)] = if nb == NONE { fill } else { field[nb as usize * VOXELS + voxel(src, y, z)] };
+            }
+        }
+    }
+    // The faces across y and z: whole rows.
+    for (s, dst, src, axis) in [
+        (slot(0, -1, 0), -1, 7usize, 1),
+        (slot(0, 1, 0), 8, 0, 1),
+        (slot(0, 0, -1), -1, 7, 2),
+        (slot(0, 0, 1), 8, 0, 2),
+    ] {
+        let nb = n[s];
+        for c in 0..8 {
+            let (at, from) = if axis == 1 { (t(0, dst, c as i32), voxel(0, src, c)) } else { (t(0, c as i32, dst), voxel(0, c, src)) };
+            let row = &mut tile[at..at + 8];
+            if nb == NONE {
+                row.fill(fill);
+            } else {
+                let b = nb as usize * VOXELS + from;
+                row.copy_from_slice(&field[b..b + 8]);
             }
         }
     }

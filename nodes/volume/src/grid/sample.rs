@@ -51,21 +51,35 @@ impl Corners {
 pub fn corners(top: &Topology, b: usize, p: Vec3) -> Corners {
     let o = top.origin(b).as_vec3();
     let p = if p.is_finite() { p.clamp(o - 7.0, o + 14.0) } else { o };
-    let f = p.floor();
-    let fr = p - f;
-    let i = f.as_ivec3() - top.origin(b);
-    let n = top.neighbors(b);
-    // Per axis: the brick offset and local coordinate of the lower and upper corner.
-    let axis = |c: i32| [(c >> 3, (c & 7) as usize), ((c + 1) >> 3, ((c + 1) & 7) as usize)];
-    let (ax, ay, az) = (axis(i.x), axis(i.y), axis(i.z));
+    // Floor by truncation (the point is clamped to a small finite range): `f32::floor` is a libm
+    // call on a baseline x86-64 target.
+    let floor = |x: f32| {
+        let i = x as i32;
+        i - i32::from(i as f32 > x)
+    };
+    let fi = glam::IVec3::new(floor(p.x), floor(p.y), floor(p.z));
+    let fr = p - fi.as_vec3();
+    let i = fi - top.origin(b);
     let wx = [1.0 - fr.x, fr.x];
     let wy = [1.0 - fr.y, fr.y];
     let wz = [1.0 - fr.z, fr.z];
     let mut out = Corners { at: [NONE; 8], w: [0.0; 8] };
     for k in 0..8 {
+        out.w[k] = wx[k & 1] * wy[(k >> 1) & 1] * wz[k >> 2];
+    }
+    // Most points have all eight voxels in their own brick: no neighbour to look up.
+    if i.cmpge(glam::IVec3::ZERO).all() && i.cmple(glam::IVec3::splat(6)).all() {
+        let base = (b * VOXELS + voxel(i.x as usize, i.y as usize, i.z as usize)) as u32;
+        out.at = [base, base + 1, base + 8, base + 9, base + 64, base + 65, base + 72, base + 73];
+        return out;
+    }
+    let n = top.neighbors(b);
+    // Per axis: the brick offset and local coordinate of the lower and upper corner.
+    let axis = |c: i32| [(c >> 3, (c & 7) as usize), ((c + 1) >> 3, ((c + 1) & 7) as usize)];
+    let (ax, ay, az) = (axis(i.x), axis(i.y), axis(i.z));
+    for k in 0..8 {
         let (x, y, z) = (ax[k & 1], ay[(k >> 1) & 1], az[k >> 2]);
         let nb = n[slot(x.0, y.0, z.0)];
-        out.w[k] = wx[k & 1] * wy[(k >> 1) & 1] * wz[k >> 2];
         if nb != NONE {
             out.at[k] = nb * VOXELS as u32 + voxel(x.1, y.1, z.1) as u32;
         }

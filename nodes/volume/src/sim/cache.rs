@@ -2,7 +2,10 @@
 //! `i + 1` frames of simulation (so frame 0 already shows the first frame's emission), stepped on
 //! demand from the nearest state the cache holds.
 
-use std::sync::Arc;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use pyrograph_core::stepping::SteppingCache;
 use pyrograph_core::{CookCtx, FrameSource, NodeError, Value};
@@ -19,6 +22,8 @@ use crate::source::VolumeSource;
 const CHECKPOINT_EVERY: usize = 8;
 /// Bytes of checkpoints one clip keeps.
 const CHECKPOINT_BUDGET: usize = 512 << 20;
+/// Bytes of recently stepped frames one clip keeps for callers that waited for them.
+const RECENT_BUDGET: usize = 256 << 20;
 
 /// Everything a simulation reads besides its state.
 pub struct Simulation {
@@ -80,18 +85,43 @@ fn sim_error(e: SimError) -> NodeError {
     NodeError::msg(e.to_string())
 }
 
-/// A `Clip<Volume>` source.
+/// Volumes of frames stepped while other callers waited for them, oldest dropped first beyond
+/// [`RECENT_BUDGET`] (the newest is always kept).
+#[derive(Default)]
+struct Recent {
+    by_frame: BTreeMap<usize, Arc<Volume>>,
+    bytes: usize,
+}
+
+impl Recent {
+    fn put(&mut self, frame: usize, v: &Arc<Volume>) {
+        let size = |v: &Volume| v.topology.voxels() * 28 + 64;
+        if self.by_frame.insert(frame, v.clone()).is_none() {
+            self.bytes += size(v);
+        }
+        while self.bytes > RECENT_BUDGET && self.by_frame.len() > 1 {
+            let Some((_, old)) = self.by_frame.pop_first() else { break };
+            self.bytes -= size(&old);
+        }
+    }
+}
+
+/// A `Clip<Volume>` source. Frames are best asked for in order: a caller asking for a frame that
+/// another caller is stepping through waits for it (running the pool's other work meanwhile)
+/// instead of simulating it again from an earlier state.
 pub struct VolumeFrames {
     frames: usize,
     sim: Simulation,
     cache: SteppingCache<SimState>,
+    recent: Mutex<Recent>,
+    waiting: AtomicUsize,
 }
 
 impl VolumeFrames {
     /// `frames` frames of `sim`, starting from an empty grid at voxel size `voxel_size`.
     pub fn new(sim: Simulation, frames: usize, voxel_size: f32) -> Self {
         let cache = SteppingCache::new(SimState::new(voxel_size), CHECKPOINT_EVERY, CHECKPOINT_BUDGET);
-        VolumeFrames { frames, sim, cache }
+        VolumeFrames { frames, sim, cache, recent: Mutex::new(Recent::default()), waiting: AtomicUsize::new(0) }
     }
 
     /// Frames of simulation stepped so far.
@@ -99,9 +129,52 @@ impl VolumeFrames {
         self.cache.frames_stepped()
     }
 
+    fn recent(&self, index: usize) -> Option<Arc<Volume>> {
+        self.recent.lock().ok()?.by_frame.get(&index).cloned()
+    }
+
+    fn keep(&self, index: usize, v: &Arc<Volume>) {
+        if let Ok(mut r) = self.recent.lock() {
+            r.put(index, v);
+        }
+    }
+
     /// The volume at clip frame `index`.
-    pub fn volume(&self, index: usize, ctx: &CookCtx) -> Result<Volume, NodeError> {
-        self.cache.at(index + 1, ctx, |s, frame| self.sim.step_frame(s, frame, ctx), SimState::snapshot)
+    pub fn volume(&self, index: usize, ctx: &CookCtx) -> Result<Arc<Volume>, NodeError> {
+        self.waiting.fetch_add(1, Ordering::SeqCst);
+        let waited = self.wait_for(index, ctx);
+        self.waiting.fetch_sub(1, Ordering::SeqCst);
+        if let Some(v) = waited? {
+            return Ok(v);
+        }
+        let step = |s: &mut SimState, frame: usize| {
+            self.sim.step_frame(s, frame, ctx)?;
+            // A frame on the way, which a waiting caller may want.
+            if frame != index + 1 && self.waiting.load(Ordering::SeqCst) > 0 {
+                self.keep(frame - 1, &Arc::new(s.snapshot()));
+            }
+            Ok(())
+        };
+        let v = self.cache.at(index + 1, ctx, step, |s| Arc::new(s.snapshot()))?;
+        self.keep(index, &v);
+        Ok(v)
+    }
+
+    /// Waits while another caller steps from a frame at or before `index`; the volume, if it
+    /// stepped through it and kept it.
+    fn wait_for(&self, index: usize, ctx: &CookCtx) -> Result<Option<Arc<Volume>>, NodeError> {
+        loop {
+            if let Some(v) = self.recent(index) {
+                return Ok(Some(v));
+            }
+            if !self.cache.busy_before(index + 1) {
+                return Ok(None);
+            }
+            ctx.check_cancel()?;
+            if !matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
+                std::thread::sleep(Duration::from_micros(200));
+            }
+        }
     }
 }
 
@@ -110,6 +183,6 @@ impl FrameSource for VolumeFrames {
         self.frames
     }
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::custom(Arc::new(self.volume(index, ctx)?)))
+        Ok(Value::custom(self.volume(index, ctx)?))
     }
 }

@@ -14,8 +14,7 @@ use rayon::prelude::*;
 use super::multigrid::{FLUID, Level, OPEN, SOLID, apply, hierarchy, v_cycle};
 use super::state::{SimState, upper_face};
 use crate::grid::halo::{TILE, gather, t};
-use crate::grid::sample::offset;
-use crate::grid::{Topology, VOXELS, voxel};
+use crate::grid::{NONE, Topology, VOXELS, slot, voxel};
 
 /// What a projection reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -30,16 +29,14 @@ pub struct Projection {
 /// every axis is active, open air elsewhere.
 pub fn kinds(top: &Topology, solid: &[bool]) -> Vec<u8> {
     let mut kind = vec![OPEN; top.voxels()];
-    let ones = vec![1.0f32; top.voxels()];
     kind.par_chunks_mut(VOXELS).enumerate().for_each(|(b, k)| {
+        let n = top.neighbors(b);
+        let upper = [n[slot(1, 0, 0)] != NONE, n[slot(0, 1, 0)] != NONE, n[slot(0, 0, 1)] != NONE];
         for (i, out) in k.iter_mut().enumerate() {
+            let local = [i & 7, (i >> 3) & 7, i >> 6];
             *out = if solid[b * VOXELS + i] {
                 SOLID
-            } else if (0..3).all(|a| {
-                let mut d = [0; 3];
-                d[a] = 1;
-                offset(top, &ones, b, i, d) > 0.0
-            }) {
+            } else if (0..3).all(|a| local[a] < 7 || upper[a]) {
                 FLUID
             } else {
                 OPEN

@@ -11,6 +11,7 @@ use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, InputPath, NodeEr
 use pyrograph_nodes_imaging::io::{FramePattern, Gaps, fill_gaps, frames_to_write, list_pattern_numbered, output_pattern};
 
 use super::read::{ReadOptions, read_volume};
+use super::stage::{StageField, StageSpec, asset_path, stage_text};
 use super::write::{Compression, WriteOptions, write_volume};
 use crate::grid::Volume;
 
@@ -51,6 +52,10 @@ pyrograph_core::node! {
         start: u64 = 0,
         /// Replace files that already exist.
         overwrite: bool = false,
+        /// Also write a USD stage whose Volume prim references every frame's file (OpenVDBAsset fields with a time-sampled filePath), for Solaris, Omniverse or usdview.
+        usd: bool = false,
+        /// The USD stage (.usda), written with the clip's first frame.
+        usd_path: OutputPath = "vdb/volume.usda".into(),
     }
     pub struct WriteVdbOut {
         /// Files written (or left in place by --skip-existing).
@@ -58,6 +63,51 @@ pyrograph_core::node! {
         /// The first file.
         first: OutputPath,
     }
+}
+
+impl WriteVdb {
+    fn frame(&self, i: usize, ctx: &CookCtx) -> Result<Arc<Volume>, NodeError> {
+        let value = self.volume.get(i, ctx)?;
+        value.downcast::<Volume>().ok_or_else(|| NodeError::port(port!(WriteVdb, volume), format!("frame {i} holds no volume")))
+    }
+
+    /// The USD stage of the whole sequence, its fields those written (the first frame's).
+    fn write_stage(
+        &self,
+        dir: &Path,
+        pattern: &FramePattern,
+        options: &WriteOptions,
+        extents: &[(usize, [f32; 3], [f32; 3])],
+        overwrite: bool,
+        ctx: &CookCtx,
+    ) -> Result<(), NodeError> {
+        let usd_err = |m: String| NodeError::port(port!(WriteVdb, usd_path), m);
+        let stage_path = &self.usd_path.0;
+        if ctx.settings().skip_existing && stage_path.exists() {
+            return Ok(());
+        }
+        let first = self.frame(0, ctx)?;
+        let fields: Vec<StageField> = first
+            .fields
+            .iter()
+            .filter(|f| options.fields.is_empty() || options.fields.contains(&f.name))
+            .map(|f| StageField { name: f.name.clone(), vector: f.data.components() == 3 })
+            .collect();
+        let files: Vec<String> =
+            (0..self.volume.len()).map(|i| asset_path(&dir.join(pattern.file_name(self.start + i as u64)), stage_path)).collect();
+        let spec = StageSpec { name: "volume", fields: &fields, files: &files, extents, fps: self.volume.fps() };
+        let text = stage_text(&spec).map_err(|e| usd_err(format!("building the USD stage: {e:#}")))?;
+        pyrograph_usd::write(stage_path, &text, overwrite).map_err(usd_err)?;
+        ctx.record_written(stage_path);
+        Ok(())
+    }
+}
+
+/// The world box of a volume's active voxels (their outer faces), if any.
+fn world_bounds(v: &Volume) -> Option<([f32; 3], [f32; 3])> {
+    let (lo, hi) = v.topology.voxel_bounds()?;
+    let (a, b) = (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5));
+    Some((a.to_array(), b.to_array()))
 }
 
 impl Cook for WriteVdb {
@@ -85,20 +135,24 @@ impl Cook for WriteVdb {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(&dir).map_err(|e| pattern_err(format!("cannot create {}: {e}", dir.display())))?;
         }
+        let mut extents = Vec::new();
         for (done, (i, path)) in targets.iter().enumerate() {
             ctx.check_cancel()?;
             if ctx.settings().skip_existing && path.exists() {
                 ctx.record_written(path);
                 continue;
             }
-            let value = self.volume.get(*i, ctx)?;
-            let volume = value
-                .downcast::<Volume>()
-                .ok_or_else(|| NodeError::port(port!(WriteVdb, volume), format!("frame {i} holds no volume")))?;
+            let volume = self.frame(*i, ctx)?;
+            if let Some(e) = world_bounds(&volume) {
+                extents.push((*i, e.0, e.1));
+            }
             let bytes = write_volume(&volume, &options).map_err(|e| NodeError::port(port!(WriteVdb, fields), e.to_string()))?;
             write_atomic(path, &bytes, overwrite).map_err(|e| pattern_err(format!("writing {}: {e}", path.display())))?;
             ctx.record_written(path);
             ctx.frame_progress(done + 1, targets.len());
+        }
+        if self.usd && frames.first() == Some(&0) {
+            self.write_stage(&dir, &pattern, &options, &extents, overwrite, ctx)?;
         }
         let first = targets.first().map(|(_, p)| p.clone()).unwrap_or_default();
         Ok(WriteVdbOut { frames: targets.len(), first: OutputPath(first) })
@@ -116,7 +170,7 @@ pyrograph_core::node! {
     #[node("volume.load_vdb", "Volume", Source)]
     pub struct LoadVdb {
         /// A `.vdb` file or a numbered sequence (`cache/smoke_####.vdb`).
-        path: InputPath = "".into(),
+        path: InputPath,
         /// Frames per second of the clip.
         #[range(0.001, 1000.0)]
         fps: f64 = 24.0,
@@ -169,9 +223,6 @@ impl FrameSource for VdbFrames {
 
 impl Cook for LoadVdb {
     fn cook(self, _: &CookCtx) -> Result<LoadVdbOut, NodeError> {
-        if self.path.as_os_str().is_empty() {
-            return Err(NodeError::port(port!(LoadVdb, path), "no file given: set path to a .vdb file or a sequence like cache/smoke_####.vdb"));
-        }
         let files = vdb_files(&self.path).map_err(|m| NodeError::port(port!(LoadVdb, path), m))?;
         let mut h = Fingerprinter::new();
         "volume.load_vdb".hash(&mut h);

@@ -1,0 +1,112 @@
+//! Times each phase of a campfire-like simulation's sub-steps (emit, advect, burn, forces,
+//! project) and prints the active voxels, the solver's iterations and the divergence per frame.
+//!
+//!     cargo run --release -p pyrograph-nodes-volume --example phases -- [frames] [voxel_size]
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use pyrograph_core::CookCtx;
+use pyrograph_core::declare::Anim;
+use pyrograph_nodes_volume::sim::collide::Solids;
+use pyrograph_nodes_volume::sim::forces::{self, Forces, Turbulence};
+use pyrograph_nodes_volume::sim::step::{Setup, brick_bounds, next_topology, substeps};
+use pyrograph_nodes_volume::sim::{SimParams, SimState, advect, combust, emit, pressure};
+use pyrograph_nodes_volume::source::{Emitter, Geometry, Rates, TimedPoint, VolumeSource};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let frames: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(48);
+    let h: f32 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(0.06);
+    // Sixty points on a 1.2-unit disc a little above the floor, as flame roots on a log pile.
+    let points: Vec<TimedPoint> = (0..60)
+        .map(|k| {
+            let a = k as f32 * 2.399_963;
+            let r = 0.9 * ((k as f32 + 0.5) / 60.0).sqrt();
+            TimedPoint { position: [r * a.cos(), 0.25 + 0.1 * (k % 3) as f32, r * a.sin()], velocity: [0.0, 1.0, 0.0], start: 0.0 }
+        })
+        .collect();
+    let rates = Rates {
+        fuel: Anim::constant(3.0),
+        smoke: Anim::constant(0.0),
+        temperature: Anim::constant(1.0),
+        velocity: Anim::constant([0.0, 0.6, 0.0]),
+        radius: Anim::constant(0.16),
+        inherit: 0.0,
+    };
+    let source = Arc::new(VolumeSource { emitters: vec![Emitter { label: "roots".into(), geometry: Geometry::Points(Arc::new(points)), rates }] });
+    let p = SimParams {
+        voxel_size: h,
+        floor: true,
+        buoyancy: Anim::constant(3.0),
+        smoke: Anim::constant(0.8),
+        burn_rate: Anim::constant(5.0),
+        turbulence: Anim::constant(2.0),
+        turbulence_scale: 0.6,
+        bounds_min: [-6.0, -0.5, -6.0],
+        bounds_max: [6.0, 12.0, 6.0],
+        ..SimParams::default()
+    };
+    let setup = Setup {
+        solids: Solids::new(Some(0.0), &Default::default(), h).unwrap(),
+        turbulence: Turbulence::new(p.seed, p.turbulence_scale, p.turbulence_speed),
+        bounds: brick_bounds(p.bounds_min, p.bounds_max, h),
+        cutoff: p.cutoff,
+        tolerance: p.tolerance,
+        max_iterations: p.max_iterations,
+        max_voxels: 1 << 26,
+    };
+    let ctx = CookCtx::new();
+    let fps = 24.0;
+    let mut state = SimState::new(h);
+    let mut times = [Duration::ZERO; 7];
+    let names = ["topology", "emit", "advect", "burn", "forces", "project", "total"];
+    let mut steps = 0;
+    let all = Instant::now();
+    for frame in 0..frames {
+        let t0 = frame as f64;
+        let splats = source.splats(t0, fps, &ctx).unwrap();
+        let n = substeps(&state, &splats, (1.0 / fps) as f32, p.cfl, p.min_substeps, p.max_substeps);
+        let dt = (1.0 / (fps * f64::from(n))) as f32;
+        let mut last = None;
+        for _ in 0..n {
+            let sp = p.at(t0, fps).unwrap();
+            let mut lap = Instant::now();
+            let mut tick = |k: usize| {
+                times[k] += lap.elapsed();
+                lap = Instant::now();
+            };
+            let top = next_topology(&state, &emit::bricks(&splats, h), &setup).unwrap();
+            state.retopologize(top);
+            tick(0);
+            emit::emit(&mut state, &splats, dt);
+            tick(1);
+            advect::advect(&mut state, dt);
+            tick(2);
+            let target = combust::combust(&mut state, &sp, dt);
+            tick(3);
+            let time = state.time as f32;
+            forces::apply(&mut state, &sp, &Forces { wind: None, turbulence: &setup.turbulence, time }, dt);
+            tick(4);
+            let solid = setup.solids.mask(&state.top);
+            last = Some(pressure::project(&mut state, &solid, &target, p.tolerance, p.max_iterations));
+            tick(5);
+            state.time += f64::from(dt);
+            steps += 1;
+        }
+        let pr = last.unwrap();
+        let top = state.top.voxel_bounds().unwrap();
+        println!(
+            "frame {frame:3}: {n} sub-steps, {:8} voxels, {:3} iterations, divergence {:.1e}, height {} voxels",
+            state.top.voxels(),
+            pr.iterations,
+            pr.max_divergence,
+            top.1.y - top.0.y + 1
+        );
+    }
+    times[6] = all.elapsed();
+    for (n, t) in names.iter().zip(times) {
+        println!("{n:9} {:8.1} ms per step", t.as_secs_f64() * 1e3 / steps as f64);
+    }
+    println!("{:.1} steps per second over {steps} steps ({} threads)", steps as f64 / times[6].as_secs_f64(), rayon::current_num_threads());
+}

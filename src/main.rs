@@ -49,6 +49,10 @@ struct Limits {
     /// 268,435,456 = 16384 × 16384, or PYROGRAPH_MAX_PIXELS).
     #[arg(long, value_name = "N", global = true)]
     max_pixels: Option<u64>,
+    /// Refuse a volume (a simulation's active region, a VDB file's grids) of more active voxels
+    /// than this (default 67,108,864 = 64 Mi, or PYROGRAPH_MAX_VOXELS).
+    #[arg(long, value_name = "N", global = true)]
+    max_voxels: Option<u64>,
 }
 
 impl Limits {
@@ -59,7 +63,7 @@ impl Limits {
             out.push("--read-root".to_string());
             out.push(std::path::absolute(r).unwrap_or_else(|_| r.clone()).display().to_string());
         }
-        for (flag, n) in [("--max-nodes", self.max_nodes), ("--max-pixels", self.max_pixels)] {
+        for (flag, n) in [("--max-nodes", self.max_nodes), ("--max-pixels", self.max_pixels), ("--max-voxels", self.max_voxels)] {
             if let Some(n) = n {
                 out.extend([flag.to_string(), n.to_string()]);
             }
@@ -71,6 +75,7 @@ impl Limits {
         use pyrograph_frontend::core::limits;
         limits::set_max_nodes(self.max_nodes);
         limits::set_max_pixels(self.max_pixels);
+        limits::set_max_voxels(self.max_voxels);
         limits::set_read_roots(&self.read_roots).map_err(|e| Failure(format!("error: --read-root {e}")))
     }
 }

@@ -86,6 +86,8 @@ const NOT_PORTS: &[(&str, &str, &str)] = &[
     ("nodes/particles/src/usd/scene.rs", "roots", "the name of the USD prim the spread's flame roots become"),
     ("nodes/cloth/src/usd.rs", "cloth", "the default name of the USD prim written"),
     ("nodes/cloth/src/usd.rs", "points", "the point attribute's name in the USD Mesh schema"),
+    ("nodes/volume/src/vdb/nodes.rs", "volume", "the name of the USD Volume prim written"),
+    ("nodes/volume/src/vdb/write.rs", "name", "OpenVDB's grid metadata key for the grid's name"),
 ];
 
 #[test]

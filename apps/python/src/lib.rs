@@ -51,15 +51,20 @@ fn describe(py: Python<'_>, r#type: &str) -> PyResult<String> {
 }
 
 /// Confines and bounds what this process reads and builds, as the command line's
-/// `--read-root`, `--max-nodes` and `--max-pixels` do (for a service cooking graphs its users
+/// `--read-root`, `--max-nodes`, `--max-pixels` and `--max-voxels` do (for a service cooking graphs its users
 /// submit). `read_roots`: folders every include, preset, footage, mesh or database must lie
 /// in, symbolic links followed (an empty list lifts the confinement; the graph file given to
-/// `Graph.load` is read wherever it is). `max_nodes`, `max_pixels`: the limits (0 restores the
+/// `Graph.load` is read wherever it is). `max_nodes`, `max_pixels`, `max_voxels`: the limits (0 restores the
 /// default or the environment's). Arguments left out keep their setting. Process-wide: every
 /// `Graph` and thread obeys them from the next build or read.
 #[pyfunction]
-#[pyo3(signature = (*, read_roots=None, max_nodes=None, max_pixels=None))]
-fn set_limits(read_roots: Option<Vec<std::path::PathBuf>>, max_nodes: Option<u64>, max_pixels: Option<u64>) -> PyResult<()> {
+#[pyo3(signature = (*, read_roots=None, max_nodes=None, max_pixels=None, max_voxels=None))]
+fn set_limits(
+    read_roots: Option<Vec<std::path::PathBuf>>,
+    max_nodes: Option<u64>,
+    max_pixels: Option<u64>,
+    max_voxels: Option<u64>,
+) -> PyResult<()> {
     use pyrograph_frontend::core::limits;
     if let Some(roots) = read_roots {
         limits::set_read_roots(&roots).map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("read_roots: {e}")))?;
@@ -70,10 +75,13 @@ fn set_limits(read_roots: Option<Vec<std::path::PathBuf>>, max_nodes: Option<u64
     if let Some(n) = max_pixels {
         limits::set_max_pixels((n > 0).then_some(n));
     }
+    if let Some(n) = max_voxels {
+        limits::set_max_voxels((n > 0).then_some(n));
+    }
     Ok(())
 }
 
-/// The limits in force: `{"read_roots": [...], "max_nodes": N, "max_pixels": N}`.
+/// The limits in force: `{"read_roots": [...], "max_nodes": N, "max_pixels": N, "max_voxels": N}`.
 #[pyfunction]
 fn limits(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
     use pyrograph_frontend::core::limits as l;
@@ -82,6 +90,7 @@ fn limits(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
     d.set_item("read_roots", roots)?;
     d.set_item("max_nodes", l::max_nodes())?;
     d.set_item("max_pixels", l::max_pixels())?;
+    d.set_item("max_voxels", l::max_voxels())?;
     Ok(d)
 }
 

@@ -113,6 +113,7 @@ def calls(g, clip, v):
         lambda: pyrograph.set_limits(read_roots=v),
         lambda: pyrograph.set_limits(max_nodes=v),
         lambda: pyrograph.set_limits(max_pixels=v),
+        lambda: pyrograph.set_limits(max_voxels=v),
     ]
 
 
@@ -139,7 +140,7 @@ def test_every_call_given_hostile_values_raises_a_python_exception_or_returns(tm
             except BaseException as e:  # PanicException derives from BaseException
                 pytest.fail(f"value {i} ({type(v).__name__}), call {j}: {type(e).__name__}: {e}")
             finally:
-                pyrograph.set_limits(read_roots=[], max_nodes=0, max_pixels=0)
+                pyrograph.set_limits(read_roots=[], max_nodes=0, max_pixels=0, max_voxels=0)
             outcomes[(i, j)] = outcome
         # Whatever was tried, the graph still cooks, or says clearly why not.
         try:

@@ -37,9 +37,9 @@ fn main() {
     let source = Arc::new(VolumeSource { emitters: vec![Emitter { label: "roots".into(), geometry: Geometry::Points(Arc::new(points)), rates }] });
     let p = SimParams {
         voxel_size: h,
-        floor: true,
+        ground: true,
         buoyancy: Anim::constant(3.0),
-        smoke: Anim::constant(0.8),
+        smoke_yield: Anim::constant(0.8),
         burn_rate: Anim::constant(5.0),
         turbulence: Anim::constant(2.0),
         turbulence_scale: 0.6,

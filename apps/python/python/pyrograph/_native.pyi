@@ -168,10 +168,11 @@ def set_limits(
     read_roots: Sequence[str | os.PathLike[str]] | None = None,
     max_nodes: int | None = None,
     max_pixels: int | None = None,
+    max_voxels: int | None = None,
 ) -> None:
-    """Confine reads to `read_roots` (symbolic links followed; [] lifts it) and set the node and
-    pixel limits (0 restores the default), process-wide, as the CLI's --read-root, --max-nodes
-    and --max-pixels. Arguments left out keep their setting."""
+    """Confine reads to `read_roots` (symbolic links followed; [] lifts it) and set the node,
+    pixel and voxel limits (0 restores the default), process-wide, as the CLI's --read-root,
+    --max-nodes, --max-pixels and --max-voxels. Arguments left out keep their setting."""
 
 def limits() -> dict[str, Any]:
-    """The limits in force: read_roots, max_nodes, max_pixels."""
+    """The limits in force: read_roots, max_nodes, max_pixels, max_voxels."""

@@ -47,7 +47,8 @@ pub fn maccormack<const N: usize>(top: &Topology, fields: [&[f32]; N], d: &[Vec3
                     let round_trip = back.sample(hat);
                     let corrected = hat[at] + 0.5 * (field[at] - round_trip);
                     let (lo, hi) = fwd.range(field);
-                    o[i] = corrected.clamp(lo, hi);
+                    // max then min rather than clamp: no panic if a value was not finite.
+                    o[i] = corrected.max(lo).min(hi);
                 }
             }
         });

@@ -64,8 +64,8 @@ impl Cook for Simulate {
         validate(&p)?;
         validate_wind(&self.wind, port!(Simulate, wind))?;
         let h = p.voxel_size;
-        let floor = p.floor.then_some(p.floor_height);
-        let solids = Solids::new(floor, &self.collider, h).map_err(|m| NodeError::port(port!(Simulate, collider), m))?;
+        let ground = p.ground.then_some(p.ground_height);
+        let solids = Solids::new(ground, &self.collider, h).map_err(|m| NodeError::port(port!(Simulate, collider), m))?;
         let sources: Vec<Arc<VolumeSource>> =
             [self.source, self.source2, self.source3, self.source4].into_iter().filter(|s| !s.emitters.is_empty()).collect();
         let mut fp = Fingerprinter::new();

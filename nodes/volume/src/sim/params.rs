@@ -39,13 +39,13 @@ pyrograph_core::ports! {
         heat: Anim<f32> = Anim::constant(1.5),
         /// Smoke released per unit of fuel burnt.
         #[range(0.0, 1e4)]
-        smoke: Anim<f32> = Anim::constant(0.6),
+        smoke_yield: Anim<f32> = Anim::constant(0.6),
         /// Flame (the visible reaction) per unit of fuel burnt.
         #[range(0.0, 1e4)]
-        flame: Anim<f32> = Anim::constant(1.0),
+        flame_yield: Anim<f32> = Anim::constant(1.0),
         /// Gas expansion where fuel burns: target divergence (1/s) per unit of fuel burnt per second (Nguyen, Fedkiw & Jensen 2002 §3.1, the blue core's expansion).
         #[range(0.0, 1e3)]
-        expansion: Anim<f32> = Anim::constant(0.5),
+        expansion: Anim<f32> = Anim::constant(0.1),
         /// Cooling: the temperature falls by this fraction per second.
         #[range(0.0, 1e4)]
         cooling: Anim<f32> = Anim::constant(0.6),
@@ -73,11 +73,11 @@ pyrograph_core::ports! {
         /// How fast the air takes the wind field's velocity (1/s); 0 ignores the wind.
         #[range(0.0, 1e4)]
         wind_drag: Anim<f32> = Anim::constant(0.5),
-        /// A solid floor: nothing flows below `floor_height`.
-        floor: bool = false,
-        /// Height of the floor.
+        /// A solid ground: nothing flows below `ground_height`.
+        ground: bool = false,
+        /// Height of the ground.
         #[range(-1e6, 1e6)]
-        floor_height: f32 = 0.0,
+        ground_height: f32 = 0.0,
         /// Lower corner of the region the simulation may grow into.
         bounds_min: [f32; 3] = [-100.0, -100.0, -100.0],
         /// Upper corner of the region the simulation may grow into.
@@ -110,9 +110,9 @@ pub struct StepParams {
     pub ignition: f32,
     /// [`SimParams::heat`].
     pub heat: f32,
-    /// [`SimParams::smoke`].
+    /// [`SimParams::smoke_yield`].
     pub smoke: f32,
-    /// [`SimParams::flame`].
+    /// [`SimParams::flame_yield`].
     pub flame: f32,
     /// [`SimParams::expansion`].
     pub expansion: f32,
@@ -142,8 +142,8 @@ impl SimParams {
             burn_rate: self.burn_rate.at(frame, fps)?,
             ignition: self.ignition.at(frame, fps)?,
             heat: self.heat.at(frame, fps)?,
-            smoke: self.smoke.at(frame, fps)?,
-            flame: self.flame.at(frame, fps)?,
+            smoke: self.smoke_yield.at(frame, fps)?,
+            flame: self.flame_yield.at(frame, fps)?,
             expansion: self.expansion.at(frame, fps)?,
             cooling: self.cooling.at(frame, fps)?,
             flame_cooling: self.flame_cooling.at(frame, fps)?,
@@ -163,7 +163,7 @@ pub fn validate(p: &SimParams) -> Result<(), NodeError> {
         (port!(SimParams, cfl), p.cfl),
         (port!(SimParams, turbulence_scale), p.turbulence_scale),
         (port!(SimParams, turbulence_speed), p.turbulence_speed),
-        (port!(SimParams, floor_height), p.floor_height),
+        (port!(SimParams, ground_height), p.ground_height),
         (port!(SimParams, cutoff), p.cutoff),
         (port!(SimParams, tolerance), p.tolerance),
     ];

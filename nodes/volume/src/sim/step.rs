@@ -117,7 +117,8 @@ pub fn substep(
     let projection = project(state, &solid, &target, setup.tolerance, setup.max_iterations);
     clear_solids(state, &solid);
     state.time += f64::from(dt);
-    if !projection.max_divergence.is_finite() || !max_speed(state).is_finite() {
+    let finite = |f: &Vec<f32>| f.par_iter().all(|v| v.is_finite());
+    if !projection.max_divergence.is_finite() || !state.vel.iter().chain(&state.scalars).all(finite) {
         return Err(SimError::Diverged { seconds: state.time });
     }
     Ok(projection)

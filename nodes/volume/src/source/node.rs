@@ -42,7 +42,7 @@ pyrograph_core::node! {
     /// particle clip (Perry's flames, embers), the static roots, the burning flame roots of a fire spread (a
     /// burning house pours smoke where its faces burn), the masses of cloth flames, samples of a mesh's surface,
     /// a sphere or a point list emit a soft sphere of `radius` each. Fuel and smoke are added per second,
-    /// temperature is held at least at `temperature`, and the air is pulled to `velocity` (plus `inherit` times
+    /// temperature is held at least at `hold_temperature`, and the air is pulled to `velocity` (plus `inherit` times
     /// each point's own velocity), each falling off smoothly to the sphere's rim. Every rate is sampled at
     /// every sub-step of the simulation, so a keyed burst or a moving torch emits when and where it should.
     #[node("volume.source", "Volume", Source)]
@@ -68,13 +68,13 @@ pyrograph_core::node! {
         mesh_spacing: f32 = 0.05,
         /// Fuel added per second at each splat's centre.
         #[range(0.0, 1e6)]
-        fuel: Anim<f32> = Anim::constant(4.0),
+        fuel_rate: Anim<f32> = Anim::constant(4.0),
         /// Smoke density added per second at each splat's centre.
         #[range(0.0, 1e6)]
-        smoke: Anim<f32> = Anim::constant(0.5),
+        smoke_rate: Anim<f32> = Anim::constant(0.5),
         /// Temperature each splat holds its centre at (at least).
         #[range(0.0, 1e6)]
-        temperature: Anim<f32> = Anim::constant(1.0),
+        hold_temperature: Anim<f32> = Anim::constant(1.0),
         /// Velocity each splat gives the air, world units per second.
         velocity: Anim<[f32; 3]> = Anim::constant([0.0, 1.0, 0.0]),
         /// Radius of each splat, world units.
@@ -93,9 +93,9 @@ pyrograph_core::node! {
 impl Cook for Source {
     fn cook(self, _: &CookCtx) -> Result<SourceOut, NodeError> {
         let rates = Rates {
-            fuel: self.fuel.clone(),
-            smoke: self.smoke.clone(),
-            temperature: self.temperature.clone(),
+            fuel: self.fuel_rate.clone(),
+            smoke: self.smoke_rate.clone(),
+            temperature: self.hold_temperature.clone(),
             velocity: self.velocity.clone(),
             radius: self.radius.clone(),
             inherit: self.inherit,
@@ -103,26 +103,26 @@ impl Cook for Source {
         let mut emitters = Vec::new();
         let mut add = |label: &str, geometry: Geometry| emitters.push(Emitter { label: label.into(), geometry, rates: rates.clone() });
         if !self.particles.is_empty() {
-            add("particles", Geometry::Particles(self.particles.clone().into_inner()));
+            add(port!(Source, particles), Geometry::Particles(self.particles.clone().into_inner()));
         }
         if !self.roots.particles.is_empty() {
             let points = self.roots.particles.iter().map(|q| TimedPoint { position: q.position, velocity: q.velocity, start: 0.0 });
-            add("roots", Geometry::Points(Arc::new(finite(points.collect(), port!(Source, roots))?)));
+            add(port!(Source, roots), Geometry::Points(Arc::new(finite(points.collect(), port!(Source, roots))?)));
         }
         if !self.spread.is_empty() {
-            add("spread", Geometry::Spread(self.spread.clone().into_inner()));
+            add(port!(Source, spread), Geometry::Spread(self.spread.clone().into_inner()));
         }
         if !self.cloth.is_empty() {
-            add("cloth", Geometry::Cloth(self.cloth.clone().into_inner()));
+            add(port!(Source, cloth), Geometry::Cloth(self.cloth.clone().into_inner()));
         }
         if !self.mesh.triangles.is_empty() && self.shape != Shape::Points {
             let samples = surface_samples(&self.mesh, self.mesh_spacing)?;
-            add("mesh", Geometry::Points(Arc::new(finite(samples, port!(Source, mesh))?)));
+            add(port!(Source, mesh), Geometry::Points(Arc::new(finite(samples, port!(Source, mesh))?)));
         }
         match self.shape {
             Shape::Inputs => {}
-            Shape::Sphere => add("sphere", Geometry::Sphere(self.center.clone())),
-            Shape::Points => add("points", Geometry::Points(Arc::new(listed_points(&self.points, &self.mesh)?))),
+            Shape::Sphere => add(port!(Source, center), Geometry::Sphere(self.center.clone())),
+            Shape::Points => add(port!(Source, points), Geometry::Points(Arc::new(listed_points(&self.points, &self.mesh)?))),
         }
         if emitters.is_empty() {
             return Err(NodeError::port(

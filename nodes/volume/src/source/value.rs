@@ -114,13 +114,13 @@ fn emitter_splats(e: &Emitter, frame: f64, fps: f64, ctx: &CookCtx, out: &mut Ve
     let (fuel, smoke, temperature) = (r.fuel.at(frame, fps)?, r.smoke.at(frame, fps)?, r.temperature.at(frame, fps)?);
     let (velocity, radius) = (Vec3::from_array(r.velocity.at(frame, fps)?), r.radius.at(frame, fps)?);
     let bad = |what: String| NodeError::msg(format!("source '{}' at frame {frame:.3}: {what}", e.label));
-    for (name, v) in [("fuel", fuel), ("smoke", smoke), ("temperature", temperature), ("radius", radius)] {
+    for (name, v) in [("the fuel rate", fuel), ("the smoke rate", smoke), ("the held temperature", temperature), ("the splat radius", radius)] {
         if !v.is_finite() {
             return Err(bad(format!("{name} is {v}")));
         }
     }
     if !velocity.is_finite() {
-        return Err(bad(format!("velocity is {velocity}")));
+        return Err(bad(format!("the velocity is {velocity}")));
     }
     let seconds = (frame / fps) as f32;
     let first = out.len();

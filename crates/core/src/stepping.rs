@@ -175,10 +175,15 @@ mod tests {
         );
         assert!(seen.is_ok());
         assert!(!cache.busy_before(9), "nobody steps once it returned");
-        let later = cache.at(8, &ctx, |_, _| {
-            assert!(!cache.busy_before(5), "stepping from 6 is not busy before 5");
-            Ok(())
-        }, |_| ());
+        let later = cache.at(
+            8,
+            &ctx,
+            |_, _| {
+                assert!(!cache.busy_before(5), "stepping from 6 is not busy before 5");
+                Ok(())
+            },
+            |_| (),
+        );
         assert!(later.is_ok());
         let _ = cache.at(12, &ctx, |_, f| if f == 10 { Err(NodeError::msg("diverged")) } else { Ok(()) }, |_| ());
         assert!(!cache.busy_before(20), "a failed step leaves no one in flight");

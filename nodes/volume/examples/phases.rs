@@ -23,7 +23,11 @@ fn main() {
         .map(|k| {
             let a = k as f32 * 2.399_963;
             let r = 0.9 * ((k as f32 + 0.5) / 60.0).sqrt();
-            TimedPoint { position: [r * a.cos(), 0.25 + 0.1 * (k % 3) as f32, r * a.sin()], velocity: [0.0, 1.0, 0.0], start: 0.0 }
+            TimedPoint {
+                position: [r * a.cos(), 0.25 + 0.1 * (k % 3) as f32, r * a.sin()],
+                velocity: [0.0, 1.0, 0.0],
+                start: 0.0,
+            }
         })
         .collect();
     let rates = Rates {
@@ -34,7 +38,9 @@ fn main() {
         radius: Anim::constant(0.16),
         inherit: 0.0,
     };
-    let source = Arc::new(VolumeSource { emitters: vec![Emitter { label: "roots".into(), geometry: Geometry::Points(Arc::new(points)), rates }] });
+    let source = Arc::new(VolumeSource {
+        emitters: vec![Emitter { label: "roots".into(), geometry: Geometry::Points(Arc::new(points)), rates }],
+    });
     let p = SimParams {
         voxel_size: h,
         ground: true,
@@ -108,5 +114,9 @@ fn main() {
     for (n, t) in names.iter().zip(times) {
         println!("{n:9} {:8.1} ms per step", t.as_secs_f64() * 1e3 / steps as f64);
     }
-    println!("{:.1} steps per second over {steps} steps ({} threads)", steps as f64 / times[6].as_secs_f64(), rayon::current_num_threads());
+    println!(
+        "{:.1} steps per second over {steps} steps ({} threads)",
+        steps as f64 / times[6].as_secs_f64(),
+        rayon::current_num_threads()
+    );
 }

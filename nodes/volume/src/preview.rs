@@ -92,7 +92,13 @@ pub struct View {
 
 /// Fire colours from dark red to white over a flame value of 0 to 1 and beyond.
 pub fn fire_ramp(f: f32) -> Vec3 {
-    let keys = [(0.0, Vec3::ZERO), (0.15, Vec3::new(0.5, 0.05, 0.0)), (0.4, Vec3::new(1.0, 0.35, 0.02)), (0.7, Vec3::new(1.0, 0.75, 0.2)), (1.0, Vec3::new(1.0, 0.95, 0.8))];
+    let keys = [
+        (0.0, Vec3::ZERO),
+        (0.15, Vec3::new(0.5, 0.05, 0.0)),
+        (0.4, Vec3::new(1.0, 0.35, 0.02)),
+        (0.7, Vec3::new(1.0, 0.75, 0.2)),
+        (1.0, Vec3::new(1.0, 0.95, 0.8)),
+    ];
     let f = f.max(0.0);
     for w in keys.windows(2) {
         if f <= w[1].0 {
@@ -114,7 +120,8 @@ pub fn preview(v: &Volume, view: &View) -> Image {
     let pixel = view.size / view.height as f32;
     data.par_chunks_mut(w * 4).enumerate().for_each(|(row, out)| {
         for (col, px) in out.chunks_mut(4).enumerate() {
-            let world = view.center + Vec3::new((col as f32 + 0.5 - w as f32 / 2.0) * pixel, (h as f32 / 2.0 - row as f32 - 0.5) * pixel, 0.0);
+            let world = view.center
+                + Vec3::new((col as f32 + 0.5 - w as f32 / 2.0) * pixel, (h as f32 / 2.0 - row as f32 - 0.5) * pixel, 0.0);
             let idx = v.transform.to_index(world).round().as_ivec3();
             let (mut colour, mut transmit) = (Vec3::ZERO, 1.0f32);
             if let Some((lo, hi)) = bounds.filter(|(lo, hi)| idx.x >= lo.x && idx.x <= hi.x && idx.y >= lo.y && idx.y <= hi.y) {
@@ -140,5 +147,6 @@ pub fn preview(v: &Volume, view: &View) -> Image {
             px.copy_from_slice(&[c.x, c.y, c.z, 1.0 - transmit * (1.0 - view.background[3])]);
         }
     });
-    Image::from_vec(view.width, view.height, Channels::Rgba, data).unwrap_or_else(|| Image::new(view.width, view.height, Channels::Rgba))
+    Image::from_vec(view.width, view.height, Channels::Rgba, data)
+        .unwrap_or_else(|| Image::new(view.width, view.height, Channels::Rgba))
 }

@@ -31,7 +31,10 @@ fn volume() -> Volume {
         fields: vec![
             Field { name: "density".into(), data: FieldData::Scalar((0..n).map(|i| ((i * 37) % 101) as f32 / 100.0).collect()) },
             Field { name: "temperature".into(), data: FieldData::Scalar((0..n).map(|i| 3.25 - i as f32 * 0.5).collect()) },
-            Field { name: "vel".into(), data: FieldData::Vector((0..n).map(|i| [i as f32 * 0.01, -1.5, (i % 7) as f32]).collect()) },
+            Field {
+                name: "vel".into(),
+                data: FieldData::Vector((0..n).map(|i| [i as f32 * 0.01, -1.5, (i % 7) as f32]).collect()),
+            },
         ],
         time: 1.25,
         stats: SimStats::default(),
@@ -89,7 +92,10 @@ fn files_pyrograph_writes_open_in_openvdb_with_every_value() {
             assert_eq!(g["voxel_size"], serde_json::json!([0.05, 0.05, 0.05]), "{name}");
             assert_eq!(g["origin"], serde_json::json!([1.0, -2.5, 0.125]), "{name}");
             let w = g["world_111"].as_array().unwrap();
-            assert!((w[0].as_f64().unwrap() - 1.05).abs() < 1e-12 && (w[1].as_f64().unwrap() + 2.45).abs() < 1e-12, "{name}: {w:?}");
+            assert!(
+                (w[0].as_f64().unwrap() - 1.05).abs() < 1e-12 && (w[1].as_f64().unwrap() + 2.45).abs() < 1e-12,
+                "{name}: {w:?}"
+            );
             assert_eq!(g["active"].as_u64().unwrap(), v.topology.voxels() as u64, "{name}");
             let (theirs, ours) = (json_voxels(g), voxels(&v, name));
             assert_eq!(theirs.len(), ours.len(), "{name}");

@@ -78,7 +78,9 @@ impl FrameSource for Named {
     fn frame(&self, index: usize, ctx: &CookCtx) -> Result<Value, NodeError> {
         self.inner.frame(index, ctx).map_err(|e| match e {
             e @ (NodeError::InNode { .. } | NodeError::Cancelled | NodeError::Upstream(_)) => e,
-            e @ NodeError::Frame { .. } => NodeError::InNode { node: self.node.clone(), type_name: self.type_name.clone(), source: Box::new(e) },
+            e @ NodeError::Frame { .. } => {
+                NodeError::InNode { node: self.node.clone(), type_name: self.type_name.clone(), source: Box::new(e) }
+            }
             e => NodeError::InNode {
                 node: self.node.clone(),
                 type_name: self.type_name.clone(),

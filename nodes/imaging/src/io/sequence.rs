@@ -490,7 +490,8 @@ pub fn write_frames(
                 e @ NodeError::Frame { .. } => e,
                 e => NodeError::Frame { frame: *i, source: Box::new(e) },
             })?;
-            write_atomic(path, &bytes, options.overwrite).map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+            write_atomic(path, &bytes, options.overwrite)
+                .map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
             ctx.record_written(path);
             ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
             Ok::<(), IoError>(())

@@ -39,15 +39,13 @@ pub fn gather(top: &Topology, field: &[f32], b: usize, fill: f32, tile: &mut [f3
         }
     }
     // The faces across y and z: whole rows.
-    for (s, dst, src, axis) in [
-        (slot(0, -1, 0), -1, 7usize, 1),
-        (slot(0, 1, 0), 8, 0, 1),
-        (slot(0, 0, -1), -1, 7, 2),
-        (slot(0, 0, 1), 8, 0, 2),
-    ] {
+    for (s, dst, src, axis) in
+        [(slot(0, -1, 0), -1, 7usize, 1), (slot(0, 1, 0), 8, 0, 1), (slot(0, 0, -1), -1, 7, 2), (slot(0, 0, 1), 8, 0, 2)]
+    {
         let nb = n[s];
         for c in 0..8 {
-            let (at, from) = if axis == 1 { (t(0, dst, c as i32), voxel(0, src, c)) } else { (t(0, c as i32, dst), voxel(0, c, src)) };
+            let (at, from) =
+                if axis == 1 { (t(0, dst, c as i32), voxel(0, src, c)) } else { (t(0, c as i32, dst), voxel(0, c, src)) };
             let row = &mut tile[at..at + 8];
             if nb == NONE {
                 row.fill(fill);

@@ -46,7 +46,8 @@ impl Solids {
     }
 
     fn voxelise(&mut self, mesh: &Mesh, h: f32) -> Result<(), String> {
-        let tris: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| t.map(|i| Vec3::from_array(mesh.positions[i as usize]) / h)).collect();
+        let tris: Vec<[Vec3; 3]> =
+            mesh.triangles.iter().map(|t| t.map(|i| Vec3::from_array(mesh.positions[i as usize]) / h)).collect();
         let (lo, hi) = tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
         let span = (hi - lo + 2.0).max(Vec3::ONE);
         if !span.is_finite() || (span.x as f64) * (span.y as f64) * (span.z as f64) > MAX_COLLIDER_VOXELS as f64 {

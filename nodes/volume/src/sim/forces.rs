@@ -27,7 +27,8 @@ pub struct Turbulence {
 impl Turbulence {
     /// The turbulence of `seed`.
     pub fn new(seed: u32, scale: f32, speed: f32) -> Turbulence {
-        let lattice = |k: u32| WindSampler::new(&WindField { seed: seed.wrapping_mul(3).wrapping_add(k), ..WindField::default() });
+        let lattice =
+            |k: u32| WindSampler::new(&WindField { seed: seed.wrapping_mul(3).wrapping_add(k), ..WindField::default() });
         Turbulence { potentials: [lattice(0), lattice(1), lattice(2)], scale, speed }
     }
 

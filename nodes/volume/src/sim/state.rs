@@ -93,8 +93,11 @@ impl SimState {
 
     /// The volume this state shows: the four scalar fields and the centred velocity `vel`.
     pub fn snapshot(&self) -> Volume {
-        let mut fields: Vec<Field> =
-            NAMES.iter().zip(&self.scalars).map(|(n, d)| Field { name: n.to_string(), data: FieldData::Scalar(d.clone()) }).collect();
+        let mut fields: Vec<Field> = NAMES
+            .iter()
+            .zip(&self.scalars)
+            .map(|(n, d)| Field { name: n.to_string(), data: FieldData::Scalar(d.clone()) })
+            .collect();
         fields.push(Field { name: "vel".into(), data: FieldData::Vector(self.centred_velocity()) });
         Volume {
             transform: Transform { voxel_size: f64::from(self.voxel_size), origin: [0.0; 3] },

@@ -23,7 +23,9 @@ fn sphere_source(centre: [f32; 3], radius: f32) -> Arc<VolumeSource> {
         radius: Anim::constant(radius),
         inherit: 0.0,
     };
-    Arc::new(VolumeSource { emitters: vec![Emitter { label: "sphere".into(), geometry: Geometry::Sphere(Anim::constant(centre)), rates }] })
+    Arc::new(VolumeSource {
+        emitters: vec![Emitter { label: "sphere".into(), geometry: Geometry::Sphere(Anim::constant(centre)), rates }],
+    })
 }
 
 pub(crate) fn small_params() -> SimParams {
@@ -127,7 +129,10 @@ fn a_keyed_wind_leans_the_plume_after_its_key_and_not_before() {
     for f in [3, 6] {
         assert!(calm.volume(f, &ctx).unwrap() == windy.volume(f, &ctx).unwrap(), "frame {f}, before the key");
     }
-    let (c, w) = (calm.volume(15, &ctx).unwrap().centroid("density").unwrap(), windy.volume(15, &ctx).unwrap().centroid("density").unwrap());
+    let (c, w) = (
+        calm.volume(15, &ctx).unwrap().centroid("density").unwrap(),
+        windy.volume(15, &ctx).unwrap().centroid("density").unwrap(),
+    );
     println!("centroid at frame 15: calm {c}, windy {w}");
     assert!(w.x > c.x + 0.05, "the wind blows toward +x after frame 8: {w} vs {c}");
 }

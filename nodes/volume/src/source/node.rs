@@ -101,12 +101,14 @@ impl Cook for Source {
             inherit: self.inherit,
         };
         let mut emitters = Vec::new();
-        let mut add = |label: &str, geometry: Geometry| emitters.push(Emitter { label: label.into(), geometry, rates: rates.clone() });
+        let mut add =
+            |label: &str, geometry: Geometry| emitters.push(Emitter { label: label.into(), geometry, rates: rates.clone() });
         if !self.particles.is_empty() {
             add(port!(Source, particles), Geometry::Particles(self.particles.clone().into_inner()));
         }
         if !self.roots.particles.is_empty() {
-            let points = self.roots.particles.iter().map(|q| TimedPoint { position: q.position, velocity: q.velocity, start: 0.0 });
+            let points =
+                self.roots.particles.iter().map(|q| TimedPoint { position: q.position, velocity: q.velocity, start: 0.0 });
             add(port!(Source, roots), Geometry::Points(Arc::new(finite(points.collect(), port!(Source, roots))?)));
         }
         if !self.spread.is_empty() {
@@ -178,7 +180,9 @@ pub fn surface_samples(mesh: &Mesh, spacing: f32) -> Result<Vec<TimedPoint>, Nod
         if !k.is_finite() || out.len() as f32 + k * k > MAX_MESH_POINTS as f32 {
             return Err(NodeError::port(
                 port!(Source, mesh_spacing),
-                format!("sampling the mesh every {spacing} would make over {MAX_MESH_POINTS} points (at face {t}); raise mesh_spacing"),
+                format!(
+                    "sampling the mesh every {spacing} would make over {MAX_MESH_POINTS} points (at face {t}); raise mesh_spacing"
+                ),
             ));
         }
         let k = k as usize;

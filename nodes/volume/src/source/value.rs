@@ -7,10 +7,10 @@ use std::hash::Hash;
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_nodes_cloth::state::ClothState;
 use pyrograph_core::declare::Anim;
 use pyrograph_core::fingerprint::{Fingerprinter, hash_f32s};
 use pyrograph_core::{Clip, CookCtx, NodeError, TypeInfo, ValueType};
+use pyrograph_nodes_cloth::state::ClothState;
 use pyrograph_nodes_particles::types::SpreadState;
 use pyrograph_render::Particles;
 
@@ -114,7 +114,9 @@ fn emitter_splats(e: &Emitter, frame: f64, fps: f64, ctx: &CookCtx, out: &mut Ve
     let (fuel, smoke, temperature) = (r.fuel.at(frame, fps)?, r.smoke.at(frame, fps)?, r.temperature.at(frame, fps)?);
     let (velocity, radius) = (Vec3::from_array(r.velocity.at(frame, fps)?), r.radius.at(frame, fps)?);
     let bad = |what: String| NodeError::msg(format!("source '{}' at frame {frame:.3}: {what}", e.label));
-    for (name, v) in [("the fuel rate", fuel), ("the smoke rate", smoke), ("the held temperature", temperature), ("the splat radius", radius)] {
+    for (name, v) in
+        [("the fuel rate", fuel), ("the smoke rate", smoke), ("the held temperature", temperature), ("the splat radius", radius)]
+    {
         if !v.is_finite() {
             return Err(bad(format!("{name} is {v}")));
         }

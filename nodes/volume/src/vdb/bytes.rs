@@ -30,7 +30,11 @@ impl<'a> Reader<'a> {
     /// Moves to byte `pos` (within the file).
     pub fn seek(&mut self, pos: u64) -> Result<(), VdbError> {
         if pos > self.data.len() as u64 {
-            return Err(VdbError::Invalid(format!("{} points to byte {pos}, past the end of the file ({} bytes)", self.what, self.data.len())));
+            return Err(VdbError::Invalid(format!(
+                "{} points to byte {pos}, past the end of the file ({} bytes)",
+                self.what,
+                self.data.len()
+            )));
         }
         self.pos = pos as usize;
         Ok(())
@@ -81,7 +85,11 @@ impl<'a> Reader<'a> {
     pub fn string(&mut self, max: usize) -> Result<String, VdbError> {
         let n = self.u32()? as usize;
         if n > max || n > self.left() {
-            return Err(VdbError::Invalid(format!("{} declares a {n}-byte string, longer than the {} bytes allowed there", self.what, max.min(self.left()))));
+            return Err(VdbError::Invalid(format!(
+                "{} declares a {n}-byte string, longer than the {} bytes allowed there",
+                self.what,
+                max.min(self.left())
+            )));
         }
         Ok(String::from_utf8_lossy(self.bytes(n)?).into_owned())
     }

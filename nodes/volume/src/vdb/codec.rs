@@ -13,7 +13,10 @@ pub fn unzip(data: &[u8], expected: usize) -> Result<Vec<u8>, VdbError> {
     let mut z = flate2::read::ZlibDecoder::new(data).take(expected as u64 + 1);
     z.read_to_end(&mut out).map_err(|e| VdbError::Invalid(format!("a zlib block does not inflate: {e}")))?;
     if out.len() != expected {
-        return Err(VdbError::Invalid(format!("a zlib block inflates to {} bytes, not the {expected} its node needs", out.len())));
+        return Err(VdbError::Invalid(format!(
+            "a zlib block inflates to {} bytes, not the {expected} its node needs",
+            out.len()
+        )));
     }
     Ok(out)
 }
@@ -83,7 +86,8 @@ pub fn unblosc(frame: &[u8], expected: usize) -> Result<Vec<u8>, VdbError> {
             } else {
                 let start = tmp.len();
                 tmp.resize(start + part, 0);
-                let n = lz4_flex::block::decompress_into(src, &mut tmp[start..]).map_err(|e| bad(&format!("does not decode: {e}")))?;
+                let n = lz4_flex::block::decompress_into(src, &mut tmp[start..])
+                    .map_err(|e| bad(&format!("does not decode: {e}")))?;
                 if n != part {
                     return Err(bad(&format!("decodes to {n} bytes, not {part}")));
                 }

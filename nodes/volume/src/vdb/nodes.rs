@@ -122,14 +122,18 @@ impl Cook for WriteVdb {
             half: self.half,
             compression: if self.compression == VdbCompression::Zip { Compression::Zip } else { Compression::None },
         };
-        let targets: Vec<(usize, PathBuf)> = frames.iter().map(|i| (*i, dir.join(pattern.file_name(self.start + *i as u64)))).collect();
+        let targets: Vec<(usize, PathBuf)> =
+            frames.iter().map(|i| (*i, dir.join(pattern.file_name(self.start + *i as u64)))).collect();
         if !overwrite
             && !ctx.settings().skip_existing
             && let Some((_, p)) = targets.iter().find(|(_, p)| p.exists())
         {
             return Err(NodeError::port(
                 port!(WriteVdb, overwrite),
-                format!("{} already exists; nothing was written. Set overwrite to true or render with --overwrite to replace it", p.display()),
+                format!(
+                    "{} already exists; nothing was written. Set overwrite to true or render with --overwrite to replace it",
+                    p.display()
+                ),
             ));
         }
         if !dir.as_os_str().is_empty() {
@@ -228,7 +232,8 @@ impl Cook for LoadVdb {
         "volume.load_vdb".hash(&mut h);
         for f in &files {
             f.hash(&mut h);
-            let meta = std::fs::metadata(f).map_err(|e| NodeError::port(port!(LoadVdb, path), format!("{}: {e}", f.display())))?;
+            let meta =
+                std::fs::metadata(f).map_err(|e| NodeError::port(port!(LoadVdb, path), format!("{}: {e}", f.display())))?;
             (meta.len(), meta.modified().ok()).hash(&mut h);
         }
         let clip = Clip::new(PortType::of::<Volume>(), self.fps, h.finish(), Arc::new(VdbFrames { files }));

@@ -105,7 +105,9 @@ pub fn read_volume(data: &[u8], options: &ReadOptions, skipped: &mut Vec<String>
         let (grid_pos, _block_pos, end_pos) = (r.i64()?, r.i64()?, r.i64()?);
         let name = unique.split('\u{1e}').next().unwrap_or_default().to_string();
         if offsets && (grid_pos as u64 != r.pos() as u64 || end_pos < grid_pos || end_pos as u64 > data.len() as u64) {
-            return Err(VdbError::Invalid(format!("grid '{name}' declares its data at bytes {grid_pos}–{end_pos}, outside the file")));
+            return Err(VdbError::Invalid(format!(
+                "grid '{name}' declares its data at bytes {grid_pos}–{end_pos}, outside the file"
+            )));
         }
         let Some(kind) = Kind::parse(&ty) else {
             if offsets {
@@ -113,7 +115,9 @@ pub fn read_volume(data: &[u8], options: &ReadOptions, skipped: &mut Vec<String>
                 r.seek(end_pos as u64)?;
                 continue;
             }
-            return Err(VdbError::Unsupported(format!("grid '{name}' is a {ty} grid; pyrograph reads float, double and vec3 grids")));
+            return Err(VdbError::Unsupported(format!(
+                "grid '{name}' is a {ty} grid; pyrograph reads float, double and vec3 grids"
+            )));
         };
         r.what = format!("grid '{name}'");
         let grid = read_grid(&mut r, &name, kind, &parent, &grids, options, &mut seen)?;
@@ -148,10 +152,19 @@ fn read_grid(
     let transform = read_transform(r, name)?;
     if !parent.is_empty() {
         let p = grids.iter().find(|g| g.name == parent.split('\u{1e}').next().unwrap_or_default());
-        let p = p.ok_or_else(|| VdbError::Invalid(format!("grid '{name}' shares the tree of '{parent}', which comes before it nowhere")))?;
-        return Ok(Grid { name: name.into(), components: p.components, transform, bricks: p.bricks.clone(), background: p.background });
+        let p = p.ok_or_else(|| {
+            VdbError::Invalid(format!("grid '{name}' shares the tree of '{parent}', which comes before it nowhere"))
+        })?;
+        return Ok(Grid {
+            name: name.into(),
+            components: p.components,
+            transform,
+            bricks: p.bricks.clone(),
+            background: p.background,
+        });
     }
-    let mut grid = Grid { name: name.into(), components: kind.components, transform, bricks: HashMap::new(), background: [0.0; 3] };
+    let mut grid =
+        Grid { name: name.into(), components: kind.components, transform, bricks: HashMap::new(), background: [0.0; 3] };
     let tree = TreeReader { kind, flags, name, max_voxels: options.max_voxels };
     tree.read(r, &mut grid, seen)?;
     Ok(grid)
@@ -174,7 +187,13 @@ fn metadata(r: &mut Reader) -> Result<HashMap<String, Meta>, VdbError> {
         let ty = r.string(1 << 16)?;
         let size = r.u32()? as usize;
         let payload = r.bytes(size)?;
-        let fixed = |want: usize| if size == want { Ok(()) } else { Err(VdbError::Invalid(format!("metadata '{name}' of type {ty} is {size} bytes, not {want}"))) };
+        let fixed = |want: usize| {
+            if size == want {
+                Ok(())
+            } else {
+                Err(VdbError::Invalid(format!("metadata '{name}' of type {ty} is {size} bytes, not {want}")))
+            }
+        };
         let value = match ty.as_str() {
             "bool" => {
                 fixed(1)?;
@@ -222,14 +241,23 @@ fn read_transform(r: &mut Reader, name: &str) -> Result<Transform, VdbError> {
             let m = doubles(16)?;
             let off = [m[1], m[2], m[4], m[6], m[8], m[9]];
             if off.iter().any(|v| *v != 0.0) || m[3] != 0.0 || m[7] != 0.0 || m[11] != 0.0 {
-                return Err(VdbError::Unsupported(format!("grid '{name}' is rotated or sheared; pyrograph reads axis-aligned grids")));
+                return Err(VdbError::Unsupported(format!(
+                    "grid '{name}' is rotated or sheared; pyrograph reads axis-aligned grids"
+                )));
             }
             ([m[0], m[5], m[10]], vec![m[12], m[13], m[14]])
         }
-        other => return Err(VdbError::Unsupported(format!("grid '{name}' has a {other} transform; pyrograph reads linear, axis-aligned ones"))),
+        other => {
+            return Err(VdbError::Unsupported(format!(
+                "grid '{name}' has a {other} transform; pyrograph reads linear, axis-aligned ones"
+            )));
+        }
     };
     let s = scale[0];
-    if !(s.is_finite() && s > 0.0) || scale.iter().any(|v| (v - s).abs() > 1e-9 * s.abs()) || origin.iter().any(|v| !v.is_finite()) {
+    if !(s.is_finite() && s > 0.0)
+        || scale.iter().any(|v| (v - s).abs() > 1e-9 * s.abs())
+        || origin.iter().any(|v| !v.is_finite())
+    {
         return Err(VdbError::Unsupported(format!(
             "grid '{name}' has voxels of size {scale:?} at {origin:?}; pyrograph reads cubic, positive voxels"
         )));
@@ -268,7 +296,9 @@ impl TreeReader<'_> {
         let over = |n: u64| n.saturating_mul(VOXELS as u64) > self.max_voxels;
         if over(seen.len() as u64 + region) {
             let new = if region <= 4096 {
-                (0..region as i32).filter(|k| !seen.contains(&(brick_of(origin) + IVec3::new(k % per, (k / per) % per, k / (per * per))))).count() as u64
+                (0..region as i32)
+                    .filter(|k| !seen.contains(&(brick_of(origin) + IVec3::new(k % per, (k / per) % per, k / (per * per)))))
+                    .count() as u64
             } else {
                 region
             };
@@ -408,7 +438,11 @@ impl TreeReader<'_> {
             let n = r.i64()?;
             if n <= 0 {
                 if n.unsigned_abs() != bytes as u64 {
-                    return Err(VdbError::Invalid(format!("{} stores {} raw bytes where {bytes} are due", r.what, n.unsigned_abs())));
+                    return Err(VdbError::Invalid(format!(
+                        "{} stores {} raw bytes where {bytes} are due",
+                        r.what,
+                        n.unsigned_abs()
+                    )));
                 }
                 r.bytes(bytes)?.to_vec()
             } else {
@@ -486,6 +520,10 @@ fn assemble(grids: Vec<Grid>, meta: &HashMap<String, Meta>) -> Result<Volume, Vd
         Some(Meta::Int(v)) => u32::try_from(*v).unwrap_or(0),
         _ => 0,
     };
-    let stats = SimStats { substeps: int(META_SUBSTEPS), max_divergence: float(META_DIVERGENCE) as f32, pressure_iterations: int(META_ITERATIONS) };
+    let stats = SimStats {
+        substeps: int(META_SUBSTEPS),
+        max_divergence: float(META_DIVERGENCE) as f32,
+        pressure_iterations: int(META_ITERATIONS),
+    };
     Ok(Volume { transform, topology: top, fields, time: float(META_TIME), stats })
 }

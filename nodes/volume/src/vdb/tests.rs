@@ -5,9 +5,9 @@ use std::sync::Arc;
 
 use glam::IVec3;
 
+use super::VdbError;
 use super::read::{ReadOptions, read_volume};
 use super::write::{Compression, WriteOptions, write_volume};
-use super::VdbError;
 use crate::grid::{Field, FieldData, SimStats, Topology, Transform, Volume};
 
 /// A volume over bricks on both sides of 0 and in two 5-nodes, with a float and a vector field.

@@ -2,6 +2,11 @@
 //! project) and prints the active voxels, the solver's iterations and the divergence per frame.
 //!
 //!     cargo run --release -p pyrograph-nodes-volume --example phases -- [frames] [voxel_size]
+//!     cargo run --release -p pyrograph-nodes-volume --example phases -- dense N [steps]
+//!
+//! `dense N` fills an N³ box of voxels with warm smoke (every brick active) and times its steps:
+//! the memory of a dense domain of that size. Each run ends with the process's peak resident
+//! memory (VmHWM).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -14,8 +19,55 @@ use pyrograph_nodes_volume::sim::step::{Setup, brick_bounds, next_topology, subs
 use pyrograph_nodes_volume::sim::{SimParams, SimState, advect, combust, emit, pressure};
 use pyrograph_nodes_volume::source::{Emitter, Geometry, Rates, TimedPoint, VolumeSource};
 
+fn peak_rss_mib() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let kb = status.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok());
+    kb.unwrap_or(0.0) / 1024.0
+}
+
+/// Steps a dense N³ box of warm smoke `steps` times.
+fn dense(n: i32, steps: usize) {
+    use glam::IVec3;
+    use pyrograph_nodes_volume::grid::Topology;
+    let bricks = n / 8;
+    let top = Topology::new((0..bricks * bricks * bricks).map(|k| IVec3::new(k % bricks, (k / bricks) % bricks, k / (bricks * bricks))).collect());
+    let h = 1.0 / n as f32;
+    let mut state = SimState::new(h);
+    let voxels = top.voxels();
+    state.top = Arc::new(top);
+    state.scalars = std::array::from_fn(|k| vec![if k < 2 { 0.5 } else { 0.0 }; voxels]);
+    state.vel = std::array::from_fn(|_| vec![0.0; voxels]);
+    state.pressure = vec![0.0; voxels];
+    let p = SimParams { voxel_size: h, turbulence: Anim::constant(1.0), cutoff: 0.0, ..SimParams::default() };
+    let setup = Setup {
+        solids: Solids::default(),
+        turbulence: Turbulence::new(0, 0.25, 0.5),
+        bounds: (IVec3::ZERO, IVec3::splat(bricks - 1)),
+        cutoff: -1.0,
+        tolerance: p.tolerance,
+        max_iterations: p.max_iterations,
+        max_voxels: 1 << 30,
+    };
+    let sp = p.at(0.0, 24.0).unwrap();
+    let t = Instant::now();
+    for _ in 0..steps {
+        let pr = pyrograph_nodes_volume::sim::step::substep(&mut state, &setup, &sp, &[], None, 1.0 / 96.0).unwrap();
+        println!("{} voxels, {} iterations, divergence {:.1e}", state.top.voxels(), pr.iterations, pr.max_divergence);
+    }
+    println!(
+        "dense {n}³: {:.0} ms per step, peak memory {:.0} MiB ({} threads)",
+        t.elapsed().as_secs_f64() * 1e3 / steps as f64,
+        peak_rss_mib(),
+        rayon::current_num_threads()
+    );
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("dense") {
+        let n = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(128);
+        return dense(n, args.get(3).and_then(|a| a.parse().ok()).unwrap_or(3));
+    }
     let frames: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(48);
     let h: f32 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(0.06);
     // Sixty points on a 1.2-unit disc a little above the floor, as flame roots on a log pile.

@@ -8,6 +8,7 @@ use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph
 use rayon::prelude::*;
 
 use crate::{Failure, RenderOpts, apply_sets, explain, load, memory_kib};
+use crate::cli_sim::simulations;
 
 #[derive(Subcommand)]
 pub enum JobAction {
@@ -70,12 +71,13 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
     let options = BuildOptions { output_dir: Some(a.out.clone()), ..BuildOptions::default() };
     let wedges = Wedges::parse(&a.wedge, &a.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
     let variants = wedges.variants();
+    let mut simulate = false;
     if variants.is_empty() {
-        load(registry, &a.graph, &a.sets, &options)?;
+        simulate = !simulations(&load(registry, &a.graph, &a.sets, &options)?.1).is_empty();
     }
     // Every variant is checked here, so no task fails on a bad wedge value.
     for v in &variants {
-        build_variant(registry, &a.graph, &a.sets, a.out.as_path(), false, v)?;
+        simulate |= !simulations(&build_variant(registry, &a.graph, &a.sets, a.out.as_path(), false, v)?.0).is_empty();
     }
     if a.chunk == 0 {
         return Err(Failure("error: --chunk must be at least 1 frame".into()));
@@ -95,6 +97,7 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
         variants: variants.len(),
         task_chunking: a.task_chunking,
         limits: a.limits.clone(),
+        simulate,
     };
     std::fs::create_dir_all(job_dir).map_err(|e| Failure(format!("error: cannot create {}: {e}", job_dir.display())))?;
     let bundle = spec.bundle();
@@ -110,9 +113,22 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
     }
     let tasks = a.frames.chunks(a.chunk).len() * variants.len().max(1);
     println!("job bundle {}: {tasks} tasks of up to {} frames ({})", job_dir.display(), a.chunk, a.frames);
-    println!("run it here:  openjd run {0}/template.yaml --step Render -p file://{0}/job_params.yaml", abs(job_dir)?.display());
+    let deps = if simulate {
+        println!("a Simulate step caches the simulations once ({}) before the chunks render", simulations_note(variants.len()));
+        " --run-dependencies"
+    } else {
+        ""
+    };
+    println!(
+        "run it here:  openjd run {0}/template.yaml --step Render{deps} -p file://{0}/job_params.yaml",
+        abs(job_dir)?.display()
+    );
     println!("submit it:    deadline bundle submit {} (AWS Deadline Cloud)", job_dir.display());
     Ok(())
+}
+
+fn simulations_note(variants: usize) -> String {
+    if variants > 0 { format!("one task per wedge variant, {variants}") } else { "one task".to_string() }
 }
 
 /// Refuses a manifest path before anything is cooked: outside `out` (names or symbolic links)
@@ -177,7 +193,7 @@ struct VariantRun {
 
 /// Builds variant `v`'s graph (every variant is built before any cooks, so a bad value stops
 /// the wedge before it writes anything).
-fn build_variant(
+pub(crate) fn build_variant(
     registry: &Registry,
     path: &Path,
     sets: &[String],
@@ -211,6 +227,13 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
         Some(k) if k < all.len() => vec![all[k].clone()],
         Some(k) => {
             return Err(Failure(format!("error: --wedge-index {k}: the wedge has {} variants (0-{})", all.len(), all.len() - 1)));
+        }
+        None if o.sim_cache.is_some() => {
+            return Err(Failure(
+                "error: --sim-cache with a wedge: each variant simulates differently, so render one variant \
+                 (--wedge-index K) with the cache `pyrograph simulate --wedge-index K` wrote"
+                    .into(),
+            ));
         }
         None => all.clone(),
     };

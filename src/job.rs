@@ -9,6 +9,11 @@
 //! `OUT/.pyrograph-job/` for `pyrograph job collect`. The graph is referenced where it lies (a farm
 //! shares storage), so its includes and relative inputs resolve as they do here.
 //!
+//! A graph with volume simulations gets a `Simulate` step first: one task steps every simulation
+//! once (`pyrograph simulate`) into a VDB cache under `OUT/.pyrograph-job/sim`, and the render
+//! tasks, which depend on it, read that cache (`--sim-cache`) instead of each simulating up to its
+//! chunk.
+//!
 //! The YAML is written by hand: it is a fixed shape whose every scalar is emitted as a JSON
 //! string (YAML reads JSON strings as strings), which a YAML library would not make safer.
 
@@ -46,7 +51,13 @@ pub struct JobSpec {
     /// The limits the job was written under (`--read-root DIR`, `--max-nodes N`, …), passed to
     /// every task so that a farm renders under the same confinement as the check.
     pub limits: Vec<String>,
+    /// The graph has volume simulations: a `Simulate` step (one task per wedge variant) steps
+    /// them once into a VDB cache, and the `Render` step depends on it and reads the cache.
+    pub simulate: bool,
 }
+
+/// The simulation cache's folder under the output folder, in template syntax.
+const SIM_CACHE: &str = "{{Param.Out}}/.pyrograph-job/sim";
 
 /// The files of a job bundle, by name.
 pub struct Bundle {
@@ -100,7 +111,15 @@ impl JobSpec {
             t += &format!("- name: {name}\n  type: {kind}\n{extra}");
         }
         t += &format!("- name: Frames\n  type: STRING\n  default: {}\n", q(&self.frames.to_string()));
-        t += "steps:\n- name: Render\n  parameterSpace:\n    taskParameterDefinitions:\n";
+        t += "steps:\n";
+        if self.simulate {
+            t += &self.simulate_step();
+        }
+        t += "- name: Render\n";
+        if self.simulate {
+            t += "  dependencies:\n  - dependsOn: Simulate\n";
+        }
+        t += "  parameterSpace:\n    taskParameterDefinitions:\n";
         if self.task_chunking {
             let contiguous = matches!(self.frames.ranges(), [r] if r.step == 1);
             t += &format!(
@@ -136,6 +155,22 @@ impl JobSpec {
             q("--manifest"),
             q(&manifest),
         ];
+        if self.simulate {
+            args.extend([q("--sim-cache"), q(&self.sim_cache())]);
+        }
+        self.push_variant_args(&mut args);
+        t += "  script:\n    actions:\n      onRun:\n        command: \"{{Param.Pyrograph}}\"\n";
+        t += &format!("        args: [{}]\n", args.join(", "));
+        t
+    }
+
+    /// The cache folder of a task (one per wedge variant).
+    fn sim_cache(&self) -> String {
+        if self.variants > 0 { format!("{SIM_CACHE}/w{{{{Task.Param.Wedge}}}}") } else { SIM_CACHE.to_string() }
+    }
+
+    /// `--set`, the wedge and the limits: what every task of both steps is given.
+    fn push_variant_args(&self, args: &mut Vec<String>) {
         for (flag, values) in [("--set", &self.sets), ("--wedge", &self.wedge), ("--wedge-zip", &self.wedge_zip)] {
             for v in values {
                 args.push(q(flag));
@@ -147,6 +182,30 @@ impl JobSpec {
             args.push(q("{{Task.Param.Wedge}}"));
         }
         args.extend(self.limits.iter().map(|a| q(a)));
+    }
+
+    /// The step that simulates once per variant, before any chunk renders. A re-queued task
+    /// whose cache is whole leaves it (`--skip-existing`); one that stopped part-way steps
+    /// again from the first frame (`--overwrite`), as a simulation has no state but its past.
+    fn simulate_step(&self) -> String {
+        let mut t = String::from("- name: Simulate\n");
+        if self.variants > 0 {
+            t += "  parameterSpace:\n    taskParameterDefinitions:\n";
+            t += &format!("    - name: Wedge\n      type: INT\n      range: \"0-{}\"\n", self.variants - 1);
+        }
+        let mut args = vec![
+            q("simulate"),
+            q("{{Param.Graph}}"),
+            q("--sim-cache"),
+            q(&self.sim_cache()),
+            q("--out"),
+            q("{{Param.Out}}"),
+            q("--frames"),
+            q("{{Param.Frames}}"),
+            q("--skip-existing"),
+            q("--overwrite"),
+        ];
+        self.push_variant_args(&mut args);
         t += "  script:\n    actions:\n      onRun:\n        command: \"{{Param.Pyrograph}}\"\n";
         t += &format!("        args: [{}]\n", args.join(", "));
         t
@@ -196,6 +255,7 @@ mod tests {
             variants: 0,
             task_chunking: chunking,
             limits: vec!["--read-root".into(), "/studio/footage".into()],
+            simulate: false,
         }
     }
 
@@ -228,6 +288,25 @@ mod tests {
         assert!(t.contains(r#""--wedge", "wind.seed=1,2,3", "--wedge-index", "{{Task.Param.Wedge}}""#), "{t}");
         assert!(t.contains("task-w{{Task.Param.Wedge}}-{{Task.Param.Frame}}.json"), "{t}");
         assert!(s.job_json().contains("\"variants\": 3"));
+    }
+
+    #[test]
+    fn a_graph_that_simulates_gets_a_simulate_step_that_the_render_step_depends_on() {
+        let t = JobSpec { simulate: true, ..spec("0-47", true) }.template();
+        let (sim, render) = t.split_once("- name: Render\n").expect("a Render step");
+        assert!(sim.contains("- name: Simulate\n") && !sim.contains("parameterSpace"), "one task: {t}");
+        assert!(sim.contains(r#"args: ["simulate", "{{Param.Graph}}", "--sim-cache", "{{Param.Out}}/.pyrograph-job/sim""#), "{t}");
+        assert!(sim.contains(r#""--frames", "{{Param.Frames}}", "--skip-existing", "--overwrite", "--set", "spread.fps=12""#), "{t}");
+        assert!(render.starts_with("  dependencies:\n  - dependsOn: Simulate\n  parameterSpace:"), "{t}");
+        assert!(render.contains(r#""--sim-cache", "{{Param.Out}}/.pyrograph-job/sim""#), "{t}");
+        let w = JobSpec { simulate: true, wedge: vec!["s.seed=1,2".into()], variants: 2, ..spec("0-47", true) }.template();
+        let (sim, render) = w.split_once("- name: Render\n").unwrap();
+        assert!(sim.contains("    - name: Wedge\n      type: INT\n      range: \"0-1\"\n"), "a variant per task: {w}");
+        for step in [sim, render] {
+            assert!(step.contains(r#""--sim-cache", "{{Param.Out}}/.pyrograph-job/sim/w{{Task.Param.Wedge}}""#), "{w}");
+            assert!(step.contains(r#""--wedge-index", "{{Task.Param.Wedge}}""#), "{w}");
+        }
+        assert!(!spec("0-47", true).template().contains("Simulate"), "no step for a graph without simulations");
     }
 
     #[test]

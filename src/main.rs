@@ -11,6 +11,7 @@ use serde_json::json;
 
 mod cli_farm;
 mod cli_presets;
+mod cli_sim;
 
 use cli_farm::{JobAction, JobArgs, collect, job, write_manifest};
 use cli_presets::{PresetQuery, presets, render_preset};
@@ -136,6 +137,9 @@ enum Command {
         #[arg(long)]
         overwrite: bool,
     },
+    /// Step every volume simulation of a graph once and cache its frames as VDB files, for
+    /// `render --sim-cache` (a farm job's Simulate step, before its chunked Render step).
+    Simulate(cli_sim::SimulateArgs),
     /// Validate a graph and probe its sources (files exist and decode) without rendering.
     Check {
         /// The graph file (RON).
@@ -295,6 +299,7 @@ fn main() -> ExitCode {
             }
             _ => Err(Failure("error: job needs GRAPH, --out, --frames and -o JOB_DIR".into())),
         },
+        Some(Command::Simulate(args)) => cli_sim::simulate(&registry, &args),
         Some(Command::Check { graph, out, allow_outside_out, json }) => {
             check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() }, json)
         }
@@ -370,6 +375,10 @@ struct RenderOpts {
     /// than its memory_mb); the system's temp folder (TMPDIR) when not given.
     #[arg(long, value_name = "DIR")]
     cache_dir: Option<PathBuf>,
+    /// Read each volume simulation's frames from this cache folder instead of stepping it
+    /// (written by `pyrograph simulate`; a farm job's Render step).
+    #[arg(long, value_name = "DIR")]
+    sim_cache: Option<PathBuf>,
     /// Print a JSON report instead of text.
     #[arg(long)]
     json: bool,
@@ -383,6 +392,7 @@ impl RenderOpts {
             skip_existing: self.skip_existing,
             overwrite: self.overwrite,
             cache_dir: self.cache_dir.clone(),
+            sim_cache: self.sim_cache.clone(),
         }
     }
 }
@@ -468,6 +478,15 @@ fn cook_graph(graph: &Graph, path: &Path, o: &RenderOpts, targets: &[String]) ->
         && !dir.is_dir()
     {
         return Err(Failure(format!("error: --cache-dir {}: not a folder", dir.display())));
+    }
+    if let Some(dir) = &o.sim_cache
+        && !dir.is_dir()
+    {
+        return Err(Failure(format!(
+            "error: --sim-cache {}: not a folder; write the cache first with `pyrograph simulate {} --sim-cache {0}`",
+            dir.display(),
+            path.display()
+        )));
     }
     if let Some(file) = &o.manifest {
         cli_farm::check_manifest_target(file, o.out.as_deref().unwrap_or(&graph.dir), o)?;

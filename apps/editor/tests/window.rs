@@ -296,7 +296,8 @@ fn a_double_click_in_a_real_window_steps_into_an_include_and_the_breadcrumb_step
     xdotool(&display, &["mousemove", &x.to_string(), &y.to_string()]);
     std::thread::sleep(Duration::from_millis(200));
     xdotool(&display, &["click", "--repeat", "2", "--delay", "80", "1"]);
-    let inside = wait_for(&dump, "inside calm", |v| scope(v) == ["calm"]);
+    // The scope can change a frame before the include's nodes are laid out: wait for both.
+    let inside = wait_for(&dump, "inside calm with its nodes", |v| scope(v) == ["calm"] && v["nodes"]["flame"].is_object());
     let nodes = inside["nodes"].as_object().map(|m| m.keys().cloned().collect::<Vec<_>>()).unwrap_or_default();
     assert!(nodes.iter().any(|k| k == "flame") && !nodes.iter().any(|k| k == "calm"), "the preset's nodes: {nodes:?}");
     let crumbs = inside["crumbs"].as_array().cloned().unwrap_or_default();

@@ -488,7 +488,7 @@ impl Graph {
                 if sinks.is_empty() { graph.leaves() } else { sinks }.iter().map(|s| s.to_string()).collect()
             }
         };
-        let settings = CookSettings { frames, skip_existing, overwrite, cache_dir: None };
+        let settings = CookSettings { frames, skip_existing, overwrite, cache_dir: None, sim_cache: None };
         let (eval, last_cooked, last_warnings) = (&self.eval, &self.last_cooked, &self.last_warnings);
         let (result, written) = crate::run::run(py, settings, progress, |ctx| {
             let refs: Vec<&str> = targets.iter().map(String::as_str).collect();

@@ -72,6 +72,9 @@ pub struct CookSettings {
     /// Folder for scratch files of out-of-core work (`--cache-dir`); the system's temp folder
     /// when `None`.
     pub cache_dir: Option<std::path::PathBuf>,
+    /// Folder of simulation caches (`--sim-cache`, a farm job's Simulate step): a simulation
+    /// node reads its frames from there instead of stepping.
+    pub sim_cache: Option<std::path::PathBuf>,
 }
 
 /// Something a node noticed that does not stop the cook but may make its result not what the

@@ -17,6 +17,7 @@ use super::params::{SimParams, validate};
 use super::step::{Setup, brick_bounds};
 use crate::grid::Volume;
 use crate::source::VolumeSource;
+use crate::vdb::sim_cache::CachedFrames;
 
 fn no_source() -> Arc<VolumeSource> {
     Arc::new(VolumeSource::default())
@@ -32,7 +33,8 @@ pyrograph_core::node! {
     /// of a wind field, and projects the velocity with multigrid-preconditioned conjugate gradients (McAdams et
     /// al. 2010) until every fluid voxel's divergence is below `tolerance`. Sub-steps are CFL-limited; every
     /// animated parameter and source rate is sampled at each. Deterministic; the clip steps a cache, so frame
-    /// n after n − 1 costs one frame. Frame i is the state after i + 1 frames. Write with volume.write_vdb.
+    /// n after n − 1 costs one frame. Frame i is the state after i + 1 frames. Write with volume.write_vdb; on a
+    /// farm, `pyrograph simulate` caches the frames once and renders read them with `--sim-cache`.
     #[node("volume.simulate", "Volume", Simulation)]
     pub struct Simulate {
         /// What emits (volume.source).
@@ -59,9 +61,12 @@ pyrograph_core::node! {
 }
 
 impl Cook for Simulate {
-    fn cook(self, _: &CookCtx) -> Result<SimulateOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<SimulateOut, NodeError> {
         let p = self.params;
         validate(&p)?;
+        if let (Some(dir), Some(node)) = (&ctx.settings().sim_cache, ctx.node_id()) {
+            return Ok(SimulateOut { volume: ClipOf::new(cached_clip(dir, node, &p, self.timeline)) });
+        }
         validate_wind(&self.wind, port!(Simulate, wind))?;
         let h = p.voxel_size;
         let ground = p.ground.then_some(p.ground_height);
@@ -90,4 +95,12 @@ impl Cook for Simulate {
         let frames = VolumeFrames::new(sim, self.timeline.frames, h);
         Ok(SimulateOut { volume: ClipOf::new(Clip::new(PortType::of::<Volume>(), fps, fp.finish(), Arc::new(frames))) })
     }
+}
+
+/// The clip of a simulation whose frames were cached by `pyrograph simulate` (`--sim-cache`).
+fn cached_clip(dir: &std::path::Path, node: &str, p: &SimParams, timeline: pyrograph_core::Timeline) -> Clip {
+    let mut fp = Fingerprinter::new();
+    ("volume.simulate from its cache", dir, node, format!("{p:?}"), timeline.frames).hash(&mut fp);
+    let frames = CachedFrames { dir: dir.to_path_buf(), node: node.to_string(), frames: timeline.frames };
+    Clip::new(PortType::of::<Volume>(), timeline.fps, fp.finish(), Arc::new(frames))
 }

@@ -16,6 +16,7 @@ pub mod bytes;
 pub mod codec;
 pub mod nodes;
 pub mod read;
+pub mod sim_cache;
 pub mod stage;
 pub mod tree;
 pub mod write;

@@ -77,7 +77,6 @@ impl WriteVdb {
         dir: &Path,
         pattern: &FramePattern,
         options: &WriteOptions,
-        extents: &[(usize, [f32; 3], [f32; 3])],
         overwrite: bool,
         ctx: &CookCtx,
     ) -> Result<(), NodeError> {
@@ -95,19 +94,12 @@ impl WriteVdb {
             .collect();
         let files: Vec<String> =
             (0..self.volume.len()).map(|i| asset_path(&dir.join(pattern.file_name(self.start + i as u64)), stage_path)).collect();
-        let spec = StageSpec { name: "volume", fields: &fields, files: &files, extents, fps: self.volume.fps() };
+        let spec = StageSpec { name: "volume", fields: &fields, files: &files, fps: self.volume.fps() };
         let text = stage_text(&spec).map_err(|e| usd_err(format!("building the USD stage: {e:#}")))?;
         pyrograph_usd::write(stage_path, &text, overwrite).map_err(usd_err)?;
         ctx.record_written(stage_path);
         Ok(())
     }
-}
-
-/// The world box of a volume's active voxels (their outer faces), if any.
-fn world_bounds(v: &Volume) -> Option<([f32; 3], [f32; 3])> {
-    let (lo, hi) = v.topology.voxel_bounds()?;
-    let (a, b) = (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5));
-    Some((a.to_array(), b.to_array()))
 }
 
 impl Cook for WriteVdb {
@@ -139,7 +131,6 @@ impl Cook for WriteVdb {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(&dir).map_err(|e| pattern_err(format!("cannot create {}: {e}", dir.display())))?;
         }
-        let mut extents = Vec::new();
         for (done, (i, path)) in targets.iter().enumerate() {
             ctx.check_cancel()?;
             if ctx.settings().skip_existing && path.exists() {
@@ -147,16 +138,13 @@ impl Cook for WriteVdb {
                 continue;
             }
             let volume = self.frame(*i, ctx)?;
-            if let Some(e) = world_bounds(&volume) {
-                extents.push((*i, e.0, e.1));
-            }
             let bytes = write_volume(&volume, &options).map_err(|e| NodeError::port(port!(WriteVdb, fields), e.to_string()))?;
             write_atomic(path, &bytes, overwrite).map_err(|e| pattern_err(format!("writing {}: {e}", path.display())))?;
             ctx.record_written(path);
             ctx.frame_progress(done + 1, targets.len());
         }
         if self.usd && frames.first() == Some(&0) {
-            self.write_stage(&dir, &pattern, &options, &extents, overwrite, ctx)?;
+            self.write_stage(&dir, &pattern, &options, overwrite, ctx)?;
         }
         let first = targets.first().map(|(_, p)| p.clone()).unwrap_or_default();
         Ok(WriteVdbOut { frames: targets.len(), first: OutputPath(first) })

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use pyrograph_usd::{Value, asset, attribute, define, relationship, sample};
+use pyrograph_usd::{asset, attribute, define, relationship, sample};
 
 /// One field of the stage: its grid name and whether it holds vectors.
 pub struct StageField {
@@ -22,8 +22,6 @@ pub struct StageSpec<'a> {
     pub fields: &'a [StageField],
     /// Every frame's VDB file, relative to the stage (or absolute), by frame.
     pub files: &'a [String],
-    /// The world bounds of the frames known (frame, lower corner, upper corner).
-    pub extents: &'a [(usize, [f32; 3], [f32; 3])],
     /// Frames per second.
     pub fps: f64,
 }
@@ -32,11 +30,10 @@ pub struct StageSpec<'a> {
 pub fn stage_text(spec: &StageSpec) -> anyhow::Result<Vec<u8>> {
     let stage = pyrograph_usd::new_stage(spec.files.len(), spec.fps)?;
     let volume = format!("/World/{}", spec.name);
+    // No `extent`: a farm writes the stage with the chunk holding frame 0, before the other
+    // chunks' volumes exist, and a stage must not differ with how the frames were chunked. The
+    // readers (Solaris, usdview, Omniverse) take a volume's bounds from its VDB files.
     define(&stage, &volume, "Volume")?;
-    let extent = attribute(&stage, &volume, "extent", "float3[]", false)?;
-    for (t, lo, hi) in spec.extents {
-        sample(&extent, *t, Value::Vec3fVec(vec![(*lo).into(), (*hi).into()]))?;
-    }
     for f in spec.fields {
         let prim = format!("{volume}/{}", f.name);
         define(&stage, &prim, "OpenVDBAsset")?;

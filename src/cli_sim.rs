@@ -1,0 +1,134 @@
+//! `pyrograph simulate`: steps every volume simulation of a graph once and caches its frames as
+//! VDB files, which `render --sim-cache` then reads instead of stepping. A farm job whose graph
+//! simulates runs this as its Simulate step, before the chunks of its Render step.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, Registry, Value};
+use pyrograph_frontend::volume::grid::Volume;
+use pyrograph_frontend::volume::vdb::sim_cache::{cache_file, cache_name, write_cache_frame};
+
+use crate::Failure;
+use crate::cli_farm::build_variant;
+
+/// The type of the nodes this command steps.
+pub const SIMULATION_TYPE: &str = "volume.simulate";
+
+/// What `simulate` steps and where it caches it.
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// The graph file (RON).
+    graph: PathBuf,
+    /// Folder of the cache: frame i of simulation SIM goes to DIR/SIM/SIM.<i:04>.vdb.
+    #[arg(long, value_name = "DIR")]
+    sim_cache: PathBuf,
+    /// The render's output folder (writer paths are checked against it, as `render --out`).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The frames the render will need: each simulation steps to the last of them (default:
+    /// its whole clip).
+    #[arg(long, value_parser = crate::parse_frames)]
+    frames: Option<FrameSet>,
+    /// Override a parameter: node.param=value.
+    #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
+    set: Vec<String>,
+    /// A wedge axis, as `render --wedge`; with it, --wedge-index picks the variant to simulate.
+    #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
+    wedge: Vec<String>,
+    /// Parameters that vary together, as `render --wedge-zip`.
+    #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
+    wedge_zip: Vec<String>,
+    /// The wedge variant to simulate (0-based).
+    #[arg(long, value_name = "K")]
+    wedge_index: Option<usize>,
+    /// Leave a simulation alone whose every frame is already cached (a re-queued task).
+    #[arg(long)]
+    skip_existing: bool,
+    /// Replace cached frames that exist (a simulation re-steps from its first frame).
+    #[arg(long)]
+    overwrite: bool,
+}
+
+/// The simulation nodes of a graph (includes flattened), by id.
+pub fn simulations(graph: &Graph) -> Vec<Arc<str>> {
+    let mut ids: Vec<Arc<str>> = graph
+        .topo_order()
+        .iter()
+        .map(|i| graph.node(*i))
+        .filter(|n| n.node.desc().type_name == SIMULATION_TYPE)
+        .map(|n| n.id.clone())
+        .collect();
+    ids.sort();
+    ids
+}
+
+fn build(registry: &Registry, a: &SimulateArgs) -> Result<Graph, Failure> {
+    let wedges = pyrograph::wedge::Wedges::parse(&a.wedge, &a.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
+    let out = a.out.clone().unwrap_or_else(|| a.graph.parent().map(Path::to_path_buf).unwrap_or_default());
+    if wedges.is_empty() {
+        if a.wedge_index.is_some() {
+            return Err(Failure("error: --wedge-index needs --wedge or --wedge-zip".into()));
+        }
+        let options = BuildOptions { output_dir: Some(out), ..BuildOptions::default() };
+        return Ok(crate::load(registry, &a.graph, &a.set, &options)?.1);
+    }
+    let all = wedges.variants();
+    let Some(v) = a.wedge_index.and_then(|k| all.get(k)) else {
+        return Err(Failure(format!(
+            "error: a wedge has one cache per variant: pick one with --wedge-index 0-{} (and a --sim-cache of its own)",
+            all.len() - 1
+        )));
+    };
+    Ok(build_variant(registry, &a.graph, &a.set, &out, false, v)?.0)
+}
+
+/// Steps each simulation of the graph to the last frame needed and writes every frame.
+pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
+    let graph = build(registry, a)?;
+    let sims = simulations(&graph);
+    if sims.is_empty() {
+        println!("{}: no {SIMULATION_TYPE} node, nothing to cache", a.graph.display());
+        return Ok(());
+    }
+    let mut names: Vec<String> = sims.iter().map(|s| cache_name(s)).collect();
+    names.dedup();
+    if names.len() != sims.len() {
+        return Err(Failure(format!(
+            "error: two simulations share a cache folder name ({}): give them ids that differ in letters or digits",
+            sims.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")
+        )));
+    }
+    let ctx = CookCtx::new();
+    for id in &sims {
+        ctx.check_cancel().map_err(|e| Failure(format!("error: {e}")))?;
+        let started = std::time::Instant::now();
+        let value = Evaluator::new()
+            .output(&graph, &format!("{id}.volume"), &ctx)
+            .map_err(|e| Failure(format!("error: {}", crate::explain(id, &e))))?;
+        let Value::Clip(clip) = value else {
+            return Err(Failure(format!("error: simulation '{id}' made no clip")));
+        };
+        let last = a.frames.as_ref().map_or(clip.len(), |f| (f.last() + 1).min(clip.len()));
+        let files: Vec<PathBuf> = (0..last).map(|i| cache_file(&a.sim_cache, id, i)).collect();
+        if a.skip_existing && files.iter().all(|f| f.is_file()) {
+            println!("{id}: {last} frames already cached in {}", a.sim_cache.join(cache_name(id)).display());
+            continue;
+        }
+        if !a.overwrite && let Some(f) = files.iter().find(|f| f.exists()) {
+            return Err(Failure(format!(
+                "error: {} exists; nothing was simulated (--overwrite re-simulates and replaces the cache)",
+                f.display()
+            )));
+        }
+        let node_ctx = ctx.for_node(id);
+        for i in 0..last {
+            let frame = clip.get(i, &node_ctx).map_err(|e| Failure(format!("error: {}", crate::explain(id, &e))))?;
+            let volume = frame.downcast::<Volume>().ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
+            write_cache_frame(&a.sim_cache, id, i, &volume).map_err(|e| Failure(format!("error: simulation '{id}': {e}")))?;
+        }
+        let dir = a.sim_cache.join(cache_name(id));
+        println!("{id}: {last} frames cached in {} ({:.1} s)", dir.display(), started.elapsed().as_secs_f64());
+    }
+    Ok(())
+}

@@ -8,7 +8,7 @@ use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph
 use rayon::prelude::*;
 
 use crate::{Failure, RenderOpts, apply_sets, explain, load, memory_kib};
-use crate::cli_sim::simulations;
+use pyrograph::job::simulations;
 
 #[derive(Subcommand)]
 pub enum JobAction {

@@ -3,7 +3,6 @@
 //! simulates runs this as its Simulate step, before the chunks of its Render step.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, Registry, Value};
 use pyrograph_frontend::volume::grid::Volume;
@@ -11,9 +10,7 @@ use pyrograph_frontend::volume::vdb::sim_cache::{cache_file, cache_name, write_c
 
 use crate::Failure;
 use crate::cli_farm::build_variant;
-
-/// The type of the nodes this command steps.
-pub const SIMULATION_TYPE: &str = "volume.simulate";
+use pyrograph::job::{SIMULATION_TYPE, simulations};
 
 /// What `simulate` steps and where it caches it.
 #[derive(clap::Args)]
@@ -48,19 +45,6 @@ pub struct SimulateArgs {
     /// Replace cached frames that exist (a simulation re-steps from its first frame).
     #[arg(long)]
     overwrite: bool,
-}
-
-/// The simulation nodes of a graph (includes flattened), by id.
-pub fn simulations(graph: &Graph) -> Vec<Arc<str>> {
-    let mut ids: Vec<Arc<str>> = graph
-        .topo_order()
-        .iter()
-        .map(|i| graph.node(*i))
-        .filter(|n| n.node.desc().type_name == SIMULATION_TYPE)
-        .map(|n| n.id.clone())
-        .collect();
-    ids.sort();
-    ids
 }
 
 fn build(registry: &Registry, a: &SimulateArgs) -> Result<Graph, Failure> {
@@ -115,20 +99,52 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
             println!("{id}: {last} frames already cached in {}", a.sim_cache.join(cache_name(id)).display());
             continue;
         }
-        if !a.overwrite && let Some(f) = files.iter().find(|f| f.exists()) {
+        if !a.overwrite
+            && let Some(f) = files.iter().find(|f| f.exists())
+        {
             return Err(Failure(format!(
                 "error: {} exists; nothing was simulated (--overwrite re-simulates and replaces the cache)",
                 f.display()
             )));
         }
         let node_ctx = ctx.for_node(id);
+        let mut stats = Stats::default();
         for i in 0..last {
             let frame = clip.get(i, &node_ctx).map_err(|e| Failure(format!("error: {}", crate::explain(id, &e))))?;
-            let volume = frame.downcast::<Volume>().ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
+            let volume =
+                frame.downcast::<Volume>().ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
+            stats.add(&volume);
             write_cache_frame(&a.sim_cache, id, i, &volume).map_err(|e| Failure(format!("error: simulation '{id}': {e}")))?;
         }
         let dir = a.sim_cache.join(cache_name(id));
-        println!("{id}: {last} frames cached in {} ({:.1} s)", dir.display(), started.elapsed().as_secs_f64());
+        let secs = started.elapsed().as_secs_f64();
+        println!(
+            "{id}: {last} frames cached in {} ({secs:.1} s; {} sub-steps, {:.1} a second; up to {} active voxels; smoke {} voxels tall)",
+            dir.display(),
+            stats.substeps,
+            stats.substeps as f64 / secs,
+            stats.voxels,
+            stats.height
+        );
     }
     Ok(())
+}
+
+/// What a simulation did over its frames, for the line `simulate` prints.
+#[derive(Default)]
+struct Stats {
+    substeps: u64,
+    voxels: usize,
+    /// The tallest extent of smoke (density over 1 %), in voxels.
+    height: i32,
+}
+
+impl Stats {
+    fn add(&mut self, v: &Volume) {
+        self.substeps += u64::from(v.stats.substeps);
+        self.voxels = self.voxels.max(v.topology.voxels());
+        if let Some((lo, hi)) = v.field_bounds("density", 0.01) {
+            self.height = self.height.max(hi.y - lo.y + 1);
+        }
+    }
 }

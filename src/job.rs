@@ -19,7 +19,25 @@
 
 use std::path::{Path, PathBuf};
 
-use pyrograph_core::FrameSet;
+use std::sync::Arc;
+
+use pyrograph_core::{FrameSet, Graph};
+
+/// The type of the nodes a job's Simulate step steps.
+pub const SIMULATION_TYPE: &str = "volume.simulate";
+
+/// The simulation nodes of a graph (includes flattened), by id.
+pub fn simulations(graph: &Graph) -> Vec<Arc<str>> {
+    let mut ids: Vec<Arc<str>> = graph
+        .topo_order()
+        .iter()
+        .map(|i| graph.node(*i))
+        .filter(|n| n.node.desc().type_name == SIMULATION_TYPE)
+        .map(|n| n.id.clone())
+        .collect();
+    ids.sort();
+    ids
+}
 
 /// What a job renders and how its frames are cut into tasks.
 #[derive(Clone, Debug)]
@@ -295,8 +313,14 @@ mod tests {
         let t = JobSpec { simulate: true, ..spec("0-47", true) }.template();
         let (sim, render) = t.split_once("- name: Render\n").expect("a Render step");
         assert!(sim.contains("- name: Simulate\n") && !sim.contains("parameterSpace"), "one task: {t}");
-        assert!(sim.contains(r#"args: ["simulate", "{{Param.Graph}}", "--sim-cache", "{{Param.Out}}/.pyrograph-job/sim""#), "{t}");
-        assert!(sim.contains(r#""--frames", "{{Param.Frames}}", "--skip-existing", "--overwrite", "--set", "spread.fps=12""#), "{t}");
+        assert!(
+            sim.contains(r#"args: ["simulate", "{{Param.Graph}}", "--sim-cache", "{{Param.Out}}/.pyrograph-job/sim""#),
+            "{t}"
+        );
+        assert!(
+            sim.contains(r#""--frames", "{{Param.Frames}}", "--skip-existing", "--overwrite", "--set", "spread.fps=12""#),
+            "{t}"
+        );
         assert!(render.starts_with("  dependencies:\n  - dependsOn: Simulate\n  parameterSpace:"), "{t}");
         assert!(render.contains(r#""--sim-cache", "{{Param.Out}}/.pyrograph-job/sim""#), "{t}");
         let w = JobSpec { simulate: true, wedge: vec!["s.seed=1,2".into()], variants: 2, ..spec("0-47", true) }.template();

@@ -62,7 +62,16 @@ fn render(out: &Path, frames: &str, extra: &[&str]) -> Output {
 }
 
 fn simulate(cache: &Path, frames: &str, extra: &[&str]) -> Output {
-    bin().arg("simulate").arg(graph()).arg("--sim-cache").arg(cache).args(["--frames", frames]).args(SETS).args(extra).output().unwrap()
+    bin()
+        .arg("simulate")
+        .arg(graph())
+        .arg("--sim-cache")
+        .arg(cache)
+        .args(["--frames", frames])
+        .args(SETS)
+        .args(extra)
+        .output()
+        .unwrap()
 }
 
 #[test]
@@ -123,7 +132,10 @@ fn a_simulation_job_on_openjd_simulates_once_then_renders_chunks_identical_to_on
     );
     assert!(text(&o).contains("a Simulate step") && text(&o).contains("--run-dependencies"), "{}", text(&o));
     let template = std::fs::read_to_string(job.join("template.yaml")).unwrap();
-    assert!(template.contains("- name: Simulate\n") && template.contains("  dependencies:\n  - dependsOn: Simulate\n"), "{template}");
+    assert!(
+        template.contains("- name: Simulate\n") && template.contains("  dependencies:\n  - dependsOn: Simulate\n"),
+        "{template}"
+    );
     let openjd = || Command::new(std::env::var_os("PYROGRAPH_OPENJD").unwrap_or_else(|| "openjd".into()));
     ok(openjd().arg("check").arg(job.join("template.yaml")).output().unwrap(), "openjd check");
     let params = format!("file://{}", job.join("job_params.yaml").display());

@@ -21,7 +21,10 @@ use pyrograph_nodes_volume::source::{Emitter, Geometry, Rates, TimedPoint, Volum
 
 fn peak_rss_mib() -> f64 {
     let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let kb = status.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok());
+    let kb = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok());
     kb.unwrap_or(0.0) / 1024.0
 }
 
@@ -30,7 +33,9 @@ fn dense(n: i32, steps: usize) {
     use glam::IVec3;
     use pyrograph_nodes_volume::grid::Topology;
     let bricks = n / 8;
-    let top = Topology::new((0..bricks * bricks * bricks).map(|k| IVec3::new(k % bricks, (k / bricks) % bricks, k / (bricks * bricks))).collect());
+    let top = Topology::new(
+        (0..bricks * bricks * bricks).map(|k| IVec3::new(k % bricks, (k / bricks) % bricks, k / (bricks * bricks))).collect(),
+    );
     let h = 1.0 / n as f32;
     let mut state = SimState::new(h);
     let voxels = top.voxels();

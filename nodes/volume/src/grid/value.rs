@@ -166,6 +166,22 @@ impl Volume {
         }
         (weight > 0.0).then(|| self.transform.to_world((sum / weight).as_vec3()))
     }
+
+    /// The index box (inclusive) of the voxels whose scalar field `name` exceeds `threshold`:
+    /// how tall a smoke column is, in voxels.
+    pub fn field_bounds(&self, name: &str, threshold: f32) -> Option<(IVec3, IVec3)> {
+        let data = self.scalar(name)?;
+        let mut bounds: Option<(IVec3, IVec3)> = None;
+        for (b, c) in self.topology.coords().iter().enumerate() {
+            for (i, v) in data[b * VOXELS..(b + 1) * VOXELS].iter().enumerate() {
+                if *v > threshold {
+                    let p = *c * 8 + IVec3::new((i & 7) as i32, ((i >> 3) & 7) as i32, (i >> 6) as i32);
+                    bounds = Some(bounds.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+                }
+            }
+        }
+        bounds
+    }
 }
 
 impl ValueType for Volume {
@@ -200,5 +216,29 @@ impl ValueType for Volume {
             self.transform.voxel_size,
             names.join(" ")
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::topology::voxel;
+
+    #[test]
+    fn field_bounds_cover_the_voxels_over_the_threshold_across_bricks() {
+        let top = Topology::new(vec![IVec3::new(0, 0, 0), IVec3::new(0, 2, -1)]);
+        let mut data = vec![0.0f32; top.voxels()];
+        let (a, b) = (top.find(IVec3::new(0, 0, 0)).unwrap() as usize, top.find(IVec3::new(0, 2, -1)).unwrap() as usize);
+        data[a * VOXELS + voxel(3, 1, 2)] = 0.5;
+        data[b * VOXELS + voxel(5, 6, 7)] = 0.2;
+        data[b * VOXELS + voxel(0, 7, 0)] = 0.01;
+        let v = Volume {
+            topology: Arc::new(top),
+            fields: vec![Field { name: "density".into(), data: FieldData::Scalar(data) }],
+            ..Volume::empty(0.1)
+        };
+        assert_eq!(v.field_bounds("density", 0.05), Some((IVec3::new(3, 1, -1), IVec3::new(5, 22, 2))));
+        assert_eq!(v.field_bounds("density", 0.6), None);
+        assert_eq!(v.field_bounds("fuel", 0.0), None);
     }
 }

@@ -223,7 +223,7 @@ fn run_variant(graph: &Graph, out: PathBuf, o: &RenderOpts, v: &Variant) -> Resu
 /// cache keeps them within one memory budget), then the manifest and the sheet.
 pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &Wedges) -> Result<(), Failure> {
     let all = wedges.variants();
-    let chosen: Vec<Variant> = match o.wedge_index {
+    let chosen: Vec<Variant> = match o.wedges.wedge_index {
         Some(k) if k < all.len() => vec![all[k].clone()],
         Some(k) => {
             return Err(Failure(format!("error: --wedge-index {k}: the wedge has {} variants (0-{})", all.len(), all.len() - 1)));
@@ -265,7 +265,7 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
     }
     if let Some(file) = &o.manifest {
         let files: Vec<PathBuf> = runs.iter().flat_map(|r| r.written.clone()).collect();
-        write_manifest(file, path, &out_root, o, o.wedge_index, !failed, &files, started.elapsed())?;
+        write_manifest(file, path, &out_root, o, o.wedges.wedge_index, !failed, &files, started.elapsed())?;
     }
     if o.sheet && !failed {
         let sheet_path = out_root.join("wedges.png");

@@ -195,7 +195,7 @@ pub fn render_preset(
     inputs: &[String],
     o: &RenderOpts,
 ) -> Result<(), Failure> {
-    if !o.wedge.is_empty() || !o.wedge_zip.is_empty() || o.sheet || o.wedge_index.is_some() {
+    if !o.wedges.wedge.is_empty() || !o.wedges.wedge_zip.is_empty() || o.sheet || o.wedges.wedge_index.is_some() {
         return Err(Failure(
             "error: preset renders one variant; for wedges, include the preset in a graph and render that".into(),
         ));

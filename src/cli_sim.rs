@@ -30,15 +30,9 @@ pub struct SimulateArgs {
     /// Override a parameter: node.param=value.
     #[arg(long = "set", value_name = "NODE.PARAM=VALUE")]
     set: Vec<String>,
-    /// A wedge axis, as `render --wedge`; with it, --wedge-index picks the variant to simulate.
-    #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
-    wedge: Vec<String>,
-    /// Parameters that vary together, as `render --wedge-zip`.
-    #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
-    wedge_zip: Vec<String>,
-    /// The wedge variant to simulate (0-based).
-    #[arg(long, value_name = "K")]
-    wedge_index: Option<usize>,
+    // The wedge, as `render --wedge`: --wedge-index picks the variant to simulate.
+    #[command(flatten)]
+    wedges: crate::WedgeArgs,
     /// Leave a simulation alone whose every frame is already cached (a re-queued task).
     #[arg(long)]
     skip_existing: bool,
@@ -48,17 +42,18 @@ pub struct SimulateArgs {
 }
 
 fn build(registry: &Registry, a: &SimulateArgs) -> Result<Graph, Failure> {
-    let wedges = pyrograph::wedge::Wedges::parse(&a.wedge, &a.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
+    let wedges =
+        pyrograph::wedge::Wedges::parse(&a.wedges.wedge, &a.wedges.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
     let out = a.out.clone().unwrap_or_else(|| a.graph.parent().map(Path::to_path_buf).unwrap_or_default());
     if wedges.is_empty() {
-        if a.wedge_index.is_some() {
+        if a.wedges.wedge_index.is_some() {
             return Err(Failure("error: --wedge-index needs --wedge or --wedge-zip".into()));
         }
         let options = BuildOptions { output_dir: Some(out), ..BuildOptions::default() };
         return Ok(crate::load(registry, &a.graph, &a.set, &options)?.1);
     }
     let all = wedges.variants();
-    let Some(v) = a.wedge_index.and_then(|k| all.get(k)) else {
+    let Some(v) = a.wedges.wedge_index.and_then(|k| all.get(k)) else {
         return Err(Failure(format!(
             "error: a wedge has one cache per variant: pick one with --wedge-index 0-{} (and a --sim-cache of its own)",
             all.len() - 1

@@ -330,6 +330,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// A wedge: its axes and the variant a farm task takes (`render` and `simulate`).
+#[derive(clap::Args)]
+struct WedgeArgs {
+    /// Once per value: node.param=v1,v2,… (repeat: every combination). Writer paths may use
+    /// {wedge} and {wedge.PARAM}; otherwise each variant writes into OUT/<variant>/.
+    #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
+    wedge: Vec<String>,
+    /// Parameters that vary together, as one wedge axis (equal value counts).
+    #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
+    wedge_zip: Vec<String>,
+    /// Only this variant of the wedge (0-based; what a farm task does).
+    #[arg(long, value_name = "K")]
+    wedge_index: Option<usize>,
+}
+
 /// What `render` does beyond which graph: frames, outputs, overrides, wedges, reports.
 #[derive(clap::Args)]
 struct RenderOpts {
@@ -346,16 +361,8 @@ struct RenderOpts {
     /// Write a JSON manifest of the files written (size, SHA-256), the time and peak memory.
     #[arg(long, value_name = "FILE")]
     manifest: Option<PathBuf>,
-    /// Render once per value: node.param=v1,v2,… (repeat: every combination). Writer paths
-    /// may use {wedge} and {wedge.PARAM}; otherwise each variant writes into OUT/<variant>/.
-    #[arg(long = "wedge", value_name = "NODE.PARAM=V1,V2,…")]
-    wedge: Vec<String>,
-    /// Parameters that vary together, as one wedge axis (equal value counts).
-    #[arg(long = "wedge-zip", value_name = "NODE.PARAM=V1,V2,…")]
-    wedge_zip: Vec<String>,
-    /// Render only this variant of the wedge (0-based; what a farm task does).
-    #[arg(long, value_name = "K")]
-    wedge_index: Option<usize>,
+    #[command(flatten)]
+    wedges: WedgeArgs,
     /// Also write OUT/wedges.png: a labelled contact sheet, one cell per variant.
     #[arg(long)]
     sheet: bool,
@@ -444,11 +451,12 @@ fn progress_bars(enabled: bool) -> Option<pyrograph_frontend::core::ProgressFn> 
 }
 
 fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failure> {
-    let wedges = pyrograph::wedge::Wedges::parse(&o.wedge, &o.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
+    let wedges =
+        pyrograph::wedge::Wedges::parse(&o.wedges.wedge, &o.wedges.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;
     if !wedges.is_empty() {
         return cli_farm::render_wedges(registry, path, o, &wedges);
     }
-    if o.wedge_index.is_some() || o.sheet {
+    if o.wedges.wedge_index.is_some() || o.sheet {
         return Err(Failure("error: --wedge-index and --sheet need --wedge or --wedge-zip".into()));
     }
     let options = BuildOptions { output_dir: o.out.clone(), allow_outside_out: o.allow_outside_out, ..BuildOptions::default() };

@@ -7,6 +7,7 @@ faster) and their median, the thread counts and, for whole processes, peak RSS.
     cargo build --release --example kernels && cargo build --release
     cargo bench --no-run -p pyrograph-nodes-particles -p pyrograph-nodes-cloth   # the frame-rate rows
     ../shared/peers/setup.sh                      # the peers' venv, /tmp/peers-venv
+    python3 -m venv /tmp/warp-venv && /tmp/warp-venv/bin/pip install warp-lang==1.19.0 numpy   # the smoke rows' peer
     /tmp/peers-venv/bin/python benches/peers/run.py [--rounds 5] [--only bloom,endgrow] [--work DIR]
 
 Kernel rows time the kernel inside one process on each side (examples/kernels, benches/peers/kernels.py:
@@ -36,6 +37,9 @@ FOOTAGE = os.path.abspath(os.environ.get("PYROGRAPH_FOOTAGE") or os.path.join(RE
 KERNELS = os.path.join(REPO, "target/release/examples/kernels")
 CLI = os.path.join(REPO, "target/release/pyrograph")
 PY = sys.executable
+# NVIDIA Warp (the smoke-step row's peer) in its own venv: python3 -m venv /tmp/warp-venv &&
+# /tmp/warp-venv/bin/pip install warp-lang==1.19.0 numpy
+WARP_PY = os.environ.get("PYROGRAPH_WARP_PYTHON", "/tmp/warp-venv/bin/python")
 sys.path.insert(0, PEERS)
 
 
@@ -200,6 +204,21 @@ def check_train(o, p):
     return f"eigenvalues within {rel:.1e}, eigenfires 1–20 {angle:.1e}° apart, weights within {w:.1e}"
 
 
+def check_smoke(o, p):
+    """Density and temperature (0–1) within 1e-3 and each staggered velocity component within 1e-3
+    of the largest speed, after the same sub-steps from the same blob."""
+    a, b = np.load(o).astype(np.float64), np.load(p).astype(np.float64)
+    if a.shape != b.shape:
+        raise Disagree(f"smoke fields: shapes {a.shape} and {b.shape}")
+    scalars = float(np.abs(a[:2] - b[:2]).max())
+    speed = float(np.abs(b[2:]).max())
+    vel = float(np.abs(a[2:] - b[2:]).max()) / speed
+    if not (scalars <= 1e-3 and vel <= 1e-3 and speed > 0):
+        raise Disagree(f"smoke fields differ: density/temperature by {scalars:.3g}, velocity by {vel:.3g} of its "
+                       f"largest speed {speed:.3g}")
+    return f"density and temperature within {scalars:.1e}, velocity within {vel:.1e} of the largest speed ({speed:.3f})"
+
+
 def check_cloth(o, p):
     return f"displacements after the run agree to {max_diff(o, p, 1e-4, 'cloth displacements'):.1e}"
 
@@ -343,6 +362,16 @@ def rows(i, work):
                 lambda o, t=t, cl=cl: (kernel, [KERNELS, "--reps", "5", *cl, "--output", o + ".npy"], threads_env(t)),
                 lambda o, t=t, cl=cl: (kernel, kp + ["--reps", "5", *cl, "--output", o + ".npy"], {**threads_env(t), **malloc}),
                 check_cloth, peer_threads=1, unit="µs")
+    for t in (2, 1):
+        sm = ["--n", "128", "--steps", "4"]
+        row(f"smoke_t{t}", "smoke", "smoke sub-step: MacCormack advection, cooling, buoyancy, MGPCG projection to 1e-2/s, "
+            "time per sub-step (mean of 4 from the blob)", "dense 128³ box (2.1 M voxels), warm blob", t,
+            "NVIDIA Warp 1.19 CPU device, the same algorithm, benches/peers/warp_smoke.py",
+            lambda o, t=t: (kernel, [KERNELS, "--warmup", "0", "--reps", "1", "smoke", *sm, "--output", o + ".npy"],
+                            threads_env(t)),
+            lambda o, t=t: (kernel, [WARP_PY, os.path.join(HERE, "warp_smoke.py"), "--reps", "1", *sm,
+                                     "--output", o + ".npy"], threads_env(t)),
+            check_smoke, peer_threads="2 allowed, 1 used" if t == 2 else 1, unit="s")
     ar = ["--steps", "100000", "--model-dir", os.path.join(work, "arp_model")]
     row("arp", "arp", "ARP sampling (eq. 2), time per step", "26 parameters, K = 2, learned on candle-black", 1,
         "numpy, ar_fit.py's sampler: a Python loop of mat-vecs",
@@ -384,6 +413,8 @@ TARGETS = {
     "cloth-frame": ("≥ 60 fps", lambda o, p, r: o <= 1 / 60),
     "cloth": ("≥ 5× numpy", lambda o, p, r: r <= 0.2),
     "arp": ("≥ 1 M steps/s", lambda o, p, r: o <= 1e-6),
+    # Issue 61: the smoke step no slower than Warp's CPU device at 1 and at 2 threads.
+    "smoke": ("≤ Warp", lambda o, p, r: r <= 1.0),
     # Issue 45's interactive targets (the first wave's were 30 and 24 fps).
     "particles": ("≥ 48 fps", lambda o, p, r: o <= 1 / 48),
     "cube": ("≥ 30 fps", lambda o, p, r: o <= 1 / 30),
@@ -502,7 +533,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--only", default="", help="comma-separated groups: preprocess, video, bloom, endgrow, "
-                                               "reconstruct, train, cloth, arp, solo (default: all)")
+                                               "reconstruct, train, cloth, smoke, arp, solo (default: all)")
     p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-peers"))
     a = p.parse_args()
     for exe in (KERNELS, CLI):

@@ -1,7 +1,9 @@
 """How cost grows with the work (issue 45): time and peak memory against size for particle flames
 (100 → 10,000 flames, simulate + render 1280×720), cloth flames (16 → 1,024, a 24 fps frame's
 sub-steps + render), fire spread (a plane of 242 → 247,808 faces: the surface built, then 96 steps),
-batch reconstruction (eq. 22, 8 → 256 frames) and the mask chain against resolution (480p → 4K: the
+batch reconstruction (eq. 22, 8 → 256 frames), the smoke solver's sub-step against active voxels
+(volume.simulate's step on a dense box of warm smoke, 24³ → 216³: 1.4·10⁴ → 10⁷ voxels, every brick
+active) and the mask chain against resolution (480p → 4K: the
 peer harness's benches/maskchain/mask.ron rendered by the CLI over 48 PNG frames, read to written),
 each size a separate process of the harness's kernels (examples/kernels) or of the CLI under
 /usr/bin/time, so that peak RSS is that size's own.
@@ -98,11 +100,14 @@ def workloads(work):
              for n, f in ((16, 24), (64, 24), (144, 12), (256, 12), (576, 6), (1024, 3))]
     recon = [(b, ["--reps", "3", "reconstruct", *recon_inputs(work, b)]) for b in (8, 16, 32, 64, 128, 256)]
     spread = [(2 * d * d, ["--reps", "3", "spread", "--divisions", str(d), "--steps", "96"]) for d in (11, 22, 44, 88, 176, 352)]
+    smoke = [(n ** 3, ["--warmup", "0", "--reps", "3" if n <= 96 else "1", "smoke", "--n", str(n), "--steps", str(steps)])
+             for n, steps in ((24, 8), (48, 8), (96, 4), (136, 2), (216, 2))]
     masks = [(w * h, ("mask", (w, h))) for w, h in MASK_SIZES]
     return [("particle flames", "flames", "frame", particles),
             ("cloth flames", "flames", "frame", cloth),
             ("fire spread (surface + 96 steps)", "mesh faces", "step", spread),
             ("batch reconstruction", "frames", "batch", recon),
+            ("smoke solver sub-step", "active voxels", "sub-step", smoke),
             ("mask chain, 480p to 4K", "pixels a frame", "frame", masks)]
 
 
@@ -118,7 +123,7 @@ def plot(results, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
-    fig, axes = plt.subplots(2, len(results), figsize=(3.4 * len(results), 7.0))
+    fig, axes = plt.subplots(2, len(results), figsize=(3.4 * len(results), 7.0), squeeze=False)
     for col, (name, label, unit, rows) in enumerate(results):
         sizes = np.array([r["size"] for r in rows], dtype=float)
         ms = np.array([r["median_s"] * 1e3 for r in rows])
@@ -148,17 +153,20 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-scaling"))
     p.add_argument("--plot", default=os.path.join(REPO, "docs/images/scaling.png"))
+    p.add_argument("--only", default="", help="comma-separated words of workload names to measure (e.g. smoke); "
+                                               "the plot then holds only those")
     p.add_argument("--from", dest="rows", metavar="JSONL",
                    help="plot and tabulate a previous run's scaling.jsonl (its latest row of each size) instead of running")
     a = p.parse_args()
-    results = replay(a.rows) if a.rows else measure(a.work)
+    results = replay(a.rows) if a.rows else measure(a.work, [w for w in a.only.split(",") if w])
     plot(results, a.plot)
     print(f"\nplot: {a.plot}\n")
     table(results)
 
 
-def measure(work):
-    """Runs every workload at every size: [(name, size label, unit, rows)], logged to work/scaling.jsonl."""
+def measure(work, only=()):
+    """Runs every workload (or those whose name holds a word of `only`) at every size: [(name, size
+    label, unit, rows)], logged to work/scaling.jsonl."""
     for exe in (KERNELS, CLI):
         if not os.access(exe, os.X_OK):
             raise SystemExit(f"build first: cargo build --release --example kernels && cargo build --release (no {exe})")
@@ -166,6 +174,8 @@ def measure(work):
     results = []
     with open(os.path.join(work, "scaling.jsonl"), "a") as log:
         for name, label, unit, sizes in workloads(work):
+            if only and not any(w in name for w in only):
+                continue
             rows = []
             for size, args in sizes:
                 got, rss = mask_chain(work, args[1]) if args[0] == "mask" else timed(args)

@@ -9,6 +9,7 @@
 mod eigen;
 mod flames;
 mod npy;
+mod smoke;
 mod solo;
 
 use std::time::Instant;
@@ -42,6 +43,8 @@ enum Op {
     Cloth(flames::ClothArgs),
     /// Learning flames §4: fit + EM learning on footage frames (untimed), then ARP sampling.
     Arp(flames::ArpArgs),
+    /// `volume.simulate`'s sub-step on a dense N³ box of warm smoke (the Warp peer's step).
+    Smoke(smoke::SmokeArgs),
     /// No peer: 1,000 particle flames, simulate + render 1280×720, per frame.
     Particles(solo::FramesArgs),
     /// No peer: 144 cloth flames (node defaults), a frame's sub-steps + render 1280×720, per frame.
@@ -64,6 +67,7 @@ fn main() {
         Op::Train(a) => eigen::train(&a, t),
         Op::Cloth(a) => flames::cloth(&a, t),
         Op::Arp(a) => flames::arp(&a, t),
+        Op::Smoke(a) => smoke::smoke(&a, t),
         Op::Particles(a) => solo::particles(&a, t),
         Op::ClothFrame(a) => solo::cloth_frame(&a, t),
         Op::Cube(a) => solo::cube(&a, t),

@@ -54,15 +54,15 @@ pub struct Forces<'a> {
 /// Adds `dt` seconds of every force to the velocity.
 pub fn apply(state: &mut SimState, p: &StepParams, f: &Forces, dt: f32) {
     buoyancy(state, p, dt);
-    let centred = state.centred_velocity();
-    let mut accel = vec![Vec3::ZERO; centred.len()];
-    if p.vorticity > 0.0 {
-        confinement(state, &centred, p.vorticity, &mut accel);
-    }
-    if p.turbulence > 0.0 {
-        turbulence(state, f.turbulence, p.turbulence, f.time, &mut accel);
-    }
+    // The centred forces cost a velocity interpolation and an acceleration field: only when used.
     if p.vorticity > 0.0 || p.turbulence > 0.0 {
+        let mut accel = vec![Vec3::ZERO; state.top.voxels()];
+        if p.vorticity > 0.0 {
+            confinement(state, &state.centred_velocity(), p.vorticity, &mut accel);
+        }
+        if p.turbulence > 0.0 {
+            turbulence(state, f.turbulence, p.turbulence, f.time, &mut accel);
+        }
         add_centred(state, &accel, dt);
     }
     if let Some(w) = f.wind.filter(|_| p.wind_drag > 0.0) {

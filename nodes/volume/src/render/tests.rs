@@ -1,0 +1,159 @@
+//! `volume.render` against what it must obey: Beer–Lambert attenuation of the background, shadows
+//! cast through the smoke, an empty volume showing the background, and bad input as errors naming
+//! the port.
+
+use std::sync::Arc;
+
+use glam::{IVec3, Vec3, Vec4};
+use pyrograph_core::{Cook, CookCtx, Image};
+use pyrograph_render::ports::CameraPorts;
+use pyrograph_render::{Camera, Particle, Particles, View};
+
+use super::light::{Light, LightKind};
+use super::march::{Look, render};
+use super::{Render, no_lights};
+use crate::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS, Volume};
+
+const H: f64 = 0.05;
+
+/// A volume over the bricks `lo..=hi` whose density at voxel `v` is `density(v)`.
+fn volume(lo: IVec3, hi: IVec3, density: impl Fn(IVec3) -> f32) -> Volume {
+    let mut coords = Vec::new();
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                coords.push(IVec3::new(x, y, z));
+            }
+        }
+    }
+    let top = Topology::new(coords);
+    let mut d = vec![0.0; top.voxels()];
+    for (b, c) in top.coords().iter().enumerate() {
+        for i in 0..VOXELS {
+            d[b * VOXELS + i] = density(*c * 8 + IVec3::new((i & 7) as i32, ((i >> 3) & 7) as i32, (i >> 6) as i32));
+        }
+    }
+    Volume {
+        transform: Transform { voxel_size: H, origin: [0.0; 3] },
+        topology: Arc::new(top),
+        fields: vec![Field { name: "density".into(), data: FieldData::Scalar(d) }],
+        time: 0.0,
+        stats: SimStats::default(),
+    }
+}
+
+fn look(extinction: f32) -> Look {
+    Look {
+        extinction,
+        albedo: Vec3::splat(0.9),
+        anisotropy: 0.0,
+        ambient: Vec3::ZERO,
+        exposure: 0.0,
+        glow: 0.0,
+        kelvin: [1000.0, 2600.0],
+        step: 0.5,
+        background: Vec4::ONE,
+        seed: 7,
+    }
+}
+
+/// A camera far down +z looking along −z at world point `at`, `size` pixels square, narrow.
+fn front(at: Vec3, size: u32, fov: f32) -> View {
+    let camera = Camera::new(at + Vec3::Z * 40.0, at, Vec3::Y, fov, 1.0, 100.0).unwrap();
+    View::new(camera, size, size).unwrap()
+}
+
+fn pixel(img: &Image, x: u32, y: u32) -> Vec4 {
+    let w = img.width() as usize;
+    let at = (y as usize * w + x as usize) * 4;
+    Vec4::from_slice(&img.data()[at..at + 4])
+}
+
+#[test]
+fn a_constant_density_attenuates_the_background_by_beer_lambert() {
+    // Density 0.09375 in bricks z = 1..=4 (32 voxels deep), empty active bricks on either side so the
+    // interpolated density is integrated whole: optical depth 8 × 0.09375 × 32 × 0.05 = 1.2.
+    let v = volume(IVec3::new(0, 0, 0), IVec3::new(1, 1, 5), |p| if (8..40).contains(&p.z) { 0.093_75 } else { 0.0 });
+    let centre = Vec3::new(8.0, 8.0, 0.0) * H as f32;
+    let img = render(&v, &front(centre, 9, 2.0), &[], &look(8.0));
+    let seen = pixel(&img, 4, 4);
+    let want = (-1.2f32).exp();
+    println!("transmittance through optical depth 1.2: {} (Beer–Lambert {want})", seen.x);
+    assert!(((seen.x - want) / want).abs() < 0.01, "{} vs {want}", seen.x);
+    assert!(seen.x == seen.y && seen.y == seen.z && seen.w == 1.0);
+    // Twice the density: the square of the transmittance.
+    let dense = volume(IVec3::new(0, 0, 0), IVec3::new(1, 1, 5), |p| if (8..40).contains(&p.z) { 0.1875 } else { 0.0 });
+    let twice = pixel(&render(&dense, &front(centre, 9, 2.0), &[], &look(8.0)), 4, 4);
+    assert!(((twice.x - want * want) / (want * want)).abs() < 0.02, "{} vs {}", twice.x, want * want);
+}
+
+#[test]
+fn a_dense_puff_between_the_sun_and_a_thin_plume_shadows_the_plume() {
+    // A thin plume around x = 8 voxels, the sun along +x, and (or not) a dense puff at x ≈ 40.
+    let plume = |p: IVec3| if (p - IVec3::new(8, 8, 8)).abs().max_element() <= 3 { 0.2 } else { 0.0 };
+    let puff = |p: IVec3| if (p - IVec3::new(40, 8, 8)).abs().max_element() <= 5 { 4.0 } else { 0.0 };
+    let (lo, hi) = (IVec3::new(0, 0, 0), IVec3::new(6, 1, 1));
+    let alone = volume(lo, hi, plume);
+    let shadowed = volume(lo, hi, |p| plume(p) + puff(p));
+    let mut l = look(8.0);
+    l.background = Vec4::new(0.0, 0.0, 0.0, 1.0);
+    let sun = [Light { kind: LightKind::Directional(Vec3::X), color: Vec3::splat(3.0) }];
+    // Looking at the plume only (the puff is out of the narrow view).
+    let view = front(Vec3::splat(8.0 * H as f32), 5, 1.0);
+    let lit = pixel(&render(&alone, &view, &sun, &l), 2, 2);
+    let dark = pixel(&render(&shadowed, &view, &sun, &l), 2, 2);
+    println!("the plume lit {} and in the puff's shadow {}", lit.x, dark.x);
+    assert!(lit.x > 0.02, "the sun lights the plume: {lit}");
+    assert!(dark.x < 0.05 * lit.x, "the puff's shadow: {dark} against {lit}");
+}
+
+#[test]
+fn an_empty_volume_renders_the_background() {
+    let v = Volume::empty(H);
+    let mut l = look(8.0);
+    l.background = Vec4::new(0.2, 0.3, 0.4, 1.0);
+    let img = render(&v, &front(Vec3::ZERO, 6, 30.0), &[], &l);
+    assert!(img.data().chunks(4).all(|p| p == [0.2, 0.3, 0.4, 1.0]));
+}
+
+fn node(v: Volume) -> Render {
+    Render {
+        volume: Arc::new(v),
+        lights: no_lights(),
+        camera: CameraPorts::looking(16, 9, [0.4, 0.4, 6.0], [0.4, 0.4, 0.0]),
+        extinction: 8.0,
+        albedo: [0.85; 3],
+        anisotropy: 0.3,
+        ambient: [0.05; 3],
+        sun_direction: [0.5, 1.0, 0.3],
+        sun_color: [1.0; 3],
+        exposure: 8.0,
+        glow: 0.1,
+        kelvin_cold: 1000.0,
+        kelvin_hot: 2600.0,
+        fire_light: 1.0,
+        step_size: 0.5,
+        background: [0.0, 0.0, 0.0, 1.0],
+    }
+}
+
+#[test]
+fn bad_lights_directions_and_densities_are_errors_naming_the_port() {
+    let blob = || volume(IVec3::ZERO, IVec3::ONE, |p| if p.x < 4 { 0.5 } else { 0.0 });
+    let ctx = CookCtx::new();
+    let mut n = node(blob());
+    n.lights = Arc::new(Particles {
+        particles: vec![Particle { position: [0.0, f32::NAN, 0.0], weight: 1.0, ..Particle::default() }],
+        ..Particles::default()
+    });
+    let e = n.cook(&ctx).err().expect("a NaN light is refused").to_string();
+    assert!(e.contains("lights") && e.contains("light 0"), "{e}");
+    let mut n = node(blob());
+    n.sun_direction = [0.0; 3];
+    let e = n.cook(&ctx).err().expect("no sun direction").to_string();
+    assert!(e.contains("sun_direction"), "{e}");
+    let e = node(volume(IVec3::ZERO, IVec3::ONE, |p| if p.x == 3 { -0.5 } else { 0.0 })).cook(&ctx).err().expect("negative");
+    assert!(e.to_string().contains("volume") && e.to_string().contains("negative"), "{e}");
+    let out = node(blob()).cook(&ctx).expect("a good volume renders");
+    assert_eq!((out.image.width(), out.image.height()), (16, 9));
+}

@@ -90,17 +90,21 @@ impl<'a> Sampler<'a> {
         self.top.find(brick_of(p.round().as_ivec3())).map(|b| b as usize)
     }
 
+    /// [`Sampler::brick`] through a one-brick memo: successive samples along a ray fall in the
+    /// same brick several times running, and each look-up saved is a hash probe.
+    #[inline]
+    pub fn brick_cached(&self, p: Vec3, memo: &mut (IVec3, Option<usize>)) -> Option<usize> {
+        let c = brick_of(p.round().as_ivec3());
+        if c != memo.0 {
+            *memo = (c, self.top.find(c).map(|b| b as usize));
+        }
+        memo.1
+    }
+
     /// The value at index-space point `p`, looked up from brick `b` (the brick of [`Sampler::brick`]).
     #[inline]
     pub fn at(&self, b: usize, p: Vec3) -> f32 {
         corners(self.top, b, p).sample(self.field)
-    }
-
-    /// The value at world point `w`.
-    #[inline]
-    pub fn world(&self, w: Vec3) -> f32 {
-        let p = self.index(w);
-        self.brick(p).map_or(0.0, |b| self.at(b, p))
     }
 }
 
@@ -127,8 +131,10 @@ pub fn transmittance(v: &Volume, density: &[f32], extinction: f32, light: &Light
             // centre).
             let mut s = 0.5 * step;
             let mut depth = 0.0;
+            let mut memo = (IVec3::MAX, None);
             while s < exit {
-                depth += sampler.world(p + dir * s);
+                let q = sampler.index(p + dir * s);
+                depth += sampler.brick_cached(q, &mut memo).map_or(0.0, |b| sampler.at(b, q));
                 if depth * step * extinction > 12.0 {
                     break;
                 }

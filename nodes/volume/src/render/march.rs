@@ -54,7 +54,8 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
     let density = v.scalar("density");
     let shadow_fields: Vec<Vec<f32>> = match density {
         Some(d) => {
-            let step = look.step.max(0.25) * v.transform.voxel_size as f32;
+            // Shadows are smooth: a voxel's step toward the light is enough.
+            let step = look.step.max(1.0) * v.transform.voxel_size as f32;
             lights.iter().map(|l| transmittance(v, d, look.extinction, l, step)).collect()
         }
         None => Vec::new(),
@@ -123,6 +124,7 @@ fn march(
     let mut k = 0u64;
     let start = t0 + jitter * step;
     let brick_world = h * DIM as f32;
+    let mut memo = (glam::IVec3::MAX, None);
     loop {
         let t = start + k as f32 * step;
         if t >= t1 || transmit < 1e-3 {
@@ -132,7 +134,7 @@ fn march(
         let sampler = f.density.as_ref().or(f.flame.as_ref()).or(f.temperature.as_ref());
         let Some(s) = sampler else { break };
         let ip = s.index(p);
-        let Some(b) = s.brick(ip) else {
+        let Some(b) = s.brick_cached(ip, &mut memo) else {
             // An inactive brick: skip to where the ray leaves its 8³ cell.
             let cell = (ip + 0.5).div_euclid(Vec3::splat(DIM as f32));
             let lo = s.origin_world() + (cell * DIM as f32 - 0.5) * h;

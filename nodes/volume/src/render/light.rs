@@ -10,7 +10,7 @@ use std::f32::consts::PI;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::grid::sample::corners;
+use crate::grid::sample::{Corners, corners};
 use crate::grid::{Topology, VOXELS, Volume, brick_of};
 
 /// Where a light is.
@@ -99,6 +99,13 @@ impl<'a> Sampler<'a> {
             *memo = (c, self.top.find(c).map(|b| b as usize));
         }
         memo.1
+    }
+
+    /// The eight voxels around index-space point `p` and their weights, looked up from brick `b`
+    /// (the brick of [`Sampler::brick`]): they read any field on the same bricks.
+    #[inline]
+    pub fn corners(&self, b: usize, p: Vec3) -> Corners {
+        corners(self.top, b, p)
     }
 
     /// The value at index-space point `p`, looked up from brick `b` (the brick of [`Sampler::brick`]).

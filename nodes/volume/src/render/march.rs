@@ -41,12 +41,14 @@ pub struct Look {
     pub seed: u64,
 }
 
-/// The fields a march reads.
+/// The fields a march reads, all on the volume's bricks (so one sample's eight corners serve
+/// every field), and the sampler that finds those corners.
 struct Fields<'a> {
-    density: Option<Sampler<'a>>,
-    temperature: Option<Sampler<'a>>,
-    flame: Option<Sampler<'a>>,
-    shadows: Vec<Sampler<'a>>,
+    at: Sampler<'a>,
+    density: Option<&'a [f32]>,
+    temperature: Option<&'a [f32]>,
+    flame: Option<&'a [f32]>,
+    shadows: Vec<&'a [f32]>,
 }
 
 /// Renders `v` seen through `view`, lit by `lights`. Transmittances are precomputed per light.
@@ -61,10 +63,11 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
         None => Vec::new(),
     };
     let fields = Fields {
-        density: density.map(|d| Sampler::new(v, d)),
-        temperature: v.scalar("temperature").map(|t| Sampler::new(v, t)),
-        flame: v.scalar("flame").map(|f| Sampler::new(v, f)),
-        shadows: shadow_fields.iter().map(|s| Sampler::new(v, s)).collect(),
+        at: Sampler::new(v, &[]),
+        density,
+        temperature: v.scalar("temperature"),
+        flame: v.scalar("flame"),
+        shadows: shadow_fields.iter().map(|s| s.as_slice()).collect(),
     };
     let table = Table::new(look.kelvin[0].min(look.kelvin[1]).max(100.0), look.kelvin[0].max(look.kelvin[1]).max(101.0));
     let (w, h) = (view.width() as usize, view.height() as usize);
@@ -131,8 +134,10 @@ fn march(
             break;
         }
         let p = origin + d * t;
-        let sampler = f.density.as_ref().or(f.flame.as_ref()).or(f.temperature.as_ref());
-        let Some(s) = sampler else { break };
+        if f.density.is_none() && f.flame.is_none() && f.temperature.is_none() {
+            break;
+        }
+        let s = &f.at;
         let ip = s.index(p);
         let Some(b) = s.brick_cached(ip, &mut memo) else {
             // An inactive brick: skip to where the ray leaves its 8³ cell.
@@ -143,9 +148,10 @@ fn march(
             continue;
         };
         k += 1;
-        let density = f.density.as_ref().map_or(0.0, |s| s.at(b, ip).max(0.0));
-        let temperature = f.temperature.as_ref().map_or(0.0, |s| s.at(b, ip).max(0.0));
-        let flame = f.flame.as_ref().map_or(0.0, |s| s.at(b, ip).max(0.0));
+        let c = s.corners(b, ip);
+        let density = f.density.map_or(0.0, |d| c.sample(d).max(0.0));
+        let temperature = f.temperature.map_or(0.0, |t| c.sample(t).max(0.0));
+        let flame = f.flame.map_or(0.0, |fl| c.sample(fl).max(0.0));
         let sigma = look.extinction * density;
         let strength = flame + look.glow * temperature;
         let emitted = if strength > 0.0 {
@@ -160,7 +166,7 @@ fn march(
             for (light, shadow) in lights.iter().zip(&f.shadows) {
                 let (to_light, strength) = light.toward(p, h);
                 // The light travels along −to_light and leaves toward the camera along −d.
-                inscatter += strength * shadow.at(b, ip) * henyey_greenstein(to_light.dot(d), look.anisotropy);
+                inscatter += strength * c.sample(shadow) * henyey_greenstein(to_light.dot(d), look.anisotropy);
             }
             scattered = look.albedo * sigma * inscatter;
         }

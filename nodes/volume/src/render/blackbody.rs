@@ -75,8 +75,11 @@ impl Table {
     /// Entries of the table.
     const SIZE: usize = 256;
 
-    /// The colours from `lo` to `hi` kelvin (`lo < hi`, both positive).
+    /// The colours from `lo` to `hi` kelvin (in either order; the range is at least a kelvin wide,
+    /// so equal ends give one colour rather than a division by zero).
     pub fn new(lo: f32, hi: f32) -> Table {
+        let (lo, hi) = (lo.min(hi).max(1.0), hi.max(lo).max(1.0));
+        let hi = hi.max(lo + 1.0);
         let colours =
             (0..Self::SIZE).map(|i| rgb(f64::from(lo) + f64::from(hi - lo) * i as f64 / (Self::SIZE - 1) as f64)).collect();
         Table { lo, hi, colours }
@@ -136,5 +139,8 @@ mod tests {
             assert!((table.at(k) - rgb(f64::from(k))).abs().max_element() < 2e-3 * rgb(f64::from(k)).max_element());
         }
         assert_eq!(table.at(100.0), table.at(1000.0));
+        // Equal ends (an artist's single flame colour) read that colour, not NaN.
+        let one = Table::new(1800.0, 1800.0);
+        assert!(one.at(1800.0).is_finite() && (one.at(1800.0) - rgb(1800.0)).abs().max_element() < 1e-3);
     }
 }

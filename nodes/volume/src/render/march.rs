@@ -69,7 +69,7 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
         flame: v.scalar("flame"),
         shadows: shadow_fields.iter().map(|s| s.as_slice()).collect(),
     };
-    let table = Table::new(look.kelvin[0].min(look.kelvin[1]).max(100.0), look.kelvin[0].max(look.kelvin[1]).max(101.0));
+    let table = Table::new(look.kelvin[0], look.kelvin[1]);
     let (w, h) = (view.width() as usize, view.height() as usize);
     let inverse = view.view_proj().inverse();
     let bounds = v

@@ -84,14 +84,9 @@ impl<'a> Sampler<'a> {
         (w - self.origin) * self.inv_h
     }
 
-    /// The brick holding index-space point `p`'s nearest voxel, if active.
-    #[inline]
-    pub fn brick(&self, p: Vec3) -> Option<usize> {
-        self.top.find(brick_of(p.round().as_ivec3())).map(|b| b as usize)
-    }
-
-    /// [`Sampler::brick`] through a one-brick memo: successive samples along a ray fall in the
-    /// same brick several times running, and each look-up saved is a hash probe.
+    /// The brick holding index-space point `p`'s nearest voxel, if active, through a one-brick
+    /// memo: successive samples along a ray fall in the same brick several times running, and
+    /// each look-up saved is a hash probe.
     #[inline]
     pub fn brick_cached(&self, p: Vec3, memo: &mut (IVec3, Option<usize>)) -> Option<usize> {
         let c = brick_of(p.round().as_ivec3());
@@ -102,13 +97,13 @@ impl<'a> Sampler<'a> {
     }
 
     /// The eight voxels around index-space point `p` and their weights, looked up from brick `b`
-    /// (the brick of [`Sampler::brick`]): they read any field on the same bricks.
+    /// (the brick of [`Sampler::brick_cached`]): they read any field on the same bricks.
     #[inline]
     pub fn corners(&self, b: usize, p: Vec3) -> Corners {
         corners(self.top, b, p)
     }
 
-    /// The value at index-space point `p`, looked up from brick `b` (the brick of [`Sampler::brick`]).
+    /// The value at index-space point `p`, looked up from brick `b` (the brick of [`Sampler::brick_cached`]).
     #[inline]
     pub fn at(&self, b: usize, p: Vec3) -> f32 {
         corners(self.top, b, p).sample(self.field)

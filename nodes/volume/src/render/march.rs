@@ -63,6 +63,7 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
         None => Vec::new(),
     };
     let fields = Fields {
+        // Locates samples only (index, brick, corners): its own field is never read.
         at: Sampler::new(v, &[]),
         density,
         temperature: v.scalar("temperature"),
@@ -72,9 +73,12 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
     let table = Table::new(look.kelvin[0], look.kelvin[1]);
     let (w, h) = (view.width() as usize, view.height() as usize);
     let inverse = view.view_proj().inverse();
+    // Nothing to march without a field that absorbs or emits: the background alone.
+    let shows = density.is_some() || fields.temperature.is_some() || fields.flame.is_some();
     let bounds = v
         .topology
         .voxel_bounds()
+        .filter(|_| shows)
         .map(|(lo, hi)| (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5)));
     let mut data = vec![0.0f32; w * h * 4];
     data.par_chunks_mut(w * 4).enumerate().for_each(|(row, out)| {
@@ -134,9 +138,6 @@ fn march(
             break;
         }
         let p = origin + d * t;
-        if f.density.is_none() && f.flame.is_none() && f.temperature.is_none() {
-            break;
-        }
         let s = &f.at;
         let ip = s.index(p);
         let Some(b) = s.brick_cached(ip, &mut memo) else {

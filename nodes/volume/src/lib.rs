@@ -27,4 +27,5 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<vdb::nodes::LoadVdb>();
     registry.declare::<preview::Preview>();
     registry.declare::<render::Render>();
+    registry.declare::<render::sixway::RenderSixway>();
 }

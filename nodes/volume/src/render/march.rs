@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::blackbody::Table;
 use super::light::{Light, Sampler, exit_distance, henyey_greenstein, transmittance};
-use crate::grid::{DIM, Volume};
+use crate::grid::{DIM, NONE, Volume};
 
 /// How the volume looks.
 #[derive(Clone, Debug)]
@@ -41,6 +41,77 @@ pub struct Look {
     pub seed: u64,
 }
 
+/// Light groups a render keeps apart: the beauty adds every light into group 0; the six-way maps
+/// keep one light per axis direction.
+pub const GROUPS: usize = 6;
+
+/// What one ray gathers in front of whatever is behind the volume.
+#[derive(Clone, Copy, Debug)]
+pub struct Gathered {
+    /// Light of the sun and point lights scattered toward the camera, per light group.
+    pub scattered: [Vec3; GROUPS],
+    /// Ambient light scattered toward the camera.
+    pub ambient: Vec3,
+    /// The fire's emitted light reaching the camera.
+    pub emitted: Vec3,
+    /// The fraction of what is behind that reaches the camera.
+    pub transmit: f32,
+    /// Distance along the ray (from the near plane) where the opacity first reached one half.
+    pub depth: f32,
+    /// Opacity-weighted sums of the world position and of the velocity, and the weights' sum.
+    pub motion: (Vec3, Vec3, f32),
+}
+
+impl Gathered {
+    fn new() -> Gathered {
+        Gathered {
+            scattered: [Vec3::ZERO; GROUPS],
+            ambient: Vec3::ZERO,
+            emitted: Vec3::ZERO,
+            transmit: 1.0,
+            depth: f32::INFINITY,
+            motion: (Vec3::ZERO, Vec3::ZERO, 0.0),
+        }
+    }
+
+    /// All the light the volume sends toward the camera.
+    pub fn light(&self) -> Vec3 {
+        self.scattered.iter().sum::<Vec3>() + self.ambient + self.emitted
+    }
+}
+
+/// A ray: where it leaves the near plane and its unit direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// On the near plane.
+    pub origin: Vec3,
+    /// Unit direction.
+    pub direction: Vec3,
+}
+
+/// An opaque surface seen through a pixel (a mesh drawn by the rasterizer): how far along the
+/// ray (from the near plane) and its colour.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    /// Distance from the near plane along the pixel's ray; infinite where no surface is.
+    pub distance: f32,
+    /// Its (lit) colour.
+    pub colour: Vec3,
+}
+
+/// What a render sees besides the volume: lights (each in a group), surfaces per pixel (row
+/// major), and whether to gather the velocity for motion vectors.
+pub struct Scene<'a> {
+    /// The lights.
+    pub lights: &'a [Light],
+    /// Each light's group (below [`GROUPS`]); empty puts every light in group 0.
+    pub groups: &'a [usize],
+    /// Opaque surfaces, one per pixel, if any.
+    pub surfaces: Option<&'a [Surface]>,
+    /// Gather the velocity field ("vel") for motion vectors.
+    pub motion: bool,
+}
+
 /// The fields a march reads, all on the volume's bricks (so one sample's eight corners serve
 /// every field), and the sampler that finds those corners.
 struct Fields<'a> {
@@ -48,27 +119,53 @@ struct Fields<'a> {
     density: Option<&'a [f32]>,
     temperature: Option<&'a [f32]>,
     flame: Option<&'a [f32]>,
-    shadows: Vec<&'a [f32]>,
+    velocity: Option<&'a [[f32; 3]]>,
+    /// Per light: its transmittance volume and its group.
+    shadows: Vec<(&'a [f32], usize)>,
 }
 
-/// Renders `v` seen through `view`, lit by `lights`. Transmittances are precomputed per light.
+/// Renders `v` seen through `view`, lit by `lights`, over the look's background: the beauty
+/// frame (straight RGBA).
 pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
+    let scene = Scene { lights, groups: &[], surfaces: None, motion: false };
+    let data = gather(v, view, &scene, look, |g, _, _| {
+        let bg = look.background;
+        let c = g.light() + bg.truncate() * bg.w * g.transmit;
+        let alpha = 1.0 - g.transmit * (1.0 - bg.w);
+        let straight = if alpha > 0.0 { c / alpha } else { Vec3::ZERO };
+        [straight.x, straight.y, straight.z, alpha]
+    });
+    Image::from_vec(view.width(), view.height(), Channels::Rgba, data.into_flattened())
+        .unwrap_or_else(|| Image::new(view.width(), view.height(), Channels::Rgba))
+}
+
+/// Marches every pixel of `view` through `v` and maps what each ray gathered (and the surface
+/// behind it, if any) to `C` values, row major. Transmittances are precomputed per light.
+pub fn gather<const C: usize>(
+    v: &Volume,
+    view: &View,
+    scene: &Scene,
+    look: &Look,
+    map: impl Fn(&Gathered, Option<&Surface>, Ray) -> [f32; C] + Sync,
+) -> Vec<[f32; C]> {
     let density = v.scalar("density");
     let shadow_fields: Vec<Vec<f32>> = match density {
         Some(d) => {
             // Shadows are smooth: a voxel's step toward the light is enough.
             let step = look.step.max(1.0) * v.transform.voxel_size as f32;
-            lights.iter().map(|l| transmittance(v, d, look.extinction, l, step)).collect()
+            scene.lights.iter().map(|l| transmittance(v, d, look.extinction, l, step)).collect()
         }
         None => Vec::new(),
     };
+    let group = |k: usize| scene.groups.get(k).copied().unwrap_or(0).min(GROUPS - 1);
     let fields = Fields {
         // Locates samples only (index, brick, corners): its own field is never read.
         at: Sampler::new(v, &[]),
         density,
         temperature: v.scalar("temperature"),
         flame: v.scalar("flame"),
-        shadows: shadow_fields.iter().map(|s| s.as_slice()).collect(),
+        velocity: v.vector("vel").filter(|_| scene.motion),
+        shadows: shadow_fields.iter().enumerate().map(|(k, s)| (s.as_slice(), group(k))).collect(),
     };
     let table = Table::new(look.kelvin[0], look.kelvin[1]);
     let (w, h) = (view.width() as usize, view.height() as usize);
@@ -80,35 +177,33 @@ pub fn render(v: &Volume, view: &View, lights: &[Light], look: &Look) -> Image {
         .voxel_bounds()
         .filter(|_| shows)
         .map(|(lo, hi)| (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5)));
-    let mut data = vec![0.0f32; w * h * 4];
-    data.par_chunks_mut(w * 4).enumerate().for_each(|(row, out)| {
-        for (col, px) in out.chunks_mut(4).enumerate() {
+    let mut data = vec![[0.0f32; C]; w * h];
+    data.par_chunks_mut(w).enumerate().for_each(|(row, out)| {
+        for (col, px) in out.iter_mut().enumerate() {
             let ndc = |z: f32| {
                 let x = (col as f32 + 0.5) / w as f32 * 2.0 - 1.0;
                 let y = 1.0 - (row as f32 + 0.5) / h as f32 * 2.0;
                 inverse.project_point3(Vec3::new(x, y, z))
             };
+            let surface = scene.surfaces.map(|s| &s[row * w + col]).filter(|s| s.distance.is_finite());
             let (near, far) = (ndc(0.0), ndc(1.0));
-            let (colour, transmit) = match bounds {
+            let gathered = match bounds {
                 Some((lo, hi)) => {
                     let jitter = hash01(look.seed, row as u64, col as u64);
-                    march(v, &fields, lights, look, &table, (near, far), (lo, hi), jitter)
+                    let stop = surface.map_or(f32::INFINITY, |s| s.distance);
+                    march(v, &fields, scene.lights, look, &table, (near, far, stop), (lo, hi), jitter)
                 }
-                None => (Vec3::ZERO, 1.0),
+                None => Gathered::new(),
             };
-            let bg = look.background;
-            let c = colour + bg.truncate() * bg.w * transmit;
-            let alpha = 1.0 - transmit * (1.0 - bg.w);
-            let straight = if alpha > 0.0 { c / alpha } else { Vec3::ZERO };
-            px.copy_from_slice(&[straight.x, straight.y, straight.z, alpha]);
+            let ray = Ray { origin: near, direction: (far - near).normalize_or(Vec3::NEG_Z) };
+            *px = map(&gathered, surface, ray);
         }
     });
-    Image::from_vec(view.width(), view.height(), Channels::Rgba, data)
-        .unwrap_or_else(|| Image::new(view.width(), view.height(), Channels::Rgba))
+    data
 }
 
-/// The light a ray from `segment.0` to `segment.1` gathers through the box `bounds`, and the
-/// fraction of what is behind that reaches the camera.
+/// What a ray from `segment.0` toward `segment.1`, stopped at distance `segment.2` (an opaque
+/// surface), gathers through the box `bounds`.
 #[allow(clippy::too_many_arguments)]
 fn march(
     v: &Volume,
@@ -116,25 +211,25 @@ fn march(
     lights: &[Light],
     look: &Look,
     table: &Table,
-    segment: (Vec3, Vec3),
+    segment: (Vec3, Vec3, f32),
     bounds: (Vec3, Vec3),
     jitter: f32,
-) -> (Vec3, f32) {
-    let (origin, end) = segment;
+) -> Gathered {
+    let (origin, end, stop) = segment;
     let length = (end - origin).length();
     let d = (end - origin) / length.max(1e-30);
-    let Some((t0, t1)) = slab(origin, d, bounds.0, bounds.1) else { return (Vec3::ZERO, 1.0) };
-    let (t0, t1) = (t0.max(0.0), t1.min(length));
+    let mut g = Gathered::new();
+    let Some((t0, t1)) = slab(origin, d, bounds.0, bounds.1) else { return g };
+    let (t0, t1) = (t0.max(0.0), t1.min(length).min(stop));
     let h = v.transform.voxel_size as f32;
     let step = look.step * h;
-    let (mut colour, mut transmit) = (Vec3::ZERO, 1.0f32);
     let mut k = 0u64;
     let start = t0 + jitter * step;
     let brick_world = h * DIM as f32;
     let mut memo = (glam::IVec3::MAX, None);
     loop {
         let t = start + k as f32 * step;
-        if t >= t1 || transmit < 1e-3 {
+        if t >= t1 || g.transmit < 1e-3 {
             break;
         }
         let p = origin + d * t;
@@ -149,36 +244,50 @@ fn march(
             continue;
         };
         k += 1;
+        // The last step ends at the surface, if one stops the ray inside the volume.
+        let dt = step.min(t1 - t);
         let c = s.corners(b, ip);
         let density = f.density.map_or(0.0, |d| c.sample(d).max(0.0));
         let temperature = f.temperature.map_or(0.0, |t| c.sample(t).max(0.0));
         let flame = f.flame.map_or(0.0, |fl| c.sample(fl).max(0.0));
         let sigma = look.extinction * density;
         let strength = flame + look.glow * temperature;
-        let emitted = if strength > 0.0 {
-            let kelvin = look.kelvin[0] + (look.kelvin[1] - look.kelvin[0]) * temperature;
-            table.at(kelvin) * (look.exposure * strength)
-        } else {
-            Vec3::ZERO
-        };
-        let mut scattered = Vec3::ZERO;
-        if sigma > 0.0 {
-            let mut inscatter = look.ambient;
-            for (light, shadow) in lights.iter().zip(&f.shadows) {
-                let (to_light, strength) = light.toward(p, h);
-                // The light travels along −to_light and leaves toward the camera along −d.
-                inscatter += strength * c.sample(shadow) * henyey_greenstein(to_light.dot(d), look.anisotropy);
-            }
-            scattered = look.albedo * sigma * inscatter;
-        }
         // A homogeneous segment: the source (scattering + emission) integrated against its own
         // attenuation, exactly.
-        let a = (-sigma * step).exp();
-        let through = if sigma > 1e-8 { (1.0 - a) / sigma } else { step };
-        colour += transmit * (scattered + emitted) * through;
-        transmit *= a;
+        let a = (-sigma * dt).exp();
+        let through = g.transmit * if sigma > 1e-8 { (1.0 - a) / sigma } else { dt };
+        if strength > 0.0 {
+            let kelvin = look.kelvin[0] + (look.kelvin[1] - look.kelvin[0]) * temperature;
+            g.emitted += table.at(kelvin) * (look.exposure * strength * through);
+        }
+        if sigma > 0.0 {
+            let scatter = look.albedo * (sigma * through);
+            g.ambient += scatter * look.ambient;
+            for (light, (shadow, group)) in lights.iter().zip(&f.shadows) {
+                let (to_light, strength) = light.toward(p, h);
+                // The light travels along −to_light and leaves toward the camera along −d.
+                let phase = henyey_greenstein(to_light.dot(d), look.anisotropy);
+                g.scattered[*group] += scatter * strength * (c.sample(shadow) * phase);
+            }
+            let opacity = g.transmit * (1.0 - a);
+            if let Some(vel) = f.velocity {
+                let mut u = Vec3::ZERO;
+                for (at, w) in c.at.iter().zip(c.w) {
+                    if *at != NONE {
+                        u += Vec3::from_array(vel[*at as usize]) * w;
+                    }
+                }
+                g.motion.0 += p * opacity;
+                g.motion.1 += u * opacity;
+                g.motion.2 += opacity;
+            }
+            if g.transmit * a <= 0.5 && g.depth.is_infinite() {
+                g.depth = t;
+            }
+        }
+        g.transmit *= a;
     }
-    (colour, transmit)
+    g
 }
 
 /// Where a ray from `o` along unit `d` enters and leaves the box `lo..hi`, if it meets it.

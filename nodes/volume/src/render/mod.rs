@@ -4,8 +4,10 @@
 //! blackbody colours in [`blackbody`].
 
 pub mod blackbody;
+pub mod compose;
 pub mod light;
 pub mod march;
+pub mod sixway;
 
 #[cfg(test)]
 mod tests;
@@ -14,12 +16,15 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 use pyrograph_core::{Cook, CookCtx, Image, NodeError, port};
+use pyrograph_nodes_particles::lit_mesh::MeshShading;
+use pyrograph_nodes_particles::types::Mesh;
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Particle, Particles};
 
 use crate::grid::Volume;
+use compose::{PassMap, VolumePass, mesh_surfaces};
 use light::{Light, LightKind};
-use march::Look;
+use march::{Look, Scene};
 
 fn no_lights() -> Arc<Particles> {
     Arc::new(Particles::default())
@@ -32,13 +37,21 @@ pyrograph_core::node! {
     /// glow once, shadowed through the smoke (a transmittance volume per light) with a Henyey–Greenstein phase
     /// function, plus an unshadowed ambient light; flame and heat glow in blackbody colours (Planck's law,
     /// `temperature` 0 and 1 at `kelvin_cold` and `kelvin_hot`). Steps of `step_size` voxels, jittered per pixel,
-    /// skip empty bricks and stop once a ray is opaque. RGBA, straight alpha, over `background`.
+    /// skip empty bricks and stop once a ray is opaque. An opaque mesh (the burning house) hides the smoke
+    /// behind it and is seen through the smoke in front of it, lit by the sun, the lights and the fire's own
+    /// light. RGBA, straight alpha, over `background`; `pass` draws a compositor's layer instead (emission,
+    /// scattering, alpha, depth, motion vectors from the velocity field): render each pass with its own node
+    /// and write them with imaging.write_exr_layers.
     #[node("volume.render", "Volume", PerFrame)]
     pub struct Render {
         /// The volume (volume.simulate, volume.load_vdb): density, temperature and flame fields.
         volume: Arc<Volume>,
         /// Point lights (particles.flame_lights: position, colour, intensity); default none.
         lights: Arc<Particles> = no_lights(),
+        /// An opaque mesh seen with the volume (particles.mesh_load); default none.
+        mesh: Arc<Mesh> = Arc::new(Mesh::default()),
+        /// The mesh's albedo.
+        mesh_color: [f32; 4] = [0.3, 0.2, 0.14, 1.0],
         /// The camera.
         camera: CameraPorts = CameraPorts::looking(640, 360, [0.0, 3.0, 8.0], [0.0, 2.4, 0.0]),
         /// Smoke extinction per unit of density per world unit.
@@ -76,6 +89,11 @@ pyrograph_core::node! {
         step_size: f32 = 0.5,
         /// Background colour (straight RGBA).
         background: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
+        /// What to draw: the frame or one compositing pass.
+        pass: VolumePass = VolumePass::Beauty,
+        /// Frames per second, for the motion pass's pixels per frame.
+        #[range(0.001, 1e4)]
+        frame_rate: f64 = 24.0,
     }
     pub struct RenderOut {
         /// The rendered frame (RGBA, straight alpha).
@@ -93,6 +111,7 @@ impl Cook for Render {
             (port!(Render, sun_color), &self.sun_color[..]),
             (port!(Render, sun_direction), &self.sun_direction[..]),
             (port!(Render, background), &self.background[..]),
+            (port!(Render, mesh_color), &self.mesh_color[..]),
         ] {
             if !finite(v) {
                 return Err(NodeError::port(name, format!("must be finite, got {v:?}")));
@@ -110,7 +129,13 @@ impl Cook for Render {
                 format!("light {k} has a non-finite position, colour or intensity"),
             ));
         }
-        check_fields(&self.volume)?;
+        check_fields(&self.volume, port!(Render, volume))?;
+        if self.mesh.normals.len() != self.mesh.triangles.len() {
+            return Err(NodeError::port(port!(Render, mesh), "the mesh has no face normals: load it with particles.mesh_load"));
+        }
+        if let Some(k) = self.mesh.positions.iter().position(|p| !finite(p)) {
+            return Err(NodeError::port(port!(Render, mesh), format!("vertex {k} has a non-finite position")));
+        }
         ctx.check_cancel()?;
         let mut lights = Vec::new();
         let sun_color = Vec3::from_array(self.sun_color);
@@ -131,11 +156,39 @@ impl Cook for Render {
             background: Vec4::from_array(self.background),
             seed: self.volume.time.to_bits(),
         };
-        Ok(RenderOut { image: Arc::new(march::render(&self.volume, &view, &lights, &look)) })
+        let surfaces = (!self.mesh.triangles.is_empty()).then(|| self.surfaces(&view, sun));
+        let scene =
+            Scene { lights: &lights, groups: &[], surfaces: surfaces.as_deref(), motion: self.pass == VolumePass::Motion };
+        let map =
+            PassMap { pass: self.pass, background: look.background, view: &view, frame_seconds: (1.0 / self.frame_rate) as f32 };
+        let pixels = march::gather(&self.volume, &view, &scene, &look, |g, s, ray| map.pixel(g, s, ray));
+        Ok(RenderOut { image: Arc::new(map.image(pixels)) })
     }
 }
 
 impl Render {
+    /// The mesh seen through each pixel, lit by the sun, the ambient light, the point lights and
+    /// the fire's own light.
+    fn surfaces(&self, view: &pyrograph_render::View, sun: Vec3) -> Vec<march::Surface> {
+        let mut lights = self.lights.particles.clone();
+        if let Some(Light { kind: LightKind::Point(at), color }) = self.fire_glow() {
+            lights.push(Particle {
+                position: at.to_array(),
+                center: color.extend(1.0).to_array(),
+                weight: 1.0,
+                ..Particle::default()
+            });
+        }
+        let mean = |c: [f32; 3]| (c[0] + c[1] + c[2]) / 3.0;
+        let shading = MeshShading {
+            albedo: Vec3::new(self.mesh_color[0], self.mesh_color[1], self.mesh_color[2]),
+            ambient: mean(self.ambient),
+            sun_direction: sun.normalize(),
+            sun: mean(self.sun_color),
+        };
+        mesh_surfaces(view, &self.mesh, &Particles { particles: lights, ..Particles::default() }, &shading)
+    }
+
     /// The fire's own light: at the flame's centroid, its intensity the flame's total.
     fn fire_glow(&self) -> Option<Light> {
         if self.fire_light <= 0.0 {
@@ -156,17 +209,17 @@ fn point_light(q: &Particle) -> Light {
 }
 
 /// The fields the march reads must be finite, and the density not negative.
-fn check_fields(v: &Volume) -> Result<(), NodeError> {
+fn check_fields(v: &Volume, port: &'static str) -> Result<(), NodeError> {
     for name in ["density", "temperature", "flame"] {
         let Some(data) = v.scalar(name) else { continue };
         if let Some(bad) = data.iter().find(|x| !x.is_finite()) {
-            return Err(NodeError::port(port!(Render, volume), format!("the volume's {name} field holds {bad}")));
+            return Err(NodeError::port(port, format!("the volume's {name} field holds {bad}")));
         }
         if name == "density"
             && let Some(min) = data.iter().copied().reduce(f32::min).filter(|m| *m < 0.0)
         {
             return Err(NodeError::port(
-                port!(Render, volume),
+                port,
                 format!("the volume's density field goes negative (down to {min}); a density is at least 0"),
             ));
         }

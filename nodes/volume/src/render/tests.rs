@@ -9,10 +9,12 @@ use pyrograph_core::{Cook, CookCtx, Image};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Camera, Particle, Particles, View};
 
+use super::compose::VolumePass;
 use super::light::{Light, LightKind};
 use super::march::{Look, render};
 use super::{Render, no_lights};
 use crate::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS, Volume};
+use pyrograph_nodes_particles::types::Mesh;
 
 const H: f64 = 0.05;
 
@@ -134,6 +136,10 @@ fn node(v: Volume) -> Render {
         fire_light: 1.0,
         step_size: 0.5,
         background: [0.0, 0.0, 0.0, 1.0],
+        mesh: Arc::new(Mesh::default()),
+        mesh_color: [0.5, 0.5, 0.5, 1.0],
+        pass: VolumePass::Beauty,
+        frame_rate: 24.0,
     }
 }
 
@@ -156,4 +162,98 @@ fn bad_lights_directions_and_densities_are_errors_naming_the_port() {
     assert!(e.to_string().contains("volume") && e.to_string().contains("negative"), "{e}");
     let out = node(blob()).cook(&ctx).expect("a good volume renders");
     assert_eq!((out.image.width(), out.image.height()), (16, 9));
+}
+
+/// A square at depth `z` facing +z, `half` wide each way, as two triangles.
+fn square(z: f32, half: f32) -> Mesh {
+    let c = Vec3::new(0.4, 0.4, z);
+    let corner = |x: f32, y: f32| (c + Vec3::new(x, y, 0.0) * half).to_array();
+    Mesh {
+        positions: vec![corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        normals: vec![[0.0, 0.0, 1.0]; 2],
+        ..Mesh::default()
+    }
+}
+
+/// The Beer–Lambert slab of the first test (optical depth 1.2 along z, world z 0.4..2.0), seen
+/// head on by [`node`]'s camera, smoke that only absorbs, and a mesh lit by a white ambient light.
+fn slab_node(mesh: Mesh) -> Render {
+    let v = volume(IVec3::new(0, 0, 0), IVec3::new(1, 1, 5), |p| if (8..40).contains(&p.z) { 0.093_75 } else { 0.0 });
+    Render {
+        mesh: Arc::new(mesh),
+        albedo: [0.0; 3],
+        ambient: [1.0; 3],
+        sun_color: [0.0; 3],
+        fire_light: 0.0,
+        exposure: 0.0,
+        glow: 0.0,
+        ..node(v)
+    }
+}
+
+#[test]
+fn a_mesh_in_front_hides_the_volume_and_one_behind_is_attenuated_by_it() {
+    let ctx = CookCtx::new();
+    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap().image, 8, 4);
+    // Lit by the ambient light alone: albedo × 1.
+    let front = centre(slab_node(square(4.0, 3.0)));
+    assert_eq!(front, Vec4::new(0.5, 0.5, 0.5, 1.0), "the mesh in front, untouched by the smoke behind it");
+    let behind = centre(slab_node(square(-0.5, 3.0)));
+    let want = 0.5 * (-1.2f32).exp();
+    println!("a mesh behind optical depth 1.2: {} (0.5 × Beer–Lambert {want})", behind.x);
+    assert!(((behind.x - want) / want).abs() < 0.01 && behind.w == 1.0, "{behind} vs {want}");
+    // The depth pass: where the smoke's opacity reaches one half (optical depth ln 2, 0.924 into
+    // the slab from its near face at z = 2), or the mesh in front of it.
+    let depth = |n: Render| n.cook(&ctx).unwrap().image.pixel(8, 4)[0];
+    let smoke = depth(Render { pass: VolumePass::Depth, ..slab_node(Mesh::default()) });
+    let want = 6.0 - (2.0 - 2f32.ln() / 1.2 * 1.6);
+    assert!((smoke - want).abs() < 0.03, "smoke depth {smoke} vs {want}");
+    let wall = depth(Render { pass: VolumePass::Depth, ..slab_node(square(4.0, 3.0)) });
+    assert!((wall - 2.0).abs() < 1e-3, "mesh depth {wall}");
+}
+
+#[test]
+fn the_passes_split_the_beauty_into_emission_and_scattering() {
+    // A glowing, lit blob: beauty = scattering + emission over the black background.
+    let mut v = volume(IVec3::ZERO, IVec3::ONE, |p| if (p - IVec3::splat(8)).abs().max_element() <= 4 { 0.3 } else { 0.0 });
+    let flame = v.scalar("density").unwrap().iter().map(|d| d * 2.0).collect();
+    v.fields.push(Field { name: "flame".into(), data: FieldData::Scalar(flame) });
+    let ctx = CookCtx::new();
+    let camera = CameraPorts::looking(32, 24, [0.4, 0.4, 2.0], [0.4, 0.4, 0.4]);
+    let cook = |pass| Render { pass, camera: camera.clone(), ..node(v.clone()) }.cook(&ctx).unwrap().image;
+    let (beauty, emission, scattering) = (cook(VolumePass::Beauty), cook(VolumePass::Emission), cook(VolumePass::Scattering));
+    let premultiplied = |img: &Image, x, y| {
+        let p = pixel(img, x, y);
+        p.truncate() * p.w
+    };
+    let mut lit = 0;
+    for y in 0..24 {
+        for x in 0..32 {
+            let (b, e, s) = (premultiplied(&beauty, x, y), premultiplied(&emission, x, y), premultiplied(&scattering, x, y));
+            assert!((b - (e + s)).abs().max_element() <= 1e-4 * b.max_element().max(1.0), "({x}, {y}): {b} vs {e} + {s}");
+            lit += usize::from(e.x > 0.0 && s.x > 0.0);
+        }
+    }
+    assert!(lit > 40, "the blob both glows and scatters in {lit} pixels");
+    let alpha = cook(VolumePass::Alpha);
+    assert_eq!(alpha.channels(), pyrograph_core::Channels::Gray);
+    assert!(alpha.data().iter().all(|a| *a == 1.0), "over an opaque background the beauty is opaque");
+}
+
+#[test]
+fn the_motion_pass_projects_the_smokes_velocity_to_pixels_per_frame() {
+    let mut v = volume(IVec3::ZERO, IVec3::ONE, |p| if (p - IVec3::splat(8)).abs().max_element() <= 5 { 0.5 } else { 0.0 });
+    let n = v.topology.voxels();
+    v.fields.push(Field { name: "vel".into(), data: FieldData::Vector(vec![[1.2, 0.0, 0.0]; n]) });
+    let n = Render { pass: VolumePass::Motion, frame_rate: 24.0, ..node(v) };
+    let view = n.camera.view().unwrap();
+    let img = n.cook(&CookCtx::new()).unwrap().image;
+    let m = pixel(&img, 8, 4);
+    // The blob's centre (0.4, 0.4, 0.4) moves 1.2 / 24 world units along +x in a frame.
+    let at = Vec3::splat(0.4);
+    let want = view.project(at + Vec3::X * 0.05).unwrap().x - view.project(at).unwrap().x;
+    println!("motion {m} vs {want} pixels per frame");
+    assert!((m.x - want).abs() < 0.05 * want && m.y.abs() < 0.02 * want && m.w > 0.5, "{m} vs {want}");
+    assert_eq!(pixel(&img, 0, 0), Vec4::ZERO, "no smoke, no motion");
 }

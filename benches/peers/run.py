@@ -219,6 +219,19 @@ def check_smoke(o, p):
     return f"density and temperature within {scalars:.1e}, velocity within {vel:.1e} of the largest speed ({speed:.3f})"
 
 
+def check_render(o, p):
+    """The same frame within 2e-3 at every pixel (the two sides' exp and summation order differ;
+    the jitter is the same hash), and not a black one."""
+    a, b = np.load(o).astype(np.float64), np.load(p).astype(np.float64)
+    if a.shape != b.shape:
+        raise Disagree(f"render frames: shapes {a.shape} and {b.shape}")
+    d = float(np.abs(a - b).max())
+    lit = float(b[..., :3].max())
+    if not (d <= 2e-3 and lit > 0.05):
+        raise Disagree(f"render frames differ by {d:.3g} (brightest {lit:.3g})")
+    return f"frames within {d:.1e} at every pixel (brightest {lit:.3f})"
+
+
 def check_cloth(o, p):
     return f"displacements after the run agree to {max_diff(o, p, 1e-4, 'cloth displacements'):.1e}"
 
@@ -372,6 +385,17 @@ def rows(i, work):
             lambda o, t=t: (kernel, [WARP_PY, os.path.join(HERE, "warp_smoke.py"), "--reps", "1", *sm,
                                      "--output", o + ".npy"], threads_env(t)),
             check_smoke, peer_threads="2 allowed, 1 used" if t == 2 else 1, unit="s")
+    for t in (2, 1):
+        rn = ["--n", "128", "--width", "640", "--height", "360"]
+        row(f"render_t{t}", "render", "volume render: the sun's transmittance sweep, then a ray a pixel in half-voxel "
+            "steps (single scattering, HG phase, ambient, early termination), time per frame", "dense 128³ box (2.1 M "
+            "voxels), warm puff, 640×360", t,
+            "NVIDIA Warp 1.19 CPU device, the same algorithm, benches/peers/warp_render.py",
+            lambda o, t=t: (kernel, [KERNELS, "--warmup", "1", "--reps", "3", "render", *rn, "--output", o + ".npy"],
+                            threads_env(t)),
+            lambda o, t=t: (kernel, [WARP_PY, os.path.join(HERE, "warp_render.py"), "--warmup", "1", "--reps", "3", *rn,
+                                     "--output", o + ".npy"], threads_env(t)),
+            check_render, peer_threads="2 allowed, 1 used" if t == 2 else 1, unit="s")
     ar = ["--steps", "100000", "--model-dir", os.path.join(work, "arp_model")]
     row("arp", "arp", "ARP sampling (eq. 2), time per step", "26 parameters, K = 2, learned on candle-black", 1,
         "numpy, ar_fit.py's sampler: a Python loop of mat-vecs",
@@ -415,6 +439,8 @@ TARGETS = {
     "arp": ("≥ 1 M steps/s", lambda o, p, r: o <= 1e-6),
     # Issue 61: the smoke step no slower than Warp's CPU device at 1 and at 2 threads.
     "smoke": ("≤ Warp", lambda o, p, r: r <= 1.0),
+    # Issue 62: the volume march no slower than Warp's CPU device.
+    "render": ("≤ Warp", lambda o, p, r: r <= 1.0),
     # Issue 45's interactive targets (the first wave's were 30 and 24 fps).
     "particles": ("≥ 48 fps", lambda o, p, r: o <= 1 / 48),
     "cube": ("≥ 30 fps", lambda o, p, r: o <= 1 / 30),
@@ -533,7 +559,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--only", default="", help="comma-separated groups: preprocess, video, bloom, endgrow, "
-                                               "reconstruct, train, cloth, smoke, arp, solo (default: all)")
+                                               "reconstruct, train, cloth, smoke, render, arp, solo (default: all)")
     p.add_argument("--work", default=os.environ.get("WORK", "/tmp/pyrograph-peers"))
     a = p.parse_args()
     for exe in (KERNELS, CLI):

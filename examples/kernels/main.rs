@@ -9,6 +9,7 @@
 mod eigen;
 mod flames;
 mod npy;
+mod render;
 mod smoke;
 mod solo;
 
@@ -45,6 +46,8 @@ enum Op {
     Arp(flames::ArpArgs),
     /// `volume.simulate`'s sub-step on a dense N³ box of warm smoke (the Warp peer's step).
     Smoke(smoke::SmokeArgs),
+    /// `volume.render`'s march on a dense N³ box of smoke lit by the sun (the Warp peer's march).
+    Render(render::RenderArgs),
     /// No peer: 1,000 particle flames, simulate + render 1280×720, per frame.
     Particles(solo::FramesArgs),
     /// No peer: 144 cloth flames (node defaults), a frame's sub-steps + render 1280×720, per frame.
@@ -68,6 +71,7 @@ fn main() {
         Op::Cloth(a) => flames::cloth(&a, t),
         Op::Arp(a) => flames::arp(&a, t),
         Op::Smoke(a) => smoke::smoke(&a, t),
+        Op::Render(a) => render::render_box(&a, t),
         Op::Particles(a) => solo::particles(&a, t),
         Op::ClothFrame(a) => solo::cloth_frame(&a, t),
         Op::Cube(a) => solo::cube(&a, t),

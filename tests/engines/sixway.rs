@@ -129,3 +129,43 @@ fn six_way_sheets_relit_by_unitys_decode_match_direct_renders() {
         assert!(relative <= 0.32 && light.abs() <= 0.15, "light {l}: {relative} per pixel, {light} in total");
     }
 }
+
+/// Bad input to the volume renderers is an error naming the node, the port and the frame.
+#[test]
+fn bad_volume_render_parameters_are_errors_naming_node_port_and_frame() {
+    let graph = |params: &str| {
+        format!(
+            r#"(
+    version: 3,
+    nodes: {{
+        "source": (type: "volume.source", params: {{"smoke_rate": 6.0, "radius": 0.3}}),
+        "sim": (type: "volume.simulate", params: {{"frames": 2, "voxel_size": 0.1}}),
+        "look": (type: "volume.render", params: {{"width": 8, "height": 8, {params}}}),
+    }},
+    edges: [("source.source", "sim.source"), ("sim.volume", "look.volume")],
+)"#
+        )
+    };
+    for (params, want) in [
+        (r#""exposure": -1.0"#, "exposure"),
+        (r#""sun_direction": (0.0, 0.0, 0.0)"#, "sun_direction"),
+        (r#""albedo": (0.5, 0.5, 1.5)"#, "albedo"),
+        (r#""ambient": (0.1, -1.0, 0.1)"#, "ambient"),
+        (r#""camera_position": (0.0, 0.0, 0.0), "camera_target": (0.0, 0.0, 0.0)"#, "camera"),
+    ] {
+        let doc = GraphDoc::from_ron(&graph(params)).unwrap();
+        let message = match Graph::build(&doc, &pyrograph_frontend::registry(), Path::new("."), &BuildOptions::default()) {
+            Err(e) => e.to_string(),
+            Ok(g) => {
+                let ctx = CookCtx::new();
+                let Value::Clip(clip) = Evaluator::new().output(&g, "look.image", &ctx).unwrap() else { panic!("a clip") };
+                clip.image(1, &ctx).err().map(|e| e.to_string()).unwrap_or_default()
+            }
+        };
+        println!("{params}: {message}");
+        assert!(message.contains("look") && message.contains(want), "{params}: {message}");
+        // Parameters checked per frame name the frame; a constant out of its range is refused
+        // before any frame cooks.
+        assert!(message.contains("frame 1") || message.contains("outside the range"), "{params}: {message}");
+    }
+}

@@ -5,7 +5,7 @@
 //! tessellation at 1600×1000, and a new preview frame is turned into an egui texture (the
 //! `TextureHandle::set` of the app; the GPU's copy of its 0.9 MB is not in it: there is no GPU).
 //!
-//!     cargo bench -p pyrograph-editor --bench playback [-- --loops N] [-- --realtime]
+//!     cargo bench -p pyrograph-editor --bench playback [-- --loops N] [-- --realtime] [-- --volume]
 //!
 //! For each preset (campfire, candles; 48 frames at 640×360 each), it opens the graph, selects the
 //! node the graph writes, waits for frame 0, then presses Play and counts, per loop through the
@@ -13,13 +13,18 @@
 //! (every frame renders); later loops replay frames from the editor's 1 GiB frame cache.
 //! By default real time is off (every frame shown as soon as it has cooked: how fast the preset
 //! can play); `--realtime` plays at the clip's rate, dropping frames the cook is late for.
+//!
+//! `--volume` plays the campfire-with-smoke preset's `volume.render` (node `view`, at the preset's
+//! 256×320) instead: loop 1 simulates and renders, then the render's exposure is nudged (as an
+//! artist adjusting the look does), so loop 2 renders every frame again from the simulation the
+//! editor has cached, and loop 3 replays the frame cache.
 
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use eframe::egui;
 use pyrograph_editor::{Editor, EditorApp};
-use pyrograph_frontend::core::FrameCache;
+use pyrograph_frontend::core::{FrameCache, ParamValue};
 
 /// A 60 Hz display's refresh period: the shortest time between two UI passes.
 const VSYNC: Duration = Duration::from_micros(16_667);
@@ -144,7 +149,7 @@ struct LoopStats {
     dropped: u64,
 }
 
-fn play(graph: &str, node: &str, loops: usize, realtime: bool) {
+fn play(graph: &str, node: &str, loops: usize, realtime: bool, retouch: Option<(&str, f64)>) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../graphs");
     let mut ed = Editor::with_default_registry();
     ed.add_preset_dir(root.join("presets"));
@@ -185,6 +190,10 @@ fn play(graph: &str, node: &str, loops: usize, realtime: bool) {
         assert!(ok, "{graph}: a loop did not finish within 600 s");
         let seconds = start.elapsed().as_secs_f64();
         stats.push(LoopStats { shown, seconds, dropped: ui.app.playback.dropped - dropped });
+        if let (1, Some((param, value))) = (stats.len(), retouch) {
+            // A look change downstream of the simulation: the next loop re-renders from its cache.
+            ui.app.editor.set_param(node, param, ParamValue::Float(value)).unwrap();
+        }
         let per_pass = (ui.pass_time - busy).as_secs_f64() * 1e3 / (ui.passes - passes).max(1) as f64;
         eprintln!("  {graph} loop {}: {} passes, {per_pass:.2} ms a UI pass", stats.len(), ui.passes - passes);
     }
@@ -192,7 +201,11 @@ fn play(graph: &str, node: &str, loops: usize, realtime: bool) {
     let mode = if realtime { format!("real time at {fps} fps") } else { "every frame, as fast as it cooks".into() };
     println!("{graph} ({node}, {len} frames at {fps} fps), {mode}; first frame after {to_first:.2} s");
     for (i, s) in stats.iter().enumerate() {
-        let kind = if i == 0 { "cold" } else { "cached" };
+        let kind = match (i, retouch) {
+            (0, _) => "cold",
+            (1, Some(_)) => "re-rendered from the cached simulation",
+            _ => "cached",
+        };
         println!(
             "  loop {} ({kind}): {} frames shown in {:.3} s = {:.1} fps, {} dropped",
             i + 1,
@@ -219,7 +232,11 @@ fn main() {
     FrameCache::global().set_compact(true);
     let threads = std::env::var("RAYON_NUM_THREADS").unwrap_or_else(|_| "all cores".into());
     println!("editor playback: rayon threads {threads}, UI 1600x1000");
+    if args.iter().any(|a| a == "--volume") {
+        play("presets/campfire-smoke.ron", "view", loops.max(3), realtime, Some(("exposure", 7.5)));
+        return;
+    }
     for (graph, node) in [("campfire.ron", "fire"), ("candles.ron", "render")] {
-        play(graph, node, loops, realtime);
+        play(graph, node, loops, realtime, None);
     }
 }

@@ -89,7 +89,14 @@ impl<'a> Sampler<'a> {
     /// each look-up saved is a hash probe.
     #[inline]
     pub fn brick_cached(&self, p: Vec3, memo: &mut (IVec3, Option<usize>)) -> Option<usize> {
-        let c = brick_of(p.round().as_ivec3());
+        // Round by truncation (`f32::round` is a libm call on a baseline x86-64 target); the
+        // point is inside the volume's bounds, so small and finite.
+        let nearest = |x: f32| {
+            let y = x + 0.5;
+            let i = y as i32;
+            i - i32::from(i as f32 > y)
+        };
+        let c = brick_of(glam::IVec3::new(nearest(p.x), nearest(p.y), nearest(p.z)));
         if c != memo.0 {
             *memo = (c, self.top.find(c).map(|b| b as usize));
         }

@@ -12,7 +12,8 @@ use pyrograph_render::View;
 use rayon::prelude::*;
 
 use super::blackbody::Table;
-use super::light::{Light, Sampler, exit_distance, henyey_greenstein, transmittance};
+use super::light::{Light, LightKind, Sampler, exit_distance, henyey_greenstein, transmittance};
+use super::sweep::directional_transmittance;
 use crate::grid::{DIM, NONE, Volume};
 
 /// How the volume looks.
@@ -153,7 +154,14 @@ pub fn gather<const C: usize>(
         Some(d) => {
             // Shadows are smooth: a voxel's step toward the light is enough.
             let step = look.step.max(1.0) * v.transform.voxel_size as f32;
-            scene.lights.iter().map(|l| transmittance(v, d, look.extinction, l, step)).collect()
+            scene
+                .lights
+                .iter()
+                .map(|l| match l.kind {
+                    LightKind::Directional(toward) => directional_transmittance(v, d, look.extinction, toward),
+                    LightKind::Point(_) => transmittance(v, d, look.extinction, l, step),
+                })
+                .collect()
         }
         None => Vec::new(),
     };
@@ -179,6 +187,7 @@ pub fn gather<const C: usize>(
         .map(|(lo, hi)| (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5)));
     let mut data = vec![[0.0f32; C]; w * h];
     data.par_chunks_mut(w).enumerate().for_each(|(row, out)| {
+        let mut fixed = Vec::with_capacity(scene.lights.len());
         for (col, px) in out.iter_mut().enumerate() {
             let ndc = |z: f32| {
                 let x = (col as f32 + 0.5) / w as f32 * 2.0 - 1.0;
@@ -191,7 +200,8 @@ pub fn gather<const C: usize>(
                 Some((lo, hi)) => {
                     let jitter = hash01(look.seed, row as u64, col as u64);
                     let stop = surface.map_or(f32::INFINITY, |s| s.distance);
-                    march(v, &fields, scene.lights, look, &table, (near, far, stop), (lo, hi), jitter)
+                    let ray = (near, far, stop);
+                    march(v, &fields, (scene.lights, &mut fixed), look, &table, ray, (lo, hi), jitter)
                 }
                 None => Gathered::new(),
             };
@@ -208,7 +218,7 @@ pub fn gather<const C: usize>(
 fn march(
     v: &Volume,
     f: &Fields,
-    lights: &[Light],
+    (lights, fixed): (&[Light], &mut Vec<Option<Vec3>>),
     look: &Look,
     table: &Table,
     segment: (Vec3, Vec3, f32),
@@ -220,6 +230,12 @@ fn march(
     let d = (end - origin) / length.max(1e-30);
     let mut g = Gathered::new();
     let Some((t0, t1)) = slab(origin, d, bounds.0, bounds.1) else { return g };
+    // A directional light's strength and phase are the same all along the ray.
+    fixed.clear();
+    fixed.extend(lights.iter().map(|l| match l.kind {
+        LightKind::Directional(to_light) => Some(l.color * henyey_greenstein(to_light.dot(d), look.anisotropy)),
+        LightKind::Point(_) => None,
+    }));
     let (t0, t1) = (t0.max(0.0), t1.min(length).min(stop));
     let h = v.transform.voxel_size as f32;
     let step = look.step * h;
@@ -263,11 +279,13 @@ fn march(
         if sigma > 0.0 {
             let scatter = look.albedo * (sigma * through);
             g.ambient += scatter * look.ambient;
-            for (light, (shadow, group)) in lights.iter().zip(&f.shadows) {
-                let (to_light, strength) = light.toward(p, h);
+            for ((light, fixed), (shadow, group)) in lights.iter().zip(fixed.iter()).zip(&f.shadows) {
                 // The light travels along −to_light and leaves toward the camera along −d.
-                let phase = henyey_greenstein(to_light.dot(d), look.anisotropy);
-                g.scattered[*group] += scatter * strength * (c.sample(shadow) * phase);
+                let lit = fixed.unwrap_or_else(|| {
+                    let (to_light, strength) = light.toward(p, h);
+                    strength * henyey_greenstein(to_light.dot(d), look.anisotropy)
+                });
+                g.scattered[*group] += scatter * lit * c.sample(shadow);
             }
             let opacity = g.transmit * (1.0 - a);
             if let Some(vel) = f.velocity {

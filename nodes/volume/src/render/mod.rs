@@ -8,10 +8,12 @@ pub mod compose;
 pub mod light;
 pub mod march;
 pub mod sixway;
+pub mod sweep;
 
 #[cfg(test)]
 mod tests;
 
+use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
@@ -117,6 +119,19 @@ impl Cook for Render {
                 return Err(NodeError::port(name, format!("must be finite, got {v:?}")));
             }
         }
+        // Light and colours are not negative; an albedo is a fraction.
+        for (name, v, most) in [
+            (port!(Render, albedo), &self.albedo[..], 1.0),
+            (port!(Render, ambient), &self.ambient[..], f32::INFINITY),
+            (port!(Render, sun_color), &self.sun_color[..], f32::INFINITY),
+            (port!(Render, background), &self.background[..], f32::INFINITY),
+            (port!(Render, mesh_color), &self.mesh_color[..], f32::INFINITY),
+        ] {
+            if v.iter().any(|x| !(0.0..=most).contains(x)) {
+                let range = if most == 1.0 { "between 0 and 1" } else { "at least 0" };
+                return Err(NodeError::port(name, format!("every component must be {range}, got {v:?}")));
+            }
+        }
         let sun = Vec3::from_array(self.sun_direction);
         if sun.length_squared() < 1e-12 {
             return Err(NodeError::port(port!(Render, sun_direction), "must not be zero: it points toward the sun"));
@@ -135,6 +150,13 @@ impl Cook for Render {
         }
         if let Some(k) = self.mesh.positions.iter().position(|p| !finite(p)) {
             return Err(NodeError::port(port!(Render, mesh), format!("vertex {k} has a non-finite position")));
+        }
+        let vertices = self.mesh.positions.len();
+        if let Some(t) = self.mesh.triangles.iter().position(|t| t.iter().any(|&i| i as usize >= vertices)) {
+            return Err(NodeError::port(
+                port!(Render, mesh),
+                format!("triangle {t} names a vertex past the mesh's {vertices} vertices"),
+            ));
         }
         ctx.check_cancel()?;
         let mut lights = Vec::new();
@@ -170,21 +192,19 @@ impl Render {
     /// The mesh seen through each pixel, lit by the sun, the ambient light, the point lights and
     /// the fire's own light.
     fn surfaces(&self, view: &pyrograph_render::View, sun: Vec3) -> Vec<march::Surface> {
-        let mut lights = self.lights.particles.clone();
+        // The smoke's lights are irradiances; a Lambert surface sends albedo × irradiance / π
+        // (and albedo × the sky's radiance under the ambient sky).
+        let mut lights: Vec<Particle> = self.lights.particles.iter().map(|q| Particle { weight: q.weight / PI, ..*q }).collect();
         if let Some(Light { kind: LightKind::Point(at), color }) = self.fire_glow() {
-            lights.push(Particle {
-                position: at.to_array(),
-                center: color.extend(1.0).to_array(),
-                weight: 1.0,
-                ..Particle::default()
-            });
+            let center = (color / PI).extend(1.0).to_array();
+            lights.push(Particle { position: at.to_array(), center, weight: 1.0, ..Particle::default() });
         }
         let mean = |c: [f32; 3]| (c[0] + c[1] + c[2]) / 3.0;
         let shading = MeshShading {
             albedo: Vec3::new(self.mesh_color[0], self.mesh_color[1], self.mesh_color[2]),
             ambient: mean(self.ambient),
             sun_direction: sun.normalize(),
-            sun: mean(self.sun_color),
+            sun: mean(self.sun_color) / PI,
         };
         mesh_surfaces(view, &self.mesh, &Particles { particles: lights, ..Particles::default() }, &shading)
     }

@@ -160,6 +160,10 @@ fn bad_lights_directions_and_densities_are_errors_naming_the_port() {
     assert!(e.contains("sun_direction"), "{e}");
     let e = node(volume(IVec3::ZERO, IVec3::ONE, |p| if p.x == 3 { -0.5 } else { 0.0 })).cook(&ctx).err().expect("negative");
     assert!(e.to_string().contains("volume") && e.to_string().contains("negative"), "{e}");
+    let mut bad = square(0.0, 1.0);
+    bad.triangles[1] = [0, 2, 9];
+    let e = Render { mesh: Arc::new(bad), ..node(blob()) }.cook(&ctx).err().expect("a bad triangle").to_string();
+    assert!(e.contains("mesh") && e.contains("triangle 1"), "{e}");
     let out = node(blob()).cook(&ctx).expect("a good volume renders");
     assert_eq!((out.image.width(), out.image.height()), (16, 9));
 }

@@ -32,33 +32,9 @@ EYE, TARGET, FOV, NEAR, FAR = (0.5, 0.55, 2.0), (0.5, 0.4, 0.5), 40.0, 0.1, 100.
 SUN, SUN_COLOR = (0.5, 1.0, 0.3), 6.0
 EXTINCTION, ALBEDO, G, AMBIENT, STEP = 8.0, 0.85, 0.3, 0.2, 0.5
 
-Grid = wp.array3d(dtype=wp.float32)
-
-
-@wp.func
-def at(f: Grid, x: int, y: int, z: int):
-    n = f.shape[0]
-    if x < 0 or y < 0 or z < 0 or x >= n or y >= n or z >= n:
-        return float(0.0)
-    return f[z, y, x]
-
-
-@wp.func
-def trilinear(f: Grid, p: wp.vec3):
-    x0 = int(wp.floor(p[0]))
-    y0 = int(wp.floor(p[1]))
-    z0 = int(wp.floor(p[2]))
-    fx = p[0] - float(x0)
-    fy = p[1] - float(y0)
-    fz = p[2] - float(z0)
-    s = float(0.0)
-    for k in range(8):
-        dx = k & 1
-        dy = (k >> 1) & 1
-        dz = (k >> 2) & 1
-        w = wp.where(dx == 1, fx, 1.0 - fx) * wp.where(dy == 1, fy, 1.0 - fy) * wp.where(dz == 1, fz, 1.0 - fz)
-        s += w * at(f, x0 + dx, y0 + dy, z0 + dz)
-    return s
+# The grid type, the zero-outside read and the trilinear sample are the smoke peer's.
+from warp_smoke import Field as Grid  # noqa: E402
+from warp_smoke import trilinear  # noqa: E402
 
 
 @wp.func

@@ -28,6 +28,49 @@ use compose::{PassMap, VolumePass, mesh_surfaces};
 use light::{Light, LightKind};
 use march::{Look, Scene};
 
+pyrograph_core::ports! {
+    /// How a volume's smoke absorbs, how its fire glows and how finely it is marched: the ports
+    /// volume.render and volume.render_sixway share.
+    pub struct MarchPorts {
+        /// Smoke extinction per unit of density per world unit.
+        #[range(0.0, 1e6)]
+        extinction: f32 = 8.0,
+        /// Light emitted per world unit by a flame value of 1.
+        #[range(0.0, 1e6)]
+        exposure: f32 = 8.0,
+        /// Light emitted by heat (temperature) relative to the flame's.
+        #[range(0.0, 1e3)]
+        glow: f32 = 0.02,
+        /// Blackbody temperature, in kelvin, of temperature 0.
+        #[range(100.0, 1e5)]
+        kelvin_cold: f32 = 1000.0,
+        /// Blackbody temperature, in kelvin, of temperature 1 (hotter gas extrapolates).
+        #[range(100.0, 1e5)]
+        kelvin_hot: f32 = 2600.0,
+        /// March step in voxels.
+        #[range(0.05, 8.0)]
+        step_size: f32 = 0.5,
+    }
+}
+
+impl MarchPorts {
+    /// The march's look with these ports and the node's own light and colours.
+    pub fn look(&self, albedo: Vec3, anisotropy: f32, ambient: Vec3, background: Vec4, seed: u64) -> Look {
+        Look {
+            extinction: self.extinction,
+            albedo,
+            anisotropy,
+            ambient,
+            exposure: self.exposure,
+            glow: self.glow,
+            kelvin: [self.kelvin_cold, self.kelvin_hot],
+            step: self.step_size,
+            background,
+            seed,
+        }
+    }
+}
+
 fn no_lights() -> Arc<Particles> {
     Arc::new(Particles::default())
 }
@@ -56,9 +99,8 @@ pyrograph_core::node! {
         mesh_color: [f32; 4] = [0.3, 0.2, 0.14, 1.0],
         /// The camera.
         camera: CameraPorts = CameraPorts::looking(640, 360, [0.0, 3.0, 8.0], [0.0, 2.4, 0.0]),
-        /// Smoke extinction per unit of density per world unit.
-        #[range(0.0, 1e6)]
-        extinction: f32 = 8.0,
+        /// Extinction, the fire's glow and the march's step.
+        march: MarchPorts,
         /// The smoke's single-scattering albedo (the fraction of extinction that scatters), per channel.
         albedo: [f32; 3] = [0.85, 0.85, 0.85],
         /// Henyey–Greenstein anisotropy: 0 scatters evenly, toward 1 forward (bright toward the light).
@@ -70,25 +112,10 @@ pyrograph_core::node! {
         sun_direction: [f32; 3] = [0.5, 1.0, 0.3],
         /// The sun's colour and intensity: the irradiance it brings, per channel (0 for none).
         sun_color: [f32; 3] = [6.0, 5.6, 5.0],
-        /// Light emitted per world unit by a flame value of 1.
-        #[range(0.0, 1e6)]
-        exposure: f32 = 8.0,
-        /// Light emitted by heat (temperature) relative to the flame's.
-        #[range(0.0, 1e3)]
-        glow: f32 = 0.02,
-        /// Blackbody temperature, in kelvin, of temperature 0.
-        #[range(100.0, 1e5)]
-        kelvin_cold: f32 = 1000.0,
-        /// Blackbody temperature, in kelvin, of temperature 1 (hotter gas extrapolates).
-        #[range(100.0, 1e5)]
-        kelvin_hot: f32 = 2600.0,
         /// The fire lights its own smoke: a point light at the flame's centroid whose intensity is this times
         /// `exposure` times the flame's total (flame × voxel volume), in the hot blackbody colour.
         #[range(0.0, 1e6)]
         fire_light: f32 = 0.2,
-        /// March step in voxels.
-        #[range(0.05, 8.0)]
-        step_size: f32 = 0.5,
         /// Background colour (straight RGBA).
         background: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
         /// What to draw: the frame or one compositing pass.
@@ -166,18 +193,13 @@ impl Cook for Render {
         }
         lights.extend(self.lights.particles.iter().map(point_light));
         lights.extend(self.fire_glow());
-        let look = Look {
-            extinction: self.extinction,
-            albedo: Vec3::from_array(self.albedo),
-            anisotropy: self.anisotropy,
-            ambient: Vec3::from_array(self.ambient),
-            exposure: self.exposure,
-            glow: self.glow,
-            kelvin: [self.kelvin_cold, self.kelvin_hot],
-            step: self.step_size,
-            background: Vec4::from_array(self.background),
-            seed: self.volume.time.to_bits(),
-        };
+        let look = self.march.look(
+            Vec3::from_array(self.albedo),
+            self.anisotropy,
+            Vec3::from_array(self.ambient),
+            Vec4::from_array(self.background),
+            self.volume.time.to_bits(),
+        );
         let surfaces = (!self.mesh.triangles.is_empty()).then(|| self.surfaces(&view, sun));
         let scene =
             Scene { lights: &lights, groups: &[], surfaces: surfaces.as_deref(), motion: self.pass == VolumePass::Motion };
@@ -217,8 +239,9 @@ impl Render {
         let at = self.volume.centroid("flame")?;
         let h = self.volume.transform.voxel_size;
         let total = (self.volume.total("flame") * h * h * h) as f32;
-        let colour = blackbody::rgb(f64::from(self.kelvin_hot));
-        (total > 0.0).then(|| Light { kind: LightKind::Point(at), color: colour * (self.fire_light * self.exposure * total) })
+        let colour = blackbody::rgb(f64::from(self.march.kelvin_hot));
+        (total > 0.0)
+            .then(|| Light { kind: LightKind::Point(at), color: colour * (self.fire_light * self.march.exposure * total) })
     }
 }
 

@@ -10,9 +10,9 @@ use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, port};
 use pyrograph_render::View;
 use pyrograph_render::ports::CameraPorts;
 
-use super::check_fields;
 use super::light::{Light, LightKind};
 use super::march::{GROUPS, Look, Scene, gather};
+use super::{MarchPorts, check_fields};
 use crate::grid::Volume;
 
 pyrograph_core::node! {
@@ -33,33 +33,17 @@ pyrograph_core::node! {
         volume: Arc<Volume>,
         /// The camera the maps face (a flipbook's cells are square: make width and height equal).
         camera: CameraPorts = CameraPorts::looking(256, 256, [0.0, 2.0, 9.0], [0.0, 2.0, 0.0]),
-        /// Smoke extinction per unit of density per world unit.
-        #[range(0.0, 1e6)]
-        extinction: f32 = 8.0,
+        /// Extinction, the fire's glow and the march's step.
+        march: MarchPorts,
         /// The smoke's single-scattering albedo (its colour is the engine material's base colour).
         #[range(0.0, 1.0)]
         albedo: f32 = 0.9,
         /// Henyey–Greenstein anisotropy; 0 (even scattering) suits the engines' blend of six lights best.
         #[range(-0.95, 0.95)]
         anisotropy: f32 = 0.0,
-        /// Light emitted per world unit by a flame value of 1.
-        #[range(0.0, 1e6)]
-        exposure: f32 = 8.0,
-        /// Light emitted by heat (temperature) relative to the flame's.
-        #[range(0.0, 1e3)]
-        glow: f32 = 0.02,
-        /// Blackbody temperature, in kelvin, of temperature 0.
-        #[range(100.0, 1e5)]
-        kelvin_cold: f32 = 1000.0,
-        /// Blackbody temperature, in kelvin, of temperature 1.
-        #[range(100.0, 1e5)]
-        kelvin_hot: f32 = 2600.0,
         /// The emission mask per unit of the fire light's luminance.
         #[range(0.0, 1e6)]
         emission_scale: f32 = 1.0,
-        /// March step in voxels.
-        #[range(0.05, 8.0)]
-        step_size: f32 = 0.5,
     }
     pub struct RenderSixwayOut {
         /// Right, top, back lighting and opacity (RGBA, premultiplied).
@@ -74,18 +58,7 @@ impl Cook for RenderSixway {
         let view = self.camera.view()?;
         check_fields(&self.volume, port!(RenderSixway, volume))?;
         ctx.check_cancel()?;
-        let look = Look {
-            extinction: self.extinction,
-            albedo: Vec3::splat(self.albedo),
-            anisotropy: self.anisotropy,
-            ambient: Vec3::ZERO,
-            exposure: self.exposure,
-            glow: self.glow,
-            kelvin: [self.kelvin_cold, self.kelvin_hot],
-            step: self.step_size,
-            background: Vec4::ZERO,
-            seed: self.volume.time.to_bits(),
-        };
+        let look = self.march.look(Vec3::splat(self.albedo), self.anisotropy, Vec3::ZERO, Vec4::ZERO, self.volume.time.to_bits());
         let (positive, negative) = sixway_maps(&self.volume, &view, &look, self.emission_scale);
         Ok(RenderSixwayOut { positive: Arc::new(positive), negative: Arc::new(negative) })
     }

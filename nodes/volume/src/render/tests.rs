@@ -12,7 +12,7 @@ use pyrograph_render::{Camera, Particle, Particles, View};
 use super::compose::VolumePass;
 use super::light::{Light, LightKind};
 use super::march::{Look, render};
-use super::{Render, no_lights};
+use super::{MarchPorts, Render, no_lights};
 use crate::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS, Volume};
 use pyrograph_nodes_particles::types::Mesh;
 
@@ -118,23 +118,23 @@ fn an_empty_volume_renders_the_background() {
     assert!(img.data().chunks(4).all(|p| p == [0.2, 0.3, 0.4, 1.0]));
 }
 
+/// The march ports with `exposure` and `glow`, extinction 8, step half a voxel.
+fn march(exposure: f32, glow: f32) -> MarchPorts {
+    MarchPorts { extinction: 8.0, exposure, glow, kelvin_cold: 1000.0, kelvin_hot: 2600.0, step_size: 0.5 }
+}
+
 fn node(v: Volume) -> Render {
     Render {
         volume: Arc::new(v),
         lights: no_lights(),
         camera: CameraPorts::looking(16, 9, [0.4, 0.4, 6.0], [0.4, 0.4, 0.0]),
-        extinction: 8.0,
+        march: march(8.0, 0.1),
         albedo: [0.85; 3],
         anisotropy: 0.3,
         ambient: [0.05; 3],
         sun_direction: [0.5, 1.0, 0.3],
         sun_color: [1.0; 3],
-        exposure: 8.0,
-        glow: 0.1,
-        kelvin_cold: 1000.0,
-        kelvin_hot: 2600.0,
         fire_light: 1.0,
-        step_size: 0.5,
         background: [0.0, 0.0, 0.0, 1.0],
         mesh: Arc::new(Mesh::default()),
         mesh_color: [0.5, 0.5, 0.5, 1.0],
@@ -190,8 +190,7 @@ fn slab_node(mesh: Mesh) -> Render {
         ambient: [1.0; 3],
         sun_color: [0.0; 3],
         fire_light: 0.0,
-        exposure: 0.0,
-        glow: 0.0,
+        march: march(0.0, 0.0),
         ..node(v)
     }
 }

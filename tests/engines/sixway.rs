@@ -9,7 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_frontend::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Image, Inputs, PortType, Value};
+use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, Image, Value};
 use pyrograph_frontend::render::ports::CameraPorts;
 use pyrograph_frontend::volume::render::sixway::{camera_frame, relight};
 
@@ -47,16 +47,7 @@ fn frames(doc: &str, output: &str) -> Vec<Arc<Image>> {
 
 /// imaging.write_flipbook on `frames`, 2 × 2 cells, to `path`; returns the side-car.
 fn write_sheet(frames: &[Arc<Image>], path: &Path) -> serde_json::Value {
-    let reg = pyrograph_frontend::registry();
-    let node = reg.get("imaging.write_flipbook").unwrap();
-    let desc = node.desc();
-    let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-    let clip = Clip::from_frames(PortType::Image, 24.0, frames.iter().cloned().map(Value::Image).collect());
-    values[desc.input_index("clip").unwrap()] = Value::Clip(clip);
-    for (name, v) in [("rows", Value::Int(2)), ("cols", Value::Int(2)), ("path", Value::Path(path.to_path_buf()))] {
-        values[desc.input_index(name).unwrap()] = v;
-    }
-    node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap();
+    super::cook_writer(frames, &[("rows", Value::Int(2)), ("cols", Value::Int(2)), ("path", Value::Path(path.to_path_buf()))]);
     let json = path.with_file_name(format!("{}_2x2.json", path.file_stem().unwrap().to_str().unwrap()));
     serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
 }

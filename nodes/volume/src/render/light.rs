@@ -135,24 +135,27 @@ pub fn transmittance(v: &Volume, density: &[f32], extinction: f32, light: &Light
                 LightKind::Directional(d) => (d, f32::INFINITY),
                 LightKind::Point(at) => ((at - p).normalize_or(Vec3::Y), (at - p).length()),
             };
-            let exit = exit_distance(p, dir, bmin, bmax).min(limit);
-            // Half a step first, so a voxel's own density counts half (the light arrives at its
-            // centre).
-            let mut s = 0.5 * step;
-            let mut depth = 0.0;
-            let mut memo = (IVec3::MAX, None);
-            while s < exit {
-                let q = sampler.index(p + dir * s);
-                depth += sampler.brick_cached(q, &mut memo).map_or(0.0, |b| sampler.at(b, q));
-                if depth * step * extinction > 12.0 {
-                    break;
-                }
-                s += step;
-            }
-            *t = (-extinction * depth * step).exp();
+            *t = ray_transmittance(&sampler, p, dir, exit_distance(p, dir, bmin, bmax).min(limit), extinction, step);
         }
     });
     out
+}
+
+/// The transmittance from world point `p` along unit `dir` over `length` world units, marched in
+/// steps of `step` (half a step first, so a voxel's own density counts half: the light arrives at
+/// its centre), stopping once the optical depth passes 12.
+pub fn ray_transmittance(sampler: &Sampler, p: Vec3, dir: Vec3, length: f32, extinction: f32, step: f32) -> f32 {
+    let (mut s, mut depth) = (0.5 * step, 0.0);
+    let mut memo = (IVec3::MAX, None);
+    while s < length {
+        let q = sampler.index(p + dir * s);
+        depth += sampler.brick_cached(q, &mut memo).map_or(0.0, |b| sampler.at(b, q));
+        if depth * step * extinction > 12.0 {
+            break;
+        }
+        s += step;
+    }
+    (-extinction * depth * step).exp()
 }
 
 /// How far a ray from `p` (inside the box) along unit `d` travels before it leaves the box.

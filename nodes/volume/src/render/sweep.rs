@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::light::{Sampler, exit_distance};
+use super::light::{Sampler, exit_distance, ray_transmittance};
 use crate::grid::{DIM, NONE, VOXELS, Volume, brick_of, slot, voxel};
 
 /// The fraction of a directional light from `toward` (unit, toward the light) reaching each voxel
@@ -49,7 +49,9 @@ pub fn directional_transmittance(v: &Volume, density: &[f32], extinction: f32, t
                         *t = voxel_transmittance(v, &out, density, b, local, (k, sign, u), extinction, step).unwrap_or_else(
                             || {
                                 let p = v.transform.to_world((top.origin(b) + local).as_vec3());
-                                ray(&sampler, p, toward, bounds, extinction, v.transform.voxel_size as f32)
+                                // The light comes from outside the sweep: a ray in voxel steps.
+                                let length = exit_distance(p, toward, bounds.0, bounds.1);
+                                ray_transmittance(&sampler, p, toward, length, extinction, v.transform.voxel_size as f32)
                             },
                         );
                     }
@@ -118,21 +120,4 @@ fn voxel_transmittance(
         rho += w * density[at].max(0.0);
     }
     Some(t * (-extinction * step * 0.5 * (density[here].max(0.0) + rho)).exp())
-}
-
-/// The transmittance toward the light from `p` by a march in steps of a voxel until the ray
-/// leaves `bounds` (the half step first: the light arrives at the voxel's centre).
-fn ray(sampler: &Sampler, p: Vec3, toward: Vec3, bounds: (Vec3, Vec3), extinction: f32, step: f32) -> f32 {
-    let exit = exit_distance(p, toward, bounds.0, bounds.1);
-    let (mut s, mut depth) = (0.5 * step, 0.0);
-    let mut memo = (IVec3::MAX, None);
-    while s < exit {
-        let q = sampler.index(p + toward * s);
-        depth += sampler.brick_cached(q, &mut memo).map_or(0.0, |b| sampler.at(b, q));
-        if depth * step * extinction > 12.0 {
-            break;
-        }
-        s += step;
-    }
-    (-extinction * depth * step).exp()
 }

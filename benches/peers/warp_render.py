@@ -9,7 +9,10 @@ the algorithms), step for step:
 - a ray per pixel from the near plane (render/march.rs): through the box in steps of half a
   voxel, jittered per pixel by the same SplitMix64 hash, each step a homogeneous Beer–Lambert
   segment scattering the sun once (its transmittance read trilinearly, Henyey–Greenstein phase)
-  plus an unshadowed ambient term, until the ray is opaque (transmittance < 10⁻³).
+  plus an unshadowed ambient term, until the ray is opaque (transmittance < 10⁻³);
+- empty space skipped as render/clear.rs skips it: the box's 8³ bricks whose samples read only
+  zeros (the brick and the one-voxel shell around it) are flagged first, and a step whose nearest
+  voxel lies in a flagged brick jumps to where the ray leaves that brick.
 
 Warp's CPU device runs each kernel on one thread. Prints one JSON line like examples/kernels and
 writes the frame (H×W×4 float32, straight RGBA) with --output.
@@ -94,6 +97,32 @@ def sweep_slice(dens: Grid, trans: Grid, y: int, u: wp.vec3, toward: wp.vec3, h:
         trans[z, y, x] = t * wp.exp(-EXTINCTION * step * 0.5 * (dens[z, y, x] + rho))
 
 
+@wp.kernel
+def clear_bricks(dens: Grid, clear: wp.array3d(dtype=wp.int32)):
+    # A brick is clear when it and the one-voxel shell around it hold nothing above 0.
+    bz, by, bx = wp.tid()
+    n = dens.shape[0]
+    empty = int(1)
+    for z in range(wp.max(bz * 8 - 1, 0), wp.min(bz * 8 + 9, n)):
+        for y in range(wp.max(by * 8 - 1, 0), wp.min(by * 8 + 9, n)):
+            for x in range(wp.max(bx * 8 - 1, 0), wp.min(bx * 8 + 9, n)):
+                if not (dens[z, y, x] <= 0.0):
+                    empty = 0
+    clear[bz, by, bx] = empty
+
+
+@wp.func
+def brick_exit(p: wp.vec3, d: wp.vec3, lo: wp.vec3, hi: wp.vec3):
+    # How far from p (inside the box lo..hi) along d until the ray leaves it.
+    t = float(1.0e30)
+    for k in range(3):
+        if d[k] > 1.0e-12:
+            t = wp.min(t, (hi[k] - p[k]) / d[k])
+        elif d[k] < -1.0e-12:
+            t = wp.min(t, (lo[k] - p[k]) / d[k])
+    return wp.max(t, 0.0)
+
+
 @wp.func
 def henyey_greenstein(c: float, g: float):
     denom = wp.max(1.0 + g * g - 2.0 * g * c, 1.0e-6)
@@ -101,7 +130,7 @@ def henyey_greenstein(c: float, g: float):
 
 
 @wp.kernel
-def march(dens: Grid, trans: Grid, near: wp.array2d(dtype=wp.vec3), far: wp.array2d(dtype=wp.vec3),
+def march(dens: Grid, trans: Grid, clear: wp.array3d(dtype=wp.int32), near: wp.array2d(dtype=wp.vec3), far: wp.array2d(dtype=wp.vec3),
           jitter: wp.array2d(dtype=wp.float32), toward: wp.vec3, h: float, out: wp.array3d(dtype=wp.float32)):
     row, col = wp.tid()
     o = near[row, col]
@@ -133,9 +162,24 @@ def march(dens: Grid, trans: Grid, near: wp.array2d(dtype=wp.vec3), far: wp.arra
             t = start + float(k) * step
             if t >= t1 or transmit < 1.0e-3:
                 break
+            p = o + d * t
+            ip = p / h - wp.vec3(0.5, 0.5, 0.5)
+            # The brick of the nearest voxel: outside the box or clear, jump past it.
+            c = wp.vec3(wp.floor((ip[0] + 0.5) / 8.0), wp.floor((ip[1] + 0.5) / 8.0), wp.floor((ip[2] + 0.5) / 8.0))
+            nb = clear.shape[0]
+            cx = int(c[0])
+            cy = int(c[1])
+            cz = int(c[2])
+            skip = bool(True)
+            if cx >= 0 and cy >= 0 and cz >= 0 and cx < nb and cy < nb and cz < nb:
+                skip = clear[cz, cy, cx] == 1
+            if skip:
+                lo = c * (8.0 * h)
+                ex = t + brick_exit(p, d, lo, lo + wp.vec3(8.0 * h, 8.0 * h, 8.0 * h))
+                k = wp.max(int(wp.floor((ex - start) / step)) + 1, k + 1)
+                continue
             k += 1
             dt = wp.min(step, t1 - t)
-            ip = (o + d * t) / h - wp.vec3(0.5, 0.5, 0.5)
             sigma = EXTINCTION * wp.max(trilinear(dens, ip), 0.0)
             a = wp.exp(-sigma * dt)
             through = transmit * wp.where(sigma > 1.0e-8, (1.0 - a) / sigma, dt)
@@ -201,6 +245,7 @@ class Renderer:
         self.n, self.w, self.h = n, w, h
         self.dens = wp.array(blob(n), dtype=wp.float32)
         self.trans = wp.zeros((n, n, n), dtype=wp.float32)
+        self.clear = wp.zeros((n // 8, n // 8, n // 8), dtype=wp.int32)
         near, far = rays(w, h)
         self.near = wp.array(near, dtype=wp.vec3)
         self.far = wp.array(far, dtype=wp.vec3)
@@ -214,8 +259,9 @@ class Renderer:
         step = float(np.linalg.norm(u)) * hvox
         for y in range(n - 1, -1, -1):
             wp.launch(sweep_slice, dim=(n, n), inputs=[self.dens, self.trans, y, wp.vec3(*u), wp.vec3(*toward), hvox, step])
+        wp.launch(clear_bricks, dim=(n // 8, n // 8, n // 8), inputs=[self.dens, self.clear])
         wp.launch(march, dim=(self.h, self.w),
-                  inputs=[self.dens, self.trans, self.near, self.far, self.jitter, wp.vec3(*toward), hvox, self.out])
+                  inputs=[self.dens, self.trans, self.clear, self.near, self.far, self.jitter, wp.vec3(*toward), hvox, self.out])
         wp.synchronize()
 
 

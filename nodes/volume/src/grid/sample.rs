@@ -55,6 +55,14 @@ impl Corners {
     }
 }
 
+/// `x` rounded down, for `x` well inside `i32`'s range: by truncation, because `f32::floor` is a
+/// libm call on a baseline x86-64 target and samplers floor every sample.
+#[inline(always)]
+pub fn floor_i(x: f32) -> i32 {
+    let i = x as i32;
+    i - i32::from(i as f32 > x)
+}
+
 /// The corners of index-space point `p` (voxel centres at integers), looked up from brick `b`.
 /// A point more than seven voxels outside the brick is clamped to that reach; a non-finite one
 /// reads the brick's first voxel.
@@ -62,13 +70,8 @@ impl Corners {
 pub fn corners(top: &Topology, b: usize, p: Vec3) -> Corners {
     let o = top.origin(b).as_vec3();
     let p = if p.is_finite() { p.clamp(o - 7.0, o + 14.0) } else { o };
-    // Floor by truncation (the point is clamped to a small finite range): `f32::floor` is a libm
-    // call on a baseline x86-64 target.
-    let floor = |x: f32| {
-        let i = x as i32;
-        i - i32::from(i as f32 > x)
-    };
-    let fi = glam::IVec3::new(floor(p.x), floor(p.y), floor(p.z));
+    // The point is clamped to a small finite range.
+    let fi = glam::IVec3::new(floor_i(p.x), floor_i(p.y), floor_i(p.z));
     let fr = p - fi.as_vec3();
     let i = fi - top.origin(b);
     let wx = [1.0 - fr.x, fr.x];

@@ -10,8 +10,8 @@ use std::f32::consts::PI;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::grid::sample::{Corners, corners};
-use crate::grid::{Topology, VOXELS, Volume, brick_of};
+use crate::grid::sample::{Corners, corners, floor_i};
+use crate::grid::{NONE, Topology, VOXELS, Volume, brick_of, slot};
 
 /// Where a light is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,22 +85,31 @@ impl<'a> Sampler<'a> {
     }
 
     /// The brick holding index-space point `p`'s nearest voxel, if active, through a one-brick
-    /// memo: successive samples along a ray fall in the same brick several times running, and
-    /// each look-up saved is a hash probe.
-    #[inline]
+    /// memo: successive samples along a ray fall in the same brick several times running, and the
+    /// next brick is usually a neighbour of the last, read from its neighbour table; only a ray
+    /// coming from an inactive brick probes the hash map.
+    #[inline(always)]
     pub fn brick_cached(&self, p: Vec3, memo: &mut (IVec3, Option<usize>)) -> Option<usize> {
-        // Round by truncation (`f32::round` is a libm call on a baseline x86-64 target); the
-        // point is inside the volume's bounds, so small and finite.
-        let nearest = |x: f32| {
-            let y = x + 0.5;
-            let i = y as i32;
-            i - i32::from(i as f32 > y)
-        };
-        let c = brick_of(glam::IVec3::new(nearest(p.x), nearest(p.y), nearest(p.z)));
+        // The point is inside the volume's bounds, so small and finite.
+        let c = brick_of(IVec3::new(floor_i(p.x + 0.5), floor_i(p.y + 0.5), floor_i(p.z + 0.5)));
         if c != memo.0 {
-            *memo = (c, self.top.find(c).map(|b| b as usize));
+            self.enter(c, memo);
         }
         memo.1
+    }
+
+    /// Moves `memo` to brick coordinate `c` (out of line: once per brick crossed).
+    #[inline(never)]
+    fn enter(&self, c: IVec3, memo: &mut (IVec3, Option<usize>)) {
+        let next = match memo.1 {
+            Some(b) if (c - memo.0).abs().max_element() <= 1 => {
+                let d = c - memo.0;
+                let nb = self.top.neighbors(b)[slot(d.x, d.y, d.z)];
+                (nb != NONE).then_some(nb as usize)
+            }
+            _ => self.top.find(c).map(|b| b as usize),
+        };
+        *memo = (c, next);
     }
 
     /// The eight voxels around index-space point `p` and their weights, looked up from brick `b`
@@ -119,14 +128,15 @@ impl<'a> Sampler<'a> {
 
 /// The fraction of `light`'s light that reaches each voxel centre of `v` through the density
 /// (`extinction` per unit density per world unit), marched toward the light in steps of `step`
-/// world units until it leaves the active bricks' bounds or reaches a point light.
-pub fn transmittance(v: &Volume, density: &[f32], extinction: f32, light: &Light, step: f32) -> Vec<f32> {
+/// world units until it leaves the active bricks' bounds or reaches a point light. Bricks flagged
+/// in `skip` (nothing there scatters light: [`super::clear::clear_bricks`]) are left at 1 unmarched.
+pub fn transmittance(v: &Volume, density: &[f32], extinction: f32, light: &Light, step: f32, skip: &[bool]) -> Vec<f32> {
     let top = &v.topology;
     let Some((lo, hi)) = top.voxel_bounds() else { return Vec::new() };
     let sampler = Sampler::new(v, density);
     let (bmin, bmax) = (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5));
     let mut out = vec![1.0; top.voxels()];
-    out.par_chunks_mut(VOXELS).enumerate().for_each(|(b, o)| {
+    out.par_chunks_mut(VOXELS).enumerate().filter(|(b, _)| !skip.get(*b).copied().unwrap_or(false)).for_each(|(b, o)| {
         let base = top.origin(b);
         for (i, t) in o.iter_mut().enumerate() {
             let ijk = base + IVec3::new((i & 7) as i32, ((i >> 3) & 7) as i32, (i >> 6) as i32);

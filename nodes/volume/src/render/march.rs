@@ -6,15 +6,17 @@
 //! stops once the ray is opaque (Kajiya & Von Herzen 1984's single-scattering model, as Fedkiw,
 //! Stam & Jensen 2001 §4 render smoke).
 
-use glam::{Vec3, Vec4};
+use glam::{IVec3, Vec3, Vec4};
 use pyrograph_core::{Channels, Image};
 use pyrograph_render::View;
 use rayon::prelude::*;
 
 use super::blackbody::Table;
+use super::clear::clear_bricks;
 use super::light::{Light, LightKind, Sampler, exit_distance, henyey_greenstein, transmittance};
 use super::sweep::directional_transmittance;
-use crate::grid::{DIM, NONE, Volume};
+use crate::grid::sample::floor_i;
+use crate::grid::{DIM, NONE, Volume, brick_of};
 
 /// How the volume looks.
 #[derive(Clone, Debug)]
@@ -123,6 +125,8 @@ struct Fields<'a> {
     velocity: Option<&'a [[f32; 3]]>,
     /// Per light: its transmittance volume and its group.
     shadows: Vec<(&'a [f32], usize)>,
+    /// Per brick: nothing in it to absorb or glow ([`clear_bricks`]), so stepped over.
+    clear: &'a [bool],
 }
 
 /// Renders `v` seen through `view`, lit by `lights`, over the look's background: the beauty
@@ -150,6 +154,9 @@ pub fn gather<const C: usize>(
     map: impl Fn(&Gathered, Option<&Surface>, Ray) -> [f32; C] + Sync,
 ) -> Vec<[f32; C]> {
     let density = v.scalar("density");
+    let (temperature, flame) = (v.scalar("temperature"), v.scalar("flame"));
+    let read: Vec<&[f32]> = [density, temperature, flame].into_iter().flatten().collect();
+    let clear = clear_bricks(&v.topology, &read);
     let shadow_fields: Vec<Vec<f32>> = match density {
         Some(d) => {
             // Shadows are smooth: a voxel's step toward the light is enough.
@@ -159,7 +166,7 @@ pub fn gather<const C: usize>(
                 .iter()
                 .map(|l| match l.kind {
                     LightKind::Directional(toward) => directional_transmittance(v, d, look.extinction, toward),
-                    LightKind::Point(_) => transmittance(v, d, look.extinction, l, step),
+                    LightKind::Point(_) => transmittance(v, d, look.extinction, l, step, &clear),
                 })
                 .collect()
         }
@@ -170,10 +177,11 @@ pub fn gather<const C: usize>(
         // Locates samples only (index, brick, corners): its own field is never read.
         at: Sampler::new(v, &[]),
         density,
-        temperature: v.scalar("temperature"),
-        flame: v.scalar("flame"),
+        temperature,
+        flame,
         velocity: v.vector("vel").filter(|_| scene.motion),
         shadows: shadow_fields.iter().enumerate().map(|(k, s)| (s.as_slice(), group(k))).collect(),
+        clear: &clear,
     };
     let table = Table::new(look.kelvin[0], look.kelvin[1]);
     let (w, h) = (view.width() as usize, view.height() as usize);
@@ -251,9 +259,9 @@ fn march(
         let p = origin + d * t;
         let s = &f.at;
         let ip = s.index(p);
-        let Some(b) = s.brick_cached(ip, &mut memo) else {
-            // An inactive brick: skip to where the ray leaves its 8³ cell.
-            let cell = (ip + 0.5).div_euclid(Vec3::splat(DIM as f32));
+        let Some(b) = s.brick_cached(ip, &mut memo).filter(|b| !f.clear[*b]) else {
+            // An inactive brick or one with nothing in it: skip to where the ray leaves its 8³ cell.
+            let cell = brick_of(IVec3::new(floor_i(ip.x + 0.5), floor_i(ip.y + 0.5), floor_i(ip.z + 0.5))).as_vec3();
             let lo = s.origin_world() + (cell * DIM as f32 - 0.5) * h;
             let exit = t + exit_distance(p, d, lo, lo + brick_world);
             k = (((exit - start) / step).floor() as u64 + 1).max(k + 1);
@@ -270,7 +278,8 @@ fn march(
         let strength = flame + look.glow * temperature;
         // A homogeneous segment: the source (scattering + emission) integrated against its own
         // attenuation, exactly.
-        let a = (-sigma * dt).exp();
+        // No smoke here (much of a ray): exp(−0) is 1 and spares the call.
+        let a = if sigma == 0.0 { 1.0 } else { (-sigma * dt).exp() };
         let through = g.transmit * if sigma > 1e-8 { (1.0 - a) / sigma } else { dt };
         if strength > 0.0 {
             let kelvin = look.kelvin[0] + (look.kelvin[1] - look.kelvin[0]) * temperature;

@@ -4,6 +4,7 @@
 //! blackbody colours in [`blackbody`].
 
 pub mod blackbody;
+pub mod clear;
 pub mod compose;
 pub mod light;
 pub mod march;

@@ -110,6 +110,34 @@ fn a_dense_puff_between_the_sun_and_a_thin_plume_shadows_the_plume() {
 }
 
 #[test]
+fn skipping_bricks_with_nothing_in_them_loses_no_light() {
+    // Smoke filling brick x = 1 exactly, so its neighbours x = 0 and 2 hold nothing themselves
+    // but their samples near the shared faces read it; bricks x = 3..5 hold nothing at all.
+    let slab = |p: IVec3| if (8..16).contains(&p.x) { 0.5 } else { 0.0 };
+    let (lo, hi) = (IVec3::new(0, 0, 0), IVec3::new(5, 1, 1));
+    let skipped = volume(lo, hi, slab);
+    // The same smoke over a trace of density everywhere, so no brick is skipped: every extra
+    // sample adds ~1e-38 of absorption and light.
+    let marched = volume(lo, hi, |p| slab(p) + 1e-37);
+    let mut l = look(8.0);
+    l.background = Vec4::new(0.1, 0.1, 0.1, 1.0);
+    l.ambient = Vec3::splat(0.3);
+    let lights = [
+        Light { kind: LightKind::Directional(Vec3::new(1.0, 0.3, 0.2).normalize()), color: Vec3::splat(3.0) },
+        Light { kind: LightKind::Point(Vec3::new(20.0, 8.0, 8.0) * H as f32), color: Vec3::splat(0.05) },
+    ];
+    // Looking across x, so rays cross the faces of brick 1 at a slant.
+    let at = Vec3::new(12.0, 8.0, 8.0) * H as f32;
+    let camera = Camera::new(at + Vec3::new(1.0, 0.4, 2.0), at, Vec3::Y, 30.0, 0.1, 100.0).unwrap();
+    let view = View::new(camera, 24, 16).unwrap();
+    let (a, b) = (render(&skipped, &view, &lights, &l), render(&marched, &view, &lights, &l));
+    let worst = a.data().iter().zip(b.data()).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+    let lit = a.data().chunks(4).filter(|p| p[0] > 0.11).count();
+    assert!(lit > 20, "the slab is seen: {lit} pixels brighter than the background");
+    assert!(worst < 1e-6, "skipped and marched renders differ by {worst}");
+}
+
+#[test]
 fn an_empty_volume_renders_the_background() {
     let v = Volume::empty(H);
     let mut l = look(8.0);

@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
 use pyrograph::wedge::{Variant, Wedges, cell_image};
+use pyrograph::{errln, outln};
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, FrameSet, Graph, GraphDoc, Registry};
+use pyrograph_frontend::text::printable_json;
 use rayon::prelude::*;
 
 use crate::{Failure, RenderOpts, apply_sets, explain, load, memory_kib};
@@ -30,10 +32,12 @@ pub fn collect(job_dir: &Path, json_out: bool) -> Result<(), Failure> {
     pyrograph_frontend::core::document::write_atomic(&merged, text.as_bytes(), true)
         .map_err(|e| Failure(format!("error: writing {}: {e}", merged.display())))?;
     if json_out {
-        println!("{text}");
+        // The merged file keeps the tasks' own strings; what reaches the terminal is printable.
+        let shown = serde_json::to_value(&report).map(printable_json).map_err(|e| Failure(format!("error: {e}")))?;
+        println!("{}", serde_json::to_string_pretty(&shown).map_err(|e| Failure(format!("error: {e}")))?);
     } else {
         let bytes: u64 = report.files.iter().map(|f| f.bytes).sum();
-        println!(
+        outln!(
             "{} tasks, {} files ({:.1} MiB), {:.1} task-seconds, peak {} MiB; merged into {}",
             report.tasks,
             report.files.len(),
@@ -44,10 +48,10 @@ pub fn collect(job_dir: &Path, json_out: bool) -> Result<(), Failure> {
         );
     }
     if !report.missing.is_empty() {
-        eprintln!("error: {} of {} have no finished task", report.missing, report.frames);
+        errln!("error: {} of {} have no finished task", report.missing, report.frames);
     }
     for d in &report.damaged {
-        eprintln!("error: {d}");
+        errln!("error: {d}");
     }
     if report.is_complete() { Ok(()) } else { Err(Failure(String::new())) }
 }
@@ -112,18 +116,18 @@ pub fn job(registry: &Registry, a: &JobArgs, job_dir: &Path, overwrite: bool) ->
             .map_err(|e| Failure(format!("error: writing {}: {e}", job_dir.join(f).display())))?;
     }
     let tasks = a.frames.chunks(a.chunk).len() * variants.len().max(1);
-    println!("job bundle {}: {tasks} tasks of up to {} frames ({})", job_dir.display(), a.chunk, a.frames);
+    outln!("job bundle {}: {tasks} tasks of up to {} frames ({})", job_dir.display(), a.chunk, a.frames);
     let deps = if simulate {
-        println!("a Simulate step caches the simulations once ({}) before the chunks render", simulations_note(variants.len()));
+        outln!("a Simulate step caches the simulations once ({}) before the chunks render", simulations_note(variants.len()));
         " --run-dependencies"
     } else {
         ""
     };
-    println!(
+    outln!(
         "run it here:  openjd run {0}/template.yaml --step Render{deps} -p file://{0}/job_params.yaml",
         abs(job_dir)?.display()
     );
-    println!("submit it:    deadline bundle submit {} (AWS Deadline Cloud)", job_dir.display());
+    outln!("submit it:    deadline bundle submit {} (AWS Deadline Cloud)", job_dir.display());
     Ok(())
 }
 
@@ -250,7 +254,7 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
         chosen.par_iter().zip(built).map(|(v, (graph, out))| run_variant(&graph, out, o, v)).collect::<Result<_, _>>()?;
     let mut failed = false;
     for r in &runs {
-        println!(
+        outln!(
             "wedge {}/{} {}: {} files in {}",
             r.variant.index + 1,
             all.len(),
@@ -259,7 +263,7 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
             r.out.display()
         );
         for e in &r.errors {
-            eprintln!("{e}");
+            errln!("{e}");
             failed = true;
         }
     }
@@ -270,9 +274,9 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
     if o.sheet && !failed {
         let sheet_path = out_root.join("wedges.png");
         write_sheet(&runs, wedges, &sheet_path, o.overwrite)?;
-        println!("wedge sheet: {}", sheet_path.display());
+        outln!("wedge sheet: {}", sheet_path.display());
     }
-    println!("cooked {} variants in {:.2} s", runs.len(), started.elapsed().as_secs_f64());
+    outln!("cooked {} variants in {:.2} s", runs.len(), started.elapsed().as_secs_f64());
     if failed { Err(Failure(String::new())) } else { Ok(()) }
 }
 

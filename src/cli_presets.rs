@@ -4,10 +4,12 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use pyrograph::{errln, outln};
 use pyrograph_frontend::core::builtin::INCLUDE_PATH;
 use pyrograph_frontend::core::{BuildOptions, Graph, GraphDoc, NodeDoc, ParamValue, Registry};
 use pyrograph_frontend::preset_cook::{PRESET_NODE, thumbnail, thumbnail_path, wrap};
 use pyrograph_frontend::presets::{Library, PRESET_PATH_VAR, Preset, builtin_dir, matches, search_path};
+use pyrograph_frontend::text::printable_json;
 use serde_json::json;
 
 use crate::{Failure, RenderOpts, apply_sets, cook_graph};
@@ -42,13 +44,13 @@ fn library(dir: Option<&Path>, graph: Option<&Path>) -> Result<Library, Failure>
     let lib = Library::scan(&dirs);
     for d in &lib.missing {
         if d == &builtin_dir() {
-            eprintln!("note: pyrograph's own presets are not at {} (a binary moved away from its source tree)", d.display());
+            errln!("note: pyrograph's own presets are not at {} (a binary moved away from its source tree)", d.display());
         } else {
-            eprintln!("note: preset folder {} does not exist", d.display());
+            errln!("note: preset folder {} does not exist", d.display());
         }
     }
     for s in &lib.shadowed {
-        eprintln!(
+        errln!(
             "note: preset '{}' in {} is hidden by {} (earlier in the search path)",
             s.preset.name,
             s.preset.file.display(),
@@ -56,7 +58,7 @@ fn library(dir: Option<&Path>, graph: Option<&Path>) -> Result<Library, Failure>
         );
     }
     for (file, why) in &lib.refused {
-        eprintln!("error: {}: not a usable preset: {why}", file.display());
+        errln!("error: {}: not a usable preset: {why}", file.display());
     }
     Ok(lib)
 }
@@ -88,12 +90,12 @@ pub fn presets(registry: &Registry, q: &PresetQuery, json_out: bool) -> Result<(
             }
             Err(e) => {
                 failed = true;
-                eprintln!("{e}");
+                errln!("{e}");
             }
         }
     }
     if json_out {
-        println!("{}", serde_json::Value::Array(list));
+        println!("{}", printable_json(serde_json::Value::Array(list)));
     } else {
         for p in &list {
             print_entry(p);
@@ -105,11 +107,11 @@ pub fn presets(registry: &Registry, q: &PresetQuery, json_out: bool) -> Result<(
 fn print_entry(p: &serde_json::Value) {
     let tags: Vec<&str> = p["tags"].as_array().into_iter().flatten().filter_map(|t| t.as_str()).collect();
     let tags = if tags.is_empty() { String::new() } else { format!("  [{}]", tags.join(", ")) };
-    println!("{}  {}{tags}", p["name"].as_str().unwrap_or(""), p["file"].as_str().unwrap_or(""));
-    println!("    {}", p["description"].as_str().unwrap_or(""));
+    outln!("{}  {}{tags}", p["name"].as_str().unwrap_or(""), p["file"].as_str().unwrap_or(""));
+    outln!("    {}", p["description"].as_str().unwrap_or(""));
     for kind in ["inputs", "params", "outputs"] {
         for port in p[kind].as_array().into_iter().flatten() {
-            println!(
+            outln!(
                 "    {kind:<8} {:<18} {:<14} {}",
                 port["name"].as_str().unwrap_or(""),
                 port["type"].as_str().unwrap_or(""),
@@ -128,7 +130,7 @@ fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite
             // A library's preset names its own thumbnail: it may not point the writer elsewhere.
             let declared = p.meta.thumbnail.as_deref().map(Path::new);
             if declared.is_some_and(|t| t.is_absolute() || t.components().any(|c| c == std::path::Component::ParentDir)) {
-                eprintln!(
+                errln!(
                     "error: preset '{}' ({}): thumbnail \"{}\" leaves the preset's folder; name a file inside it, or use --out",
                     p.name,
                     p.file.display(),
@@ -140,14 +142,14 @@ fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite
         }
     };
     if target.exists() && !overwrite {
-        println!("{}: kept {} (it exists; --overwrite replaces it)", p.name, target.display());
+        outln!("{}: kept {} (it exists; --overwrite replaces it)", p.name, target.display());
         return true;
     }
     let started = std::time::Instant::now();
     let thumb = match thumbnail(registry, &p.file) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!("error: preset '{}' ({}): {}", p.name, p.file.display(), e.trim_start_matches("error: "));
+            errln!("error: preset '{}' ({}): {}", p.name, p.file.display(), e.trim_start_matches("error: "));
             return false;
         }
     };
@@ -164,11 +166,11 @@ fn cook_thumbnail(registry: &Registry, p: &Preset, out: Option<&Path>, overwrite
         })
         .and_then(|bytes| pyrograph_frontend::core::document::write_atomic(&target, &bytes, true).map_err(|e| e.to_string()));
     if let Err(e) = written {
-        eprintln!("error: preset '{}': writing {}: {e}", p.name, target.display());
+        errln!("error: preset '{}': writing {}: {e}", p.name, target.display());
         return false;
     }
     let frame = thumb.frame.map(|(f, n)| format!("frame {f} of {n}")).unwrap_or_else(|| "image".into());
-    println!("{}: {} ({frame}, {:.1} s)", p.name, target.display(), started.elapsed().as_secs_f64());
+    outln!("{}: {} ({frame}, {:.1} s)", p.name, target.display(), started.elapsed().as_secs_f64());
     true
 }
 
@@ -250,7 +252,7 @@ pub fn render_preset(
     cook_graph(&g, &file, o, &["write".to_string()])?;
     if !o.json {
         let what = if wrapped.is_clip { format!("{stem}/{stem}_####.png") } else { format!("{stem}.png") };
-        println!("frames in {}", out.join(what).display());
+        outln!("frames in {}", out.join(what).display());
     }
     Ok(())
 }

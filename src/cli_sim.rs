@@ -11,6 +11,7 @@ use pyrograph_frontend::volume::vdb::sim_cache::{cache_file, cache_name, write_c
 use crate::Failure;
 use crate::cli_farm::build_variant;
 use pyrograph::job::{SIMULATION_TYPE, simulations};
+use pyrograph::outln;
 
 /// What `simulate` steps and where it caches it.
 #[derive(clap::Args)]
@@ -67,7 +68,7 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
     let graph = build(registry, a)?;
     let sims = simulations(&graph);
     if sims.is_empty() {
-        println!("{}: no {SIMULATION_TYPE} node, nothing to cache", a.graph.display());
+        outln!("{}: no {SIMULATION_TYPE} node, nothing to cache", a.graph.display());
         return Ok(());
     }
     let mut names: Vec<String> = sims.iter().map(|s| cache_name(s)).collect();
@@ -91,7 +92,7 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         let last = a.frames.as_ref().map_or(clip.len(), |f| (f.last() + 1).min(clip.len()));
         let files: Vec<PathBuf> = (0..last).map(|i| cache_file(&a.sim_cache, id, i)).collect();
         if a.skip_existing && files.iter().all(|f| f.is_file()) {
-            println!("{id}: {last} frames already cached in {}", a.sim_cache.join(cache_name(id)).display());
+            outln!("{id}: {last} frames already cached in {}", a.sim_cache.join(cache_name(id)).display());
             continue;
         }
         if !a.overwrite
@@ -113,7 +114,7 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         }
         let dir = a.sim_cache.join(cache_name(id));
         let secs = started.elapsed().as_secs_f64();
-        println!(
+        outln!(
             "{id}: {last} frames cached in {} ({secs:.1} s; {} sub-steps, {:.1} a second; up to {} active voxels; smoke {} voxels tall)",
             dir.display(),
             stats.substeps,

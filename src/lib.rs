@@ -10,3 +10,20 @@ pub mod job;
 pub mod look;
 pub mod manifest;
 pub mod wedge;
+
+/// `println!` for text that may echo a user's input (node ids, paths, values): control characters
+/// escaped and overlong runs cut, so a hostile graph cannot drive the user's terminal
+/// ([`pyrograph_frontend::core::text::printable`]). Every line the command prints goes through it
+/// or, for `--json`, through [`pyrograph_frontend::core::text::printable_json`].
+#[macro_export]
+macro_rules! outln {
+    () => { println!() };
+    ($($t:tt)*) => { println!("{}", pyrograph_frontend::core::text::printable(&format!($($t)*))) };
+}
+
+/// `eprintln!` as [`outln!`] prints: control characters escaped, overlong runs cut.
+#[macro_export]
+macro_rules! errln {
+    () => { eprintln!() };
+    ($($t:tt)*) => { eprintln!("{}", pyrograph_frontend::core::text::printable(&format!($($t)*))) };
+}

@@ -9,6 +9,9 @@ use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use serde_json::json;
 
+use pyrograph::{errln, outln};
+use pyrograph_frontend::text::printable_json;
+
 mod cli_farm;
 mod cli_presets;
 mod cli_sim;
@@ -266,7 +269,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let registry = pyrograph_frontend::registry();
     if let Err(Failure(msg)) = cli.limits.apply() {
-        eprintln!("{msg}");
+        errln!("{msg}");
         return ExitCode::FAILURE;
     }
     let result = match cli.command {
@@ -323,7 +326,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure(msg)) => {
             if !msg.is_empty() {
-                eprintln!("{msg}");
+                errln!("{msg}");
             }
             ExitCode::FAILURE
         }
@@ -437,7 +440,7 @@ fn progress_bars(enabled: bool) -> Option<pyrograph_frontend::core::ProgressFn> 
         let bar = bars.entry(node.clone()).or_insert_with(|| {
             let b = multi.add(ProgressBar::new(*total as u64));
             b.set_style(style.clone());
-            b.set_prefix(node.to_string());
+            b.set_prefix(pyrograph_frontend::core::text::printable(node).into_owned());
             b
         });
         bar.set_position((*done as u64).max(bar.position()));
@@ -471,7 +474,7 @@ fn render(registry: &Registry, path: &Path, o: &RenderOpts) -> Result<(), Failur
     targets.retain(|t| {
         let bypassed = doc.node(t).is_some_and(|n| n.bypass) && graph.desc(t).is_some_and(|d| d.time == TimeDep::Sink);
         if bypassed {
-            println!("{t}: bypassed, writes nothing");
+            outln!("{t}: bypassed, writes nothing");
         }
         !bypassed
     });
@@ -539,7 +542,7 @@ fn report(
         let cache = pyrograph_frontend::core::FrameCache::global().stats();
         println!(
             "{}",
-            json!({
+            printable_json(json!({
                 "ok": errors.is_empty(),
                 "seconds": elapsed.as_secs_f64(),
                 "peak_rss_mib": memory_kib("VmHWM").map(|k| k >> 10),
@@ -547,23 +550,23 @@ fn report(
                 "targets": nodes,
                 "errors": errs,
                 "warnings": warnings.iter().map(|w| json!({"node": warning_node(w), "message": w.message})).collect::<Vec<_>>(),
-            })
+            }))
         );
     } else {
         for t in targets {
             if let Some(Ok(values)) = result.node(t) {
-                println!("{t}: {}", describe_outputs(graph, t, values));
+                outln!("{t}: {}", describe_outputs(graph, t, values));
             }
         }
         for w in warnings {
-            eprintln!("warning: node '{}': {}", warning_node(w), w.message);
+            errln!("warning: node '{}': {}", warning_node(w), w.message);
         }
         for (node, e) in &errors {
-            eprintln!("error: {}", explain(node, e));
+            errln!("error: {}", explain(node, e));
         }
         if errors.is_empty() {
             let peak = memory_kib("VmHWM").map(|k| format!(", peak memory {} MiB", k >> 10)).unwrap_or_default();
-            println!("cooked in {:.2} s{peak}", elapsed.as_secs_f64());
+            outln!("cooked in {:.2} s{peak}", elapsed.as_secs_f64());
         }
     }
     if errors.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
@@ -611,9 +614,9 @@ fn demo(registry: &Registry, out: &Path) -> Result<(), Failure> {
     for s in &sinks {
         let frames = result.output(&graph, s, "frames").map(|v| v.summary()).unwrap_or_default();
         let first = result.output(&graph, s, "first").map(|v| v.summary()).unwrap_or_default();
-        println!("demo: {s} wrote {frames} frames, first {first}");
+        outln!("demo: {s} wrote {frames} frames, first {first}");
     }
-    println!("demo frames are in {} (cooked in {:.2} s)", abs.display(), started.elapsed().as_secs_f64());
+    outln!("demo frames are in {} (cooked in {:.2} s)", abs.display(), started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -637,21 +640,23 @@ fn check(registry: &Registry, path: &Path, options: &BuildOptions, json_out: boo
         let counts = built.as_ref().ok().map(|g| json!({"nodes": g.node_count(), "edges": g.edge_count()}));
         println!(
             "{}",
-            json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list, "warnings": warned})
+            printable_json(
+                json!({"ok": problems.is_empty(), "file": path.display().to_string(), "graph": counts, "problems": list, "warnings": warned})
+            )
         );
         return if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) };
     }
     // Warnings do not fail a check: the graph cooks, its result may be wrong.
     for w in &warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     if let (Ok(g), true) = (&built, problems.is_empty()) {
-        println!("ok: {}: {} nodes, {} edges", path.display(), g.node_count(), g.edge_count());
+        outln!("ok: {}: {} nodes, {} edges", path.display(), g.node_count(), g.edge_count());
     } else {
         for p in &problems {
-            eprintln!("error: {p}");
+            errln!("error: {p}");
         }
-        eprintln!("{}: {} problem(s)", path.display(), problems.len());
+        errln!("{}: {} problem(s)", path.display(), problems.len());
     }
     if problems.is_empty() { Ok(()) } else { Err(Failure(String::new())) }
 }
@@ -662,7 +667,7 @@ fn save(path: &Path, output: &Path, sets: &[String], overwrite: bool) -> Result<
     let mut doc = GraphDoc::load(path)?;
     apply_sets(&mut doc, sets)?;
     doc.save(output, overwrite).map_err(|e| Failure(format!("error: cannot write {}: {e}", output.display())))?;
-    println!("saved {}", output.display());
+    outln!("saved {}", output.display());
     Ok(())
 }
 
@@ -670,10 +675,10 @@ fn nodes(registry: &Registry, markdown: bool, json_out: bool) {
     if markdown {
         print!("{}", pyrograph_frontend::reference::markdown(registry));
     } else if json_out {
-        println!("{}", pyrograph_frontend::reference::json(registry));
+        println!("{}", printable_json(pyrograph_frontend::reference::json(registry)));
     } else {
         for d in registry.descs() {
-            println!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());
+            outln!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());
         }
     }
 }
@@ -702,26 +707,26 @@ fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure>
             .collect();
         println!(
             "{}",
-            json!({"file": path.display().to_string(), "description": doc.description, "nodes": nodes,
+            printable_json(json!({"file": path.display().to_string(), "description": doc.description, "nodes": nodes,
                    "edges": doc.edges, "interface": doc.interface.as_ref().map(|i| json!({"inputs": i.inputs, "outputs": i.outputs, "params": i.params})),
-                   "sinks": graph.sinks().iter().map(|s| s.to_string()).collect::<Vec<_>>()})
+                   "sinks": graph.sinks().iter().map(|s| s.to_string()).collect::<Vec<_>>()}))
         );
         return Ok(());
     }
-    println!("{}: {} nodes, {} edges", path.display(), graph.node_count(), graph.edge_count());
+    outln!("{}: {} nodes, {} edges", path.display(), graph.node_count(), graph.edge_count());
     if let Some(d) = &doc.description {
-        println!("  {d}");
+        outln!("  {d}");
     }
     for (id, ty, lifted, outs) in rows {
-        println!("  {id:<16} {ty:<30} {}{}", outs.join(", "), if lifted { "  (per frame over a clip)" } else { "" });
+        outln!("  {id:<16} {ty:<30} {}{}", outs.join(", "), if lifted { "  (per frame over a clip)" } else { "" });
     }
     for (a, b) in &doc.edges {
-        println!("  {a} -> {b}");
+        outln!("  {a} -> {b}");
     }
     if !animated.is_empty() {
-        println!("  animated parameters:");
+        outln!("  animated parameters:");
         for (node, port, value) in &animated {
-            println!("    {node}.{port} = {value}");
+            outln!("    {node}.{port} = {value}");
         }
     }
     Ok(())
@@ -755,11 +760,11 @@ fn bench(registry: &Registry, iters: usize, json_out: bool) {
             .iter()
             .map(|(s, w, med, min, c)| json!({"graph": s, "nodes": 200, "workload": w, "median_s": med.as_secs_f64(), "min_s": min.as_secs_f64(), "cooked_nodes": c, "iters": iters}))
             .collect();
-        println!("{}", serde_json::Value::Array(list));
+        println!("{}", printable_json(serde_json::Value::Array(list)));
         return;
     }
-    println!("{:<8} {:<8} {:>12} {:>12} {:>8}", "graph", "workload", "median", "min", "cooked");
+    outln!("{:<8} {:<8} {:>12} {:>12} {:>8}", "graph", "workload", "median", "min", "cooked");
     for (s, w, med, min, c) in rows {
-        println!("{s:<8} {w:<8} {:>9.1} µs {:>9.1} µs {c:>8}", med.as_secs_f64() * 1e6, min.as_secs_f64() * 1e6);
+        outln!("{s:<8} {w:<8} {:>9.1} µs {:>9.1} µs {c:>8}", med.as_secs_f64() * 1e6, min.as_secs_f64() * 1e6);
     }
 }

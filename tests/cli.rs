@@ -334,3 +334,48 @@ fn a_bypassed_writer_writes_nothing_and_the_same_writer_active_writes() {
         assert_eq!(text(&o).contains("write: bypassed, writes nothing"), bypass, "{}", text(&o));
     }
 }
+
+/// A graph whose node id and path hold terminal controls (OSC retitle, BEL, CR, NUL, clear
+/// screen): every message shows them escaped, in text and in `--json`, and a 100 kB id is cut.
+#[test]
+fn control_characters_in_ids_and_values_never_reach_the_terminal_raw() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("g.ron");
+    std::fs::write(
+        &graph,
+        r#"(version: 3, nodes: {"a\u{1b}]0;PWNED\u{7}b\r\u{0}": (type: "imaging.load_image", params: {"path": "x\u{1b}[2J.png"})}, edges: [])"#,
+    )
+    .unwrap();
+    let raw = |o: &Output| [&o.stdout, &o.stderr].iter().any(|s| s.iter().any(|b| matches!(b, 0 | 7 | 0x0d | 0x1b)));
+    let g = graph.to_str().unwrap();
+    let out = dir.path().join("out");
+    for args in [vec!["render", g, "--out", out.to_str().unwrap()], vec!["check", g], vec!["info", g]] {
+        let o = run(&args);
+        assert!(!raw(&o), "{args:?}: {:?}", text(&o));
+        for json in [false, true] {
+            if !json && args[0] == "info" {
+                continue;
+            }
+            let mut a = args.clone();
+            if json {
+                a.push("--json");
+            }
+            let o = run(&a);
+            assert!(!raw(&o), "{a:?}: {:?}", text(&o));
+            let t = text(&o);
+            let escaped = if json { r"a\\u{1b}]0;PWNED\\u{7}b\\u{d}\\u{0}" } else { r"a\u{1b}]0;PWNED\u{7}b\u{d}\u{0}" };
+            assert!(t.contains(escaped), "{a:?}: {t}");
+            if args[0] == "render" {
+                let path = if json { r"x\\u{1b}[2J.png" } else { r"x\u{1b}[2J.png" };
+                assert!(t.contains(path) && t.contains("no such file"), "{a:?}: {t}");
+                assert_eq!(o.status.code(), Some(1));
+            }
+        }
+    }
+    let long = dir.path().join("long.ron");
+    std::fs::write(&long, format!(r#"(version: 3, nodes: {{"{}": (type: "nope")}}, edges: [])"#, "x".repeat(100_000))).unwrap();
+    let o = run(&["check", long.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(t.len() < 2_000, "{} bytes", t.len());
+    assert!(t.contains("more characters]") && t.contains("unknown node type 'nope'"), "{t}");
+}

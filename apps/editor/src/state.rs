@@ -233,13 +233,14 @@ impl Editor {
         self.descs.get(id)
     }
 
-    /// Every problem attached to node `id`: validation first, then its cook error.
+    /// Every problem attached to node `id`: validation first, then its cook error (control
+    /// characters escaped, overlong runs cut, as the status line shows them).
     pub fn node_problems(&self, id: &str) -> Vec<String> {
         let mut v = self.validation.by_node.get(id).cloned().unwrap_or_default();
         if let Some(e) = self.cook_errors.get(&self.runtime_id(id)) {
             v.push(e.clone());
         }
-        v
+        v.into_iter().map(|p| pyrograph_frontend::core::text::printable(&p).into_owned()).collect()
     }
 
     /// Warnings node `id` reported when it last cooked (kept while the cache serves it); for a
@@ -276,9 +277,11 @@ impl Editor {
         self.status.as_ref()
     }
 
-    /// Sets the status message.
+    /// Sets the status message, its control characters escaped and overlong runs cut (a node id or
+    /// path in it comes from the user's file).
     pub fn set_status(&mut self, text: impl Into<String>, error: bool) {
-        self.status = Some(Status { text: text.into(), error, at: Instant::now() });
+        let text = pyrograph_frontend::core::text::printable(&text.into()).into_owned();
+        self.status = Some(Status { text, error, at: Instant::now() });
     }
 
     /// The selected node ids.

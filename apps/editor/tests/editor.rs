@@ -377,3 +377,29 @@ fn warnings_show_on_their_node_until_it_cooks_again() {
     settle(&mut h);
     assert!(h.state().editor.node_warnings(&w).is_empty());
 }
+
+#[test]
+fn control_characters_in_a_graph_show_escaped_in_the_status_and_on_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.ron");
+    let id = "a\u{1b}]0;PWNED\u{7}b\r\u{0}";
+    std::fs::write(
+        &bad,
+        r#"(version: 3, nodes: {"a\u{1b}]0;PWNED\u{7}b\r\u{0}": (type: "imaging.no_such\u{1b}[2J")}, edges: [])"#,
+    )
+    .unwrap();
+    let mut ed = Editor::with_default_registry();
+    ed.open(&bad).expect("a file that parses opens");
+    let status = ed.status().expect("a status").text.clone();
+    let raw = |t: &str| t.chars().any(|c| matches!(c, '\u{0}' | '\u{7}' | '\r' | '\u{1b}'));
+    assert!(!raw(&status), "{status:?}");
+    assert!(status.contains(r"a\u{1b}]0;PWNED\u{7}b\u{d}\u{0}") && status.contains(r"imaging.no_such\u{1b}[2J"), "{status}");
+    let problems = ed.node_problems(id);
+    assert!(!problems.is_empty() && problems.iter().all(|p| !raw(p)), "{problems:?}");
+    // A 100 kB id is cut in the status line.
+    let long = dir.path().join("long.ron");
+    std::fs::write(&long, format!(r#"(version: 3, nodes: {{"{}": (type: "nope")}}, edges: [])"#, "x".repeat(100_000))).unwrap();
+    ed.open(&long).expect("a file that parses opens");
+    let status = &ed.status().expect("a status").text;
+    assert!(status.len() < 2_000 && status.contains("more characters]"), "{} bytes", status.len());
+}

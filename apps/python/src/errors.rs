@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 use pyrograph_frontend::check::Problem as RustProblem;
 use pyrograph_frontend::core::{Diagnostics, NodeError};
+use pyrograph_frontend::text::printable;
 
 pyo3::create_exception!(
     pyrograph,
@@ -14,8 +15,13 @@ pyo3::create_exception!(
     "A graph that does not load, type-check or cook. `.node` and `.port` say where (or None), `.message` what."
 );
 
-/// A `GraphError` carrying `node`, `port` and `message` attributes.
+/// A `GraphError` carrying `node`, `port` and `message` attributes. The message (and `.message`)
+/// has its control characters escaped and overlong runs cut, as the CLI prints it: a traceback
+/// printed to a terminal cannot be made to drive it. `.node` and `.port` keep the exact ids, for
+/// code that looks the node up.
 pub fn graph_error(py: Python<'_>, node: Option<&str>, port: Option<&str>, message: &str) -> PyErr {
+    let shown = printable(message);
+    let message: &str = &shown;
     let err = GraphError::new_err(message.to_string());
     let value = err.value(py);
     // Setting attributes on a fresh exception instance cannot fail short of memory exhaustion;
@@ -67,9 +73,9 @@ impl From<RustProblem> for Problem {
             file: p.file.as_ref().map(|f| f.display().to_string()),
             node: p.node.clone(),
             port: p.port.clone(),
-            location: p.location.clone(),
+            location: printable(&p.location).into_owned(),
             kind: p.kind.clone(),
-            message: p.to_string(),
+            message: printable(&p.to_string()).into_owned(),
         }
     }
 }

@@ -559,5 +559,9 @@ fn check_param(py: Python<'_>, id: &str, ty: &str, name: &str) -> PyResult<()> {
 
 /// `(node, message)` of the warnings reported so far in the cook with `ctx`.
 fn warning_pairs(ctx: &pyrograph_frontend::core::CookCtx) -> Vec<(String, String)> {
-    ctx.warnings().into_iter().map(|w| (w.node.as_deref().unwrap_or("").to_string(), w.message)).collect()
+    // The message shown as the CLI prints it (control characters escaped); the node id exact.
+    ctx.warnings()
+        .into_iter()
+        .map(|w| (w.node.as_deref().unwrap_or("").to_string(), pyrograph_frontend::text::printable(&w.message).into_owned()))
+        .collect()
 }

@@ -197,3 +197,37 @@ def test_set_limits_confines_reads_like_the_cli(tmp_path):
     problems = g.check()
     assert len(problems) == 1 and "is not a graph file" in problems[0].message and "hunter2" not in problems[0].message
     assert pathlib.Path(secret / "passwd").read_text() == "hunter2-top-secret\n"
+
+
+def test_control_characters_in_ids_and_values_are_escaped_in_messages(tmp_path):
+    raw = {"\x00", "\x07", "\r", "\x1b"}
+    bad = tmp_path / "bad.ron"
+    bad.write_text('(version: 3, nodes: {"a\\u{1b}]0;PWNED\\u{7}b\\r\\u{0}": (type: "imaging.no_such\\u{1b}[2J")}, edges: [])')
+    graph = pyrograph.Graph.load(str(bad))
+    problems = graph.check()
+    assert problems, "an unknown node type is a problem"
+    for p in problems:
+        assert not raw & (set(str(p)) | set(p.location)), repr(p)
+    text = " ".join(p.location + " " + str(p) for p in problems)
+    assert "a\\u{1b}]0;PWNED\\u{7}b\\u{d}\\u{0}" in text and "imaging.no_such\\u{1b}[2J" in text, text
+    with pytest.raises(pyrograph.GraphError) as e:
+        graph.cook("a\x1b]0;PWNED\x07b\r\x00")
+    text = str(e.value)
+    assert not raw & set(text), repr(text)
+    assert e.value.message == text
+    # A cook error echoing a hostile path.
+    g = tmp_path / "g.ron"
+    g.write_text('(version: 3, nodes: {"load\\u{1b}": (type: "imaging.load_image", params: {"path": "x\\u{1b}[2J.png"})}, edges: [])')
+    graph = pyrograph.Graph.load(str(g))
+    with pytest.raises(pyrograph.GraphError) as e:
+        graph.cook("load\x1b.image")
+    text = str(e.value)
+    assert not raw & set(text), repr(text)
+    assert "x\\u{1b}[2J.png" in text and "load\\u{1b}" in text, text
+    assert e.value.node == "load\x1b", "the attribute keeps the exact id"
+    # A 100 kB id is cut.
+    long = tmp_path / "long.ron"
+    long.write_text('(version: 3, nodes: {"%s": (type: "nope")}, edges: [])' % ("x" * 100_000))
+    problems = pyrograph.Graph.load(str(long)).check()
+    assert problems and all(len(str(p)) + len(p.location) < 2_000 for p in problems)
+    assert any("more characters]" in p.location + str(p) for p in problems), problems

@@ -9,6 +9,7 @@ pub mod preset_cook;
 pub mod preset_docs;
 pub mod presets;
 pub mod reference;
+pub mod text;
 
 pub use pyrograph_core as core;
 pub use pyrograph_nodes_cloth as cloth;

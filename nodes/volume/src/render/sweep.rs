@@ -36,6 +36,16 @@ pub fn directional_transmittance(v: &Volume, density: &[f32], extinction: f32, t
     let order: Vec<&Vec<usize>> = if sign > 0 { layers.values().rev().collect() } else { layers.values().collect() };
     let slices: Vec<i32> = if sign > 0 { (0..DIM as i32).rev().collect() } else { (0..DIM as i32).collect() };
     let mut out = vec![1.0f32; top.voxels()];
+    // Per row and column across the light's axis (the same in every brick and slice): the upstream
+    // corner and the upper corner's weight.
+    let across = |axis: usize| -> [(i32, f32); DIM] {
+        std::array::from_fn(|a| {
+            let q = a as f32 + u[axis];
+            let c = floor_i(q);
+            (c, q - c as f32)
+        })
+    };
+    let (across1, across2) = (across(i1), across(i2));
     for bricks in order {
         for &j in &slices {
             let done: Vec<(usize, [f32; DIM * DIM])> = bricks
@@ -43,15 +53,6 @@ pub fn directional_transmittance(v: &Volume, density: &[f32], extinction: f32, t
                 .map(|&b| {
                     let tile = upstream(top, &out, density, b, (k, sign), j);
                     let mut slice = [1.0f32; DIM * DIM];
-                    // Per row and column across the light's axis: the upstream corner and weight.
-                    let across = |axis: usize| -> [(i32, f32); DIM] {
-                        std::array::from_fn(|a| {
-                            let q = a as f32 + u[axis];
-                            let c = floor_i(q);
-                            (c, q - c as f32)
-                        })
-                    };
-                    let (across1, across2) = (across(i1), across(i2));
                     for (n, t) in slice.iter_mut().enumerate() {
                         let mut local = IVec3::ZERO;
                         local[k] = j;

@@ -42,6 +42,7 @@ const BAD: &[(&str, &[&str])] = &[
     ("newer_version.ron", &["graph version 9 is newer"]),
     ("bypass_nothing_to_pass.ron", &["node 'card'", "cannot be bypassed: its output 'image' is Image"]),
     ("unset_variable.ron", &["node 'frames', port 'path'", "environment variable PYROGRAPH_TEST_UNSET_VARIABLE is not set"]),
+    ("outside_out.ron", &["node 'out', port 'path'", "card.png\" writes to", "outside the", "--allow-outside-out"]),
 ];
 
 #[test]

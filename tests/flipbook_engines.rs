@@ -297,7 +297,7 @@ fn every_engine_rebuilds_the_in_between_frames_better_than_a_cross_fade() {
     }
 }
 
-/// With REGENERATE=1: the README's pictures (the Unity sheets, and the in-between where the flame
+/// With REGENERATE=1: the guide book's pictures (the Unity sheets, and the in-between where the flame
 /// moves most: frames t and t+1, their cross-fade, Unity's motion blend and the true frame t+0.5,
 /// 2× in size; under the blends, their difference from the truth × 8).
 fn picture(dir: &Path, tex: &Texture, mv: &Texture, scale: f32, frames: &[Arc<Image>], truth: &[Arc<Image>]) {

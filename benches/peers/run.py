@@ -15,7 +15,7 @@ Kernel rows time the kernel inside one process on each side (examples/kernels, b
 (`e2e`) time files in to files out with /usr/bin/time. Rows with no peer time the papers' frame-rate
 targets in the same sitting with the crates' criterion benches (`cargo bench … -- --exact ID`, each round's
 value criterion's median; build them first with `cargo bench --no-run`), with the host's load. Inputs are made once in --work from the shared footage (PYROGRAPH_FOOTAGE,
-else ../shared/footage) or from seeded numpy. Writes --work/report.md (the full table, then the README's
+else ../shared/footage) or from seeded numpy. Writes --work/report.md (the full table, then BENCHMARKS.md's
 table with each row's target) and appends every run to --work/results.jsonl.
 """
 import argparse
@@ -475,7 +475,7 @@ def load_range(got):
 
 
 def compact(r, got):
-    """The README's row: workload and size, threads, medians, the median ratio and its rounds' range, target."""
+    """The Speed-at-a-glance row: workload and size, threads, medians, the median ratio and its rounds' range, target."""
     o = st.median(g[0]["ours"]["median_s"] for g in got)
     rss = lambda side: (f", {st.median(g[0][side]['peak_rss_mib'] for g in got):.0f} MiB"
                         if "peak_rss_mib" in got[0][0][side] else "")
@@ -598,8 +598,8 @@ def main():
     readme = ("| workload | threads (pyrograph / peer) | pyrograph | peer | pyrograph / peer: median (rounds) | target |\n"
               "| --- | --- | --- | --- | --- | --- |\n" + "\n".join(short))
     with open(os.path.join(a.work, "report.md"), "w") as f:
-        f.write(head + "\n\n" + table + "\n\nFor the README:\n\n" + readme + "\n")
-    print("\n" + table + "\n\nFor the README:\n\n" + readme)
+        f.write(head + "\n\n" + table + "\n\nFor BENCHMARKS.md's Speed at a glance:\n\n" + readme + "\n")
+    print("\n" + table + "\n\nFor BENCHMARKS.md's Speed at a glance:\n\n" + readme)
     if failed:
         raise SystemExit("outputs disagree:\n" + "\n".join(failed))
 

@@ -53,7 +53,12 @@ pub fn markdown(registry: &Registry, lib: &Library, root: &Path) -> Result<Strin
         let thumb = thumbnail_path(&p.file, p.meta.thumbnail.as_deref());
         let _ = writeln!(out, "\n## {}\n", p.name);
         if thumb.exists() {
-            let _ = writeln!(out, "![{}](../{})\n", p.name, rel(&thumb, root));
+            // `docs/images/preset-thumbs` links to `graphs/presets/thumbs`, so the book (which
+            // serves only what is under docs/) shows the shipped thumbnails without a copy.
+            let path = rel(&thumb, root);
+            let shown =
+                path.strip_prefix("graphs/presets/thumbs/").map_or(format!("../{path}"), |f| format!("images/preset-thumbs/{f}"));
+            let _ = writeln!(out, "![{}]({shown})\n", p.name);
         }
         let _ = writeln!(out, "{}\n", p.description.trim());
         let m = &p.meta;

@@ -444,7 +444,7 @@ fn problems(root: &Path, base: &Path) -> Vec<String> {
 
 /// Every crate root of the workspace: the CLI's library and binary, and each member's.
 fn crate_roots(ws: &Path) -> Vec<PathBuf> {
-    let mut roots = vec![ws.join("src/lib.rs"), ws.join("src/main.rs")];
+    let mut roots = vec![ws.join("src/lib.rs"), ws.join("src/main.rs"), ws.join("frontend/src/lib.rs")];
     for group in ["crates", "nodes", "apps"] {
         let Ok(entries) = std::fs::read_dir(ws.join(group)) else { continue };
         for e in entries.flatten() {
@@ -495,4 +495,104 @@ fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
     assert!(found.contains(&"import cycle between src/a.rs, src/b.rs".to_string()), "{found:?}");
     // blur.rs reaches files.rs (an algorithm) only; its test code is not counted.
     assert_eq!(found.len(), 2, "{found:?}");
+}
+
+/// The folders of the workspace from the bottom layer up: a crate may depend on crates in its own
+/// folder or a lower one. Programs (apps/ and the CLI at the root) are one layer and never depend
+/// on each other.
+const LAYERS: &[&str] = &["crates", "nodes", "frontend", "apps"];
+
+/// A crate's layer: the index of its top folder in `LAYERS`; the root package (the CLI) is a
+/// program, as apps/ are.
+fn layer(ws: &Path, dir: &Path) -> Result<usize, String> {
+    let rel = dir.strip_prefix(ws).map_err(|_| format!("{} is outside the workspace", dir.display()))?;
+    let Some(top) = rel.components().next() else { return Ok(LAYERS.len() - 1) };
+    let top = top.as_os_str().to_string_lossy();
+    LAYERS
+        .iter()
+        .position(|l| *l == top)
+        .ok_or_else(|| format!("{}: a crate outside the layer folders {LAYERS:?}", rel.display()))
+}
+
+/// Every dependency between workspace crates that runs up a layer (or between two programs), as
+/// (crate folder, dependency folder) pairs relative to the workspace.
+fn upward(ws: &Path, deps: &[(PathBuf, PathBuf)]) -> Vec<String> {
+    let programs = LAYERS.len() - 1;
+    let mut out = Vec::new();
+    for (from, to) in deps {
+        let name = |p: &Path| match p.strip_prefix(ws) {
+            Ok(r) if r.as_os_str().is_empty() => "the CLI (the root package)".to_string(),
+            Ok(r) => r.display().to_string(),
+            Err(_) => p.display().to_string(),
+        };
+        let (lf, lt) = match (layer(ws, from), layer(ws, to)) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(e), _) | (_, Err(e)) => {
+                out.push(e);
+                continue;
+            }
+        };
+        if lt > lf {
+            out.push(format!("{} depends on {}, a higher layer ({} above {})", name(from), name(to), LAYERS[lt], LAYERS[lf]));
+        } else if lf == programs && lt == programs {
+            out.push(format!("{} depends on {}: programs do not depend on each other", name(from), name(to)));
+        }
+    }
+    out
+}
+
+/// (crate folder, dependency folder) for every dependency of a workspace crate on another, from
+/// `cargo metadata` (normal, build and dev dependencies alike).
+fn workspace_deps(ws: &Path) -> Vec<(PathBuf, PathBuf)> {
+    let out = std::process::Command::new(env!("CARGO"))
+        .args(["metadata", "--no-deps", "--format-version", "1", "--offline"])
+        .current_dir(ws)
+        .output()
+        .expect("cargo metadata runs");
+    assert!(out.status.success(), "cargo metadata: {}", String::from_utf8_lossy(&out.stderr));
+    let meta: serde_json::Value = serde_json::from_slice(&out.stdout).expect("cargo metadata prints JSON");
+    let dir = |manifest: &str| Path::new(manifest).parent().expect("a manifest has a folder").to_path_buf();
+    let mut deps = Vec::new();
+    for pkg in meta["packages"].as_array().expect("packages") {
+        let from = dir(pkg["manifest_path"].as_str().expect("manifest_path"));
+        for dep in pkg["dependencies"].as_array().expect("dependencies") {
+            if let Some(path) = dep["path"].as_str() {
+                deps.push((from.clone(), PathBuf::from(path)));
+            }
+        }
+    }
+    deps
+}
+
+#[test]
+fn crates_depend_only_on_their_own_layer_or_lower() {
+    let ws = workspace();
+    let deps = workspace_deps(&ws);
+    assert!(deps.len() >= 30, "found {} dependencies between workspace crates", deps.len());
+    let wrong = upward(&ws, &deps);
+    assert!(wrong.is_empty(), "layers broken:\n{}", wrong.join("\n"));
+}
+
+/// The check itself, on made-up arrows: a node crate on the front-end library, a library on a node
+/// crate, and the editor on the Python module must each be caught; downward arrows must not.
+#[test]
+fn the_layer_check_finds_an_upward_dependency() {
+    let ws = Path::new("/ws");
+    let arrow = |a: &str, b: &str| (ws.join(a), ws.join(b));
+    let deps = [
+        arrow("nodes/imaging", "frontend"),
+        arrow("crates/render", "nodes/particles"),
+        arrow("apps/editor", "apps/python"),
+        arrow("frontend", "nodes/volume"),
+        arrow("apps/editor", "frontend"),
+        arrow("nodes/flame-model", "nodes/eigen"),
+        arrow("", "frontend"),
+        arrow("frontend", ""),
+    ];
+    let wrong = upward(ws, &deps);
+    assert_eq!(wrong.len(), 4, "{wrong:#?}");
+    assert!(wrong[0].starts_with("nodes/imaging depends on frontend, a higher layer"), "{}", wrong[0]);
+    assert!(wrong[1].starts_with("crates/render depends on nodes/particles"), "{}", wrong[1]);
+    assert!(wrong[2].contains("programs do not depend on each other"), "{}", wrong[2]);
+    assert!(wrong[3].starts_with("frontend depends on the CLI (the root package), a higher layer"), "{}", wrong[3]);
 }

@@ -17,10 +17,10 @@ use pyrograph_core::document::{GraphDoc, PresetDoc};
 pub const PRESET_PATH_VAR: &str = "PYROGRAPH_PRESET_PATH";
 
 /// The presets that come with pyrograph: `graphs/presets/` of the source tree this crate was built
-/// from (two folders above `crates/frontend`).
+/// from (the folder above `frontend/`).
 pub fn builtin_dir() -> PathBuf {
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
-    crate_dir.parent().and_then(Path::parent).unwrap_or(crate_dir).join("graphs/presets")
+    crate_dir.parent().unwrap_or(crate_dir).join("graphs/presets")
 }
 
 /// The folders searched, first to last: `<graph folder>/presets`, the folders of `env` (the value

@@ -23,21 +23,6 @@ fn needs_footage(p: &Preset) -> bool {
     p.meta.tags.iter().any(|t| t == "footage")
 }
 
-/// How far two thumbnails may drift (float sums in another order, another libm): the mean
-/// difference under 1/255 and at most 0.5 % of samples more than 8/255 apart.
-fn compare(made: &image::RgbaImage, want: &image::RgbaImage) -> Result<(), String> {
-    if made.dimensions() != want.dimensions() {
-        return Err(format!("size {:?}, golden {:?}", made.dimensions(), want.dimensions()));
-    }
-    let diffs: Vec<u8> = made.as_raw().iter().zip(want.as_raw()).map(|(a, b)| a.abs_diff(*b)).collect();
-    let mean = diffs.iter().map(|&d| d as f64).sum::<f64>() / diffs.len() as f64;
-    let far = diffs.iter().filter(|&&d| d > 8).count() as f64 / diffs.len() as f64;
-    if mean > 1.0 || far > 0.005 {
-        return Err(format!("mean difference {mean:.2}/255, {:.2} % of samples more than 8/255 apart", far * 100.0));
-    }
-    Ok(())
-}
-
 /// Checks, cooks and compares every preset `pick` selects; returns the failures.
 fn cook_all(pick: impl Fn(&Preset) -> bool) -> usize {
     let registry = pyrograph_frontend::registry();
@@ -76,7 +61,10 @@ fn cook_all(pick: impl Fn(&Preset) -> bool) -> usize {
         }
         match image::open(&file) {
             Ok(want) => {
-                if let Err(e) = compare(&made, &want.to_rgba8()) {
+                let want = want.to_rgba8();
+                if let Err(e) =
+                    pyrograph_testing::pictures_match(made.as_raw(), made.dimensions(), want.as_raw(), want.dimensions())
+                {
                     failures.push(format!("{}: {} {e}", p.name, file.display()));
                 }
             }

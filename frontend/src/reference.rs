@@ -24,8 +24,11 @@ pub(crate) fn one_line(s: &str) -> String {
     s.replace('\n', " ").replace('|', "\\|")
 }
 
+/// One node's section, with its picture (docs/images/nodes/, made by tests/node_pictures.rs;
+/// the link is relative to docs/, where the reference lives).
 fn node_section(out: &mut String, d: &NodeDesc) {
     let _ = writeln!(out, "### `{}`\n", d.type_name);
+    let _ = writeln!(out, "![{0}: its output on the standard inputs](images/nodes/{0}.png)\n", d.type_name);
     let _ = writeln!(out, "{}\n", d.doc.trim());
     let _ = writeln!(out, "*Time:* {}\n", d.time.name());
     if !d.inputs.is_empty() {
@@ -65,7 +68,10 @@ pub fn markdown(registry: &Registry) -> String {
          A `Clip<T>` connected to a `T` input of a per-frame node runs that node once per frame.\n\
          Number, vector, colour and true/false parameters of a per-frame node fed a clip can be keyed or \
          given an expression (`keys([...])`, `expr(\"...\")`: [Animating parameters](animation.md)); a \
-         simulation or whole-clip node follows keys only on the parameters marked *animatable per step*.\n",
+         simulation or whole-clip node follows keys only on the parameters marked *animatable per step*.\n\
+         Each node's picture is its output on the standard inputs (a procedural flame, and the masks, \
+         particles, meshes, volumes and databases made from it), shown as an artist would look at it; \
+         `tests/node_pictures.rs` makes them (`REGENERATE=1`) and fails when one is missing or stale.\n",
     );
     let mut category = "";
     for d in descs {

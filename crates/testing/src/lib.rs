@@ -11,6 +11,24 @@ pub fn workspace() -> PathBuf {
     here.parent().and_then(Path::parent).expect("crates/testing lies two folders below the workspace root").to_path_buf()
 }
 
+/// Whether a picture made now still matches its committed copy (thumbnails, node pictures): both
+/// 8-bit RGBA, the same size, the mean difference under 1/255 and at most 0.5 % of samples more
+/// than 8/255 apart, so float sums in another order or another libm do not count as a change.
+pub fn pictures_match(made: &[u8], made_size: (u32, u32), want: &[u8], want_size: (u32, u32)) -> Result<(), String> {
+    if made_size != want_size {
+        return Err(format!("size {made_size:?}, committed {want_size:?}"));
+    }
+    if made.len() != want.len() || made.is_empty() {
+        return Err(format!("{} samples against {}", made.len(), want.len()));
+    }
+    let far = made.iter().zip(want).filter(|(a, b)| a.abs_diff(**b) > 8).count() as f64 / made.len() as f64;
+    let mean = made.iter().zip(want).map(|(a, b)| f64::from(a.abs_diff(*b))).sum::<f64>() / made.len() as f64;
+    if mean > 1.0 || far > 0.005 {
+        return Err(format!("mean difference {mean:.2}/255, {:.2} % of samples more than 8/255 apart", far * 100.0));
+    }
+    Ok(())
+}
+
 /// The real flame footage (never committed to the repository): `PYROGRAPH_FOOTAGE` when set,
 /// else `<workspace>/../shared/footage`.
 pub fn footage() -> PathBuf {

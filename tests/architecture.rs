@@ -413,6 +413,30 @@ fn cycles(graph: &Edges) -> Vec<Vec<PathBuf>> {
     out
 }
 
+/// The file graph lifted to modules: where a file of module `a::x::…` imports one of `a::y::…`,
+/// the sibling modules `a::x` and `a::y` depend on each other's side, so a circle between two
+/// folders (`io` → `video` → `io`) shows even when no two files import each other. Module paths
+/// are written `io::files` as the nodes' names.
+fn module_edges(tree: &Tree, files: &Edges) -> Edges {
+    let module_of: BTreeMap<&PathBuf, &Vec<String>> = tree.iter().map(|(m, f)| (&f.path, m)).collect();
+    let name = |m: &[String]| PathBuf::from(m.join("::"));
+    let mut out = Edges::new();
+    for (from, targets) in files {
+        let Some(a) = module_of.get(from) else { continue };
+        for to in targets.keys() {
+            let Some(b) = module_of.get(to) else { continue };
+            let common = a.iter().zip(b.iter()).take_while(|(x, y)| x == y).count();
+            // A file inside the module it imports from (or its parent) is no circle of siblings.
+            if common >= a.len() || common >= b.len() {
+                continue;
+            }
+            let edge = out.entry(name(&a[..=common])).or_default();
+            edge.entry(name(&b[..=common])).or_default();
+        }
+    }
+    out
+}
+
 /// Every rule broken in the crate rooted at `root`, as messages with paths relative to `base`.
 fn problems(root: &Path, base: &Path) -> Vec<String> {
     let tree = read_tree(root);
@@ -438,6 +462,18 @@ fn problems(root: &Path, base: &Path) -> Vec<String> {
             continue;
         }
         out.push(format!("import cycle between {}", names.join(", ")));
+    }
+    let crate_dir = rel(root.parent().and_then(Path::parent).unwrap_or(root));
+    for group in cycles(&module_edges(&tree, &graph)) {
+        let names: Vec<String> = group.iter().map(|p| p.to_string_lossy().to_string()).collect();
+        // A circle of single files is the file cycle reported above (or the documented one);
+        // this reports the circles that run through a folder module.
+        let is_folder = |name: &String| {
+            tree.get(&name.split("::").map(String::from).collect::<Vec<_>>()).is_some_and(|m| !m.children.is_empty())
+        };
+        if names.iter().any(is_folder) {
+            out.push(format!("module cycle in {crate_dir} between {}", names.join(", ")));
+        }
     }
     out
 }
@@ -474,15 +510,21 @@ fn algorithms_do_not_import_nodes_and_files_form_no_cycle() {
 fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("src");
-    std::fs::create_dir_all(src.join("io")).unwrap();
+    for folder in ["io", "video"] {
+        std::fs::create_dir_all(src.join(folder)).unwrap();
+    }
     let files = [
-        ("lib.rs", "pub mod io;\npub mod blur;\npub mod a;\npub mod b;\n"),
-        ("io/mod.rs", "mod files;\npub mod nodes;\npub use files::*;\npub use nodes::*;\n"),
+        ("lib.rs", "pub mod io;\npub mod blur;\npub mod a;\npub mod b;\npub mod video;\n"),
+        ("io/mod.rs", "mod files;\npub mod nodes;\nmod sequence;\npub use files::*;\npub use nodes::*;\n"),
         ("io/files.rs", "use crate::io::LoadSequence;\npub fn read() { port!(LoadSequence, path); }\n"),
         ("io/nodes.rs", "node! {\n    pub struct LoadSequence { path: u8 }\n    pub struct Out {}\n}\n"),
         ("blur.rs", "use super::io::read;\npub fn blur() { read() }\n#[cfg(test)]\nuse crate::io::nodes::LoadSequence;\n"),
         ("a.rs", "use crate::b::{self, helper};\npub fn f() { helper() }\n"),
         ("b.rs", "pub fn helper() { crate::a::f() }\npub fn text() -> &'static str { \"; use at most {n}; \" }\n"),
+        // Two folders that lean on each other through different files: no file cycle, a module one.
+        ("io/sequence.rs", "use crate::video::open;\npub fn seq() { open() }\n"),
+        ("video/mod.rs", "mod probe;\npub use probe::*;\npub fn open() {}\n"),
+        ("video/probe.rs", "use crate::io::files::read;\npub fn probe() { read() }\n"),
     ];
     for (name, text) in files {
         std::fs::write(src.join(name), text).unwrap();
@@ -493,8 +535,9 @@ fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
         "{found:?}"
     );
     assert!(found.contains(&"import cycle between src/a.rs, src/b.rs".to_string()), "{found:?}");
+    assert!(found.iter().any(|f| f.starts_with("module cycle in ") && f.ends_with(" between io, video")), "{found:?}");
     // blur.rs reaches files.rs (an algorithm) only; its test code is not counted.
-    assert_eq!(found.len(), 2, "{found:?}");
+    assert_eq!(found.len(), 3, "{found:?}");
 }
 
 /// The folders of the workspace from the bottom layer up: a crate may depend on crates in its own

@@ -12,7 +12,7 @@ mod sixway;
 use std::path::Path;
 use std::sync::Arc;
 
-use pyrograph_frontend::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Image, Inputs, PortType, Value};
+use pyrograph_frontend::core::{BuildOptions, Clip, CookCtx, Evaluator, Graph, GraphDoc, Image, PortType, Value};
 use pyrograph_frontend::imaging::flipbook::optical_flow;
 
 /// Sheet rows and columns: 16 frames in the sheet, 15 in-betweens to rebuild.
@@ -158,14 +158,10 @@ fn psnr(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
 fn cook_writer(frames: &[Arc<Image>], params: &[(&str, Value)]) {
     let reg = pyrograph_frontend::registry();
     let node = reg.get("imaging.write_flipbook").unwrap();
-    let desc = node.desc();
-    let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
     let clip = Clip::from_frames(PortType::Image, 24.0, frames.iter().cloned().map(Value::Image).collect());
-    values[desc.input_index("clip").unwrap()] = Value::Clip(clip);
-    for (name, v) in params {
-        values[desc.input_index(name).unwrap()] = v.clone();
-    }
-    node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap();
+    let mut set = vec![("clip", Value::Clip(clip))];
+    set.extend(params.iter().map(|(name, v)| (*name, v.clone())));
+    pyrograph_frontend::core::testing::cook_node(&**node, &set).unwrap();
 }
 
 /// Writes the flipbook of `frames` for `convention` into `dir` and returns the side-car.

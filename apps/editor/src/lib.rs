@@ -35,6 +35,7 @@ pub mod overlay;
 pub mod palette;
 mod panels;
 pub mod param_widgets;
+pub mod paths;
 pub mod playback;
 pub mod state;
 pub mod tangents;

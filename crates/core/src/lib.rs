@@ -18,6 +18,7 @@ pub mod limits;
 pub mod node;
 pub mod registry;
 pub mod stepping;
+pub mod testing;
 pub mod text;
 pub mod timeline;
 mod typos;

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Clip, CookCtx, Image, Inputs, NodeError, PortType, Registry, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, NodeError, PortType, Registry, Value};
 use pyrograph_nodes_eigen::values::{Basis, FrameList, Weights};
 
 fn registry() -> Registry {
@@ -15,19 +15,7 @@ fn registry() -> Registry {
 fn cook(ty: &str, set: &[(&str, Value)]) -> Result<Vec<Value>, NodeError> {
     let r = registry();
     let node = r.get(ty).unwrap_or_else(|| panic!("{ty} registered"));
-    let desc = node.desc();
-    let values: Vec<Value> = desc
-        .inputs
-        .iter()
-        .map(|p| {
-            set.iter()
-                .find(|(n, _)| *n == p.name)
-                .map(|(_, v)| v.clone())
-                .or_else(|| p.default.clone())
-                .unwrap_or_else(|| panic!("{ty}.{} needs a value", p.name))
-        })
-        .collect();
-    node.cook(&Inputs::new(desc, &values), &CookCtx::new())
+    pyrograph_core::testing::cook_node(&**node, set)
 }
 
 fn clip(w: u32, h: u32, m: usize, seed: u32) -> Value {

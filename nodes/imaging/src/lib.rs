@@ -15,6 +15,7 @@ pub mod gray;
 pub mod io;
 pub mod levels;
 pub mod masks;
+pub mod media;
 pub mod preprocess;
 pub mod procedural;
 pub mod resize;

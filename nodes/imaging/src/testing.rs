@@ -3,19 +3,9 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::declare::Declared;
-use pyrograph_core::{Channels, Cook, CookCtx, Image, Inputs, NodeError, Value};
+use pyrograph_core::{Channels, Image, Value};
 
-/// Cooks node `T` on `values` (one per input, in port order) as the graph would.
-pub(crate) fn cook_node<T: Cook>(values: &[Value]) -> Result<Vec<Value>, NodeError> {
-    let node = T::node();
-    node.cook(&Inputs::new(node.desc(), values), &CookCtx::new())
-}
-
-/// Reads node `T`'s inputs from `values`, as a cook does first.
-pub(crate) fn read<T: Declared>(values: &[Value]) -> Result<T, NodeError> {
-    T::read(&Inputs::new(&T::desc(), values))
-}
+pub(crate) use pyrograph_core::testing::{cook_values as cook_node, read};
 
 /// An image as an input value.
 pub(crate) fn image_value(img: Image) -> Value {

@@ -567,7 +567,6 @@ impl Cook for ParticleFlame {
 mod tests {
     use super::*;
     use crate::types::LargeWind;
-    use pyrograph_core::Inputs;
     use pyrograph_core::declare::Declared;
 
     fn up_root(x: f32, z: f32) -> Root {
@@ -680,7 +679,7 @@ mod tests {
             .iter()
             .map(|p| p.default.clone().unwrap_or_else(|| Value::custom(Arc::new(Particles::default()))))
             .collect();
-        let cook = |values: &[Value]| ParticleFlame::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
+        let cook = |values: &[Value]| pyrograph_core::testing::read::<ParticleFlame>(values)?.cook(&CookCtx::default());
         let port_of = |values: &[Value]| match cook(values) {
             Err(NodeError::Port { port, .. }) => port,
             other => panic!("expected a port error, got {:?}", other.err()),

@@ -379,8 +379,8 @@ mod tests {
     use super::*;
     use crate::flame::{FlameParams, Root, simulate_frame};
     use crate::types::WindField;
+    use pyrograph_core::Value;
     use pyrograph_core::declare::Declared;
-    use pyrograph_core::{Inputs, Value};
     use pyrograph_render::Camera;
 
     fn view(w: u32, h: u32) -> View {
@@ -452,7 +452,7 @@ mod tests {
         let desc = RenderFlames::desc();
         let empty = || Value::custom(no_particles());
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or_else(empty)).collect();
-        let cook = |values: &[Value]| RenderFlames::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
+        let cook = |values: &[Value]| pyrograph_core::testing::read::<RenderFlames>(values)?.cook(&CookCtx::default());
         values[desc.input_index("near").unwrap()] = Value::Float(0.0);
         match cook(&values) {
             Err(NodeError::Port { port, .. }) => assert_eq!(port, "near"),
@@ -488,7 +488,7 @@ mod tests {
         set("pass", Value::Enum(pass.into()));
         set("mesh", Value::custom(Arc::new(mesh)));
         set("blend", Value::Enum(blend.into()));
-        Ok(RenderFlames::read(&Inputs::new(&desc, &values))?.cook(&CookCtx::default())?.image)
+        Ok(pyrograph_core::testing::read::<RenderFlames>(&values)?.cook(&CookCtx::default())?.image)
     }
 
     #[test]

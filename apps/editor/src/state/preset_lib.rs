@@ -11,7 +11,7 @@ use pyrograph_frontend::core::{GraphDoc, ParamValue};
 use pyrograph_frontend::presets::{Library, Preset, matches};
 
 use super::Editor;
-use crate::clipboard::{input_path_params, is_anchored};
+use crate::paths::{input_path_params, is_anchored};
 
 /// What "Save selection as preset" writes besides the nodes.
 #[derive(Clone, Debug, Default)]

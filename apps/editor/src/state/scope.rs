@@ -20,8 +20,8 @@ use pyrograph_frontend::core::graph::expand_vars;
 use pyrograph_frontend::core::{GraphDoc, ParamValue};
 
 use super::Editor;
-use crate::clipboard::rebase_paths;
 use crate::cook::PreviewRequest;
+use crate::paths::rebase_paths;
 
 /// One level stepped into.
 pub(super) struct Level {

@@ -14,8 +14,8 @@ use pyrograph_frontend::core::graph::expand_vars;
 use pyrograph_frontend::core::{GraphDoc, NodeDoc, ParamValue};
 
 use super::Editor;
-use crate::clipboard::{input_path_params, is_anchored};
 use crate::layout::relative_path;
+use crate::paths::{input_path_params, is_anchored};
 
 impl Editor {
     /// Replaces include `id` by the nodes of its graph (see the module); returns their new ids.
@@ -127,7 +127,7 @@ fn unpacked(
         let Some(new) = rename.get(n.as_str()) else { continue };
         let mut local = local.clone();
         if let Some(dir) = inner_dir {
-            crate::clipboard::rebase_paths(&mut local, ed.registry(), dir, &base);
+            crate::paths::rebase_paths(&mut local, ed.registry(), dir, &base);
         }
         out.subgraphs.insert(new.clone(), local);
     }

@@ -1,6 +1,6 @@
 use glam::Vec3;
 use pyrograph_core::declare::{Anim, Cook, Declared};
-use pyrograph_core::{CookCtx, Inputs, NodeError, Value};
+use pyrograph_core::{CookCtx, NodeError, Value};
 
 use super::*;
 
@@ -197,7 +197,7 @@ fn bad_inputs_are_errors_naming_the_port() {
 fn the_node_refuses_a_small_grid_and_a_negative_mass() {
     let desc = MassSpringFlame::desc();
     let values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-    let cook = |values: &[Value]| MassSpringFlame::read(&Inputs::new(&desc, values))?.cook(&CookCtx::default());
+    let cook = |values: &[Value]| pyrograph_core::testing::read::<MassSpringFlame>(values)?.cook(&CookCtx::default());
     let port_of = |values: &[Value]| match cook(values) {
         Err(NodeError::Port { port, .. }) => port,
         other => panic!("expected a port error, got {:?}", other.err()),

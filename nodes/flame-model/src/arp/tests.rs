@@ -1,6 +1,7 @@
 use proptest::prelude::*;
 
-use pyrograph_core::{Inputs, NodeDesc, Value};
+use pyrograph_core::Value;
+use pyrograph_core::testing::cook;
 
 use super::rng::Rng;
 use super::*;
@@ -239,43 +240,26 @@ fn a_keyed_bend_follows_its_keys_frame_by_frame() {
     assert!(e.contains("'bend'") && e.contains("ramp is on"), "{e}");
 }
 
-fn cook_values(desc: &NodeDesc, set: &[(&str, Value)]) -> Vec<Value> {
-    let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Bool(false))).collect();
-    for (name, v) in set {
-        values[desc.input_index(name).unwrap()] = v.clone();
-    }
-    values
-}
-
 #[test]
 fn the_nodes_learn_and_sample_through_their_ports() {
     let series = Arc::new(ar2_series(&A1, &A2, &D, &B, 400, 0.01, 8));
-    let learn = ArpLearn::node();
-    let desc = learn.desc().clone();
-    let values = cook_values(&desc, &[("params", Value::custom(series.clone()))]);
-    let out = learn.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+    let out = cook::<ArpLearn>(&[("params", Value::custom(series.clone()))]).unwrap();
     let (Some(model), Some(ll), Value::Float(rho)) = (out[0].downcast::<ArModel>(), out[1].downcast::<ParamSeries>(), &out[2])
     else {
         panic!("outputs {out:?}")
     };
     assert_eq!((ll.frames, ll.data.as_slice()), (model.log_likelihood.len(), model.log_likelihood.as_slice()));
     assert!(*rho < 1.0);
-    let sampler = ArpSample::node();
-    let desc = sampler.desc().clone();
-    let values = cook_values(
-        &desc,
-        &[
-            ("model", Value::custom(model.clone())),
-            ("frames", Value::Int(50)),
-            ("ramp", Value::Bool(true)),
-            ("height_end", Value::Float(2.0)),
-        ],
-    );
-    let out = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap();
+    let out = cook::<ArpSample>(&[
+        ("model", Value::custom(model.clone())),
+        ("frames", Value::Int(50)),
+        ("ramp", Value::Bool(true)),
+        ("height_end", Value::Float(2.0)),
+    ])
+    .unwrap();
     let Some(p) = out[0].downcast::<ParamSeries>() else { panic!("{out:?}") };
     assert_eq!((p.frames, p.dim()), (50, 3));
-    let values = cook_values(&desc, &[("model", Value::custom(model.clone())), ("bend", Value::Float(f64::NAN))]);
-    let e = sampler.cook(&Inputs::new(&desc, &values), &CookCtx::new()).unwrap_err();
+    let e = cook::<ArpSample>(&[("model", Value::custom(model.clone())), ("bend", Value::Float(f64::NAN))]).unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, .. } if port == "bend"), "{e}");
 }
 

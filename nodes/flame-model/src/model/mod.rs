@@ -563,30 +563,21 @@ mod tests {
 
     #[test]
     fn nodes_cook_through_a_graph_of_clips() {
-        use pyrograph_core::Inputs;
+        use pyrograph_core::testing::cook;
         let (w, h) = (64, 96);
         let frames: Vec<Value> = (0..6)
             .map(|f| Value::Image(Arc::new(Image::from_vec(w, h, Channels::Gray, flame(w as usize, h as usize, f)).unwrap())))
             .collect();
         let clip = Clip::from_frames(PortType::Image, 24.0, frames);
         let ctx = CookCtx::new();
-        let fit = FitModel::node();
-        let desc = fit.desc().clone();
-        let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-        values[0] = Value::Clip(clip);
-        let out = fit.cook(&Inputs::new(&desc, &values), &ctx).unwrap();
+        let out = cook::<FitModel>(&[("clip", Value::Clip(clip))]).unwrap();
         let Value::Int(skipped) = out[2] else { panic!() };
         assert_eq!(skipped, 0);
         let quality = out[3].downcast::<ParamSeries>().expect("quality is a parameter series");
         assert_eq!(quality.names, ["frame", "residual", "edge", "used"]);
         assert_eq!(quality.frames, 6);
         assert_eq!(quality.row(5).unwrap()[0], 5.0);
-        let render = RenderModel::node();
-        let rdesc = render.desc().clone();
-        let mut rvalues: Vec<Value> = rdesc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-        rvalues[0] = out[0].clone();
-        rvalues[1] = out[1].clone();
-        let rendered = render.cook(&Inputs::new(&rdesc, &rvalues), &ctx).unwrap();
+        let rendered = cook::<RenderModel>(&[("model", out[0].clone()), ("params", out[1].clone())]).unwrap();
         let Value::Clip(gray) = &rendered[0] else { panic!() };
         let Value::Clip(color) = &rendered[1] else { panic!() };
         assert_eq!(gray.len(), 6);

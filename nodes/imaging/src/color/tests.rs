@@ -5,13 +5,7 @@ use proptest::prelude::*;
 use pyrograph_core::declare::Port;
 use pyrograph_core::{Mask, Value};
 
-fn gray(w: u32, h: u32, data: &[f32]) -> Image {
-    Image::from_vec(w, h, Channels::Gray, data.to_vec()).unwrap()
-}
-
-fn rgba(w: u32, h: u32, data: &[f32]) -> Image {
-    Image::from_vec(w, h, Channels::Rgba, data.to_vec()).unwrap()
-}
+use crate::testing::{gray, rgba};
 
 fn solid(w: u32, h: u32, c: [f32; 3]) -> Image {
     let data: Vec<f32> = (0..w * h).flat_map(|_| [c[0], c[1], c[2], 1.0]).collect();

@@ -1,7 +1,7 @@
 //! Tests of the flipbook layout, motion sheet, optical flow and writer.
 
 use super::*;
-use pyrograph_core::{Inputs, PortType, Value};
+use pyrograph_core::{PortType, Value};
 
 fn numbered(n: usize, w: u32, h: u32) -> Vec<Arc<Image>> {
     (0..n)
@@ -142,22 +142,22 @@ fn writer_puts_rxc_into_the_names_and_writes_a_sidecar() {
         r
     };
     let node = reg.get("imaging.write_flipbook").unwrap();
-    let desc = node.desc();
+
     let frames: Vec<Value> = numbered(4, 4, 4).into_iter().map(Value::Image).collect();
     let clip = pyrograph_core::Clip::from_frames(PortType::Image, 12.0, frames);
-    let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-    let set = |values: &mut Vec<Value>, name: &str, v: Value| values[desc.input_index(name).unwrap()] = v;
-    set(&mut values, "clip", Value::Clip(clip));
-    set(&mut values, "rows", Value::Int(2));
-    set(&mut values, "cols", Value::Int(2));
-    set(&mut values, "path", Value::Path(dir.path().join("fire.png")));
-    let out = node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap();
+    let set = [
+        ("clip", Value::Clip(clip)),
+        ("rows", Value::Int(2)),
+        ("cols", Value::Int(2)),
+        ("path", Value::Path(dir.path().join("fire.png"))),
+    ];
+    let out = pyrograph_core::testing::cook_node(&**node, &set).unwrap();
     assert!(matches!(&out[0], Value::Path(p) if p.ends_with("fire_2x2.png")));
     assert!(dir.path().join("fire_2x2_mv.png").exists());
     let json = std::fs::read_to_string(dir.path().join("fire_2x2.json")).unwrap();
     assert!(json.contains("\"fps\": 12") && json.contains("\"frames\": 4"), "{json}");
     // A second write refuses to overwrite.
-    assert!(node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap_err().to_string().contains("already exists"));
+    assert!(pyrograph_core::testing::cook_node(&**node, &set).unwrap_err().to_string().contains("already exists"));
 }
 
 /// Mip level `level` of `img` by 2×2 box averages (what GPUs and texture tools build), odd edges dropped.

@@ -11,6 +11,7 @@ use pyrograph_core::{Channels, Image, NodeError};
 
 use super::{IoError, has_extension, no_such};
 use crate::convert;
+use crate::media::over_budget;
 
 pyrograph_core::choice! {
     /// Bits per channel of PNG files.
@@ -40,16 +41,7 @@ fn is_exr(path: &Path) -> bool {
     has_extension(path, &["exr"])
 }
 
-/// Pixels an image file may declare and still be decoded: 16384 × 16384 unless `--max-pixels`
-/// or the environment variable `PYROGRAPH_MAX_PIXELS` says otherwise (see
-/// [`pyrograph_core::limits`]). A header is checked against it before any pixel is allocated, so
-/// a small file declaring an enormous image (a decompression bomb) is an error naming the file
-/// and its size, not an exhausted machine.
-pub fn pixel_budget() -> u64 {
-    pyrograph_core::limits::max_pixels()
-}
-
-/// Refuses a header that declares more pixels than [`pixel_budget`].
+/// Refuses a header that declares more pixels than [`pixel_budget`](crate::media::pixel_budget).
 fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), NodeError> {
     match over_budget(path, w, h) {
         Some(m) => Err(NodeError::msg(m)),
@@ -57,27 +49,8 @@ fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), NodeError
     }
 }
 
-/// The error for a file (an image, or a video's frames) declaring `w` × `h` pixels, when that is
-/// more than [`pixel_budget`].
-pub fn over_budget(path: &Path, w: u32, h: u32) -> Option<String> {
-    let (pixels, budget) = (u64::from(w) * u64::from(h), pixel_budget());
-    if pixels <= budget {
-        return None;
-    }
-    // Megapixels, except for a budget set below one (a test's, or a tight service's).
-    let amount = |px: u64| if px >= 1_000_000 { format!("{:.1} megapixels", px as f64 / 1e6) } else { format!("{px} pixels") };
-    Some(format!(
-        "{}: the file declares {w} × {h} pixels ({}), more than the {} pyrograph decodes; if it is a real \
-         image, {}",
-        path.display(),
-        amount(pixels),
-        amount(budget),
-        pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", pixels)
-    ))
-}
-
 /// Width and height from the file's header (of `layer`, for OpenEXR; "" is the main layer),
-/// without decoding the pixels; a size over the [`pixel_budget`] is an error.
+/// without decoding the pixels; a size over the [`pixel_budget`](crate::media::pixel_budget) is an error.
 pub fn image_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
     header_dimensions(path, layer).and_then(|size| check_budget(path, size))
 }
@@ -109,7 +82,7 @@ fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> 
 }
 
 /// Decodes one image file (`layer` of an OpenEXR file; "" is its main layer): colour files become
-/// RGBA, gray files gray. Its header is checked against the [`pixel_budget`] first (decoders
+/// RGBA, gray files gray. Its header is checked against the [`pixel_budget`](crate::media::pixel_budget) first (decoders
 /// allocate what a header declares).
 pub fn decode_image(path: &Path, layer: &str) -> Result<Image, NodeError> {
     let (w, h) = image_dimensions(path, layer)?;

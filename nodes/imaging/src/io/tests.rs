@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Clip, Cook, CookCtx, FrameSet, Image, Inputs, PortType, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, FrameSet, Image, PortType, Value};
 use pyrograph_testing::footage;
 
 use super::*;
@@ -21,13 +21,7 @@ fn write_image_writes_once_and_refuses_to_overwrite() {
     write_image(&img, &path, png, true).unwrap();
 }
 
-fn rgba(w: u32, h: u32, data: &[f32]) -> Image {
-    Image::from_vec(w, h, Channels::Rgba, data.to_vec()).unwrap()
-}
-
-fn gray(w: u32, h: u32, data: &[f32]) -> Image {
-    Image::from_vec(w, h, Channels::Gray, data.to_vec()).unwrap()
-}
+use crate::testing::{gray, rgba};
 
 fn clip_of(images: Vec<Image>) -> Clip {
     let frames = images.into_iter().map(|i| Value::Image(Arc::new(i))).collect();
@@ -370,12 +364,12 @@ fn mismatched_sizes_name_the_odd_file() {
 #[test]
 fn cook_reads_ports_and_reports_frames_written() {
     let dir = tempfile::tempdir().unwrap();
-    let node = WriteSequence::node();
-    let desc = node.desc();
-    let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap_or(Value::Int(0))).collect();
-    values[0] = Value::Clip(clip_of(vec![gray(1, 1, &[1.0]); 2]));
-    values[1] = Value::Path(dir.path().join("o_####.png"));
-    let out = node.cook(&Inputs::new(desc, &values), &CookCtx::new()).unwrap();
+    let clip = Value::Clip(clip_of(vec![gray(1, 1, &[1.0]); 2]));
+    let out = pyrograph_core::testing::cook::<WriteSequence>(&[
+        ("clip", clip),
+        ("pattern", Value::Path(dir.path().join("o_####.png"))),
+    ])
+    .unwrap();
     assert!(matches!(out[0], Value::Int(2)));
     assert!(matches!(&out[1], Value::Path(p) if p.ends_with("o_0000.png")));
 }

@@ -422,8 +422,7 @@ impl Cook for HsvMask {
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use pyrograph_core::declare::Declared;
-    use pyrograph_core::{NodeDesc, Value};
+    use pyrograph_core::Value;
 
     fn rgba(pixels: &[[f32; 3]]) -> Image {
         let data = pixels.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
@@ -595,32 +594,27 @@ mod tests {
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "image"), "{err}");
     }
 
-    fn node_inputs(overrides: &[(&str, Value)]) -> (NodeDesc, Vec<Value>) {
-        let d = HsvMask::desc();
-        let mut values: Vec<Value> =
-            d.inputs.iter().map(|p| p.default.clone().unwrap_or_else(|| Value::Image(Arc::new(rgba(&[RED]))))).collect();
-        for (name, v) in overrides {
-            let i = d.input_index(name).unwrap();
-            values[i] = v.clone();
-        }
-        (d, values)
+    /// Cooks imaging.hsv_mask on one red pixel with `overrides`.
+    fn cook_red(overrides: &[(&str, Value)]) -> Result<Vec<Value>, NodeError> {
+        let mut set = vec![("image", Value::Image(Arc::new(rgba(&[RED]))))];
+        set.extend(overrides.iter().cloned());
+        pyrograph_core::testing::cook::<HsvMask>(&set)
     }
 
     #[test]
     fn saturation_min_above_max_names_the_port() {
-        let (d, values) = node_inputs(&[
+        let err = cook_red(&[
             ("layer2_enabled", Value::Bool(true)),
             ("layer2_s_min", Value::Float(200.0)),
             ("layer2_s_max", Value::Float(100.0)),
-        ]);
-        let err = HsvMask::node().cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap_err();
+        ])
+        .unwrap_err();
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "layer2_s_min"), "{err}");
     }
 
     #[test]
     fn node_with_all_layers_keeps_red() {
-        let (d, values) = node_inputs(&[("layer2_enabled", Value::Bool(true)), ("layer3_enabled", Value::Bool(true))]);
-        let out = HsvMask::node().cook(&Inputs::new(&d, &values), &CookCtx::new()).unwrap();
+        let out = cook_red(&[("layer2_enabled", Value::Bool(true)), ("layer3_enabled", Value::Bool(true))]).unwrap();
         let Value::Mask(m) = &out[0] else { panic!("not a mask") };
         assert_eq!(bits(m), [1]);
     }

@@ -19,7 +19,7 @@ use std::thread::JoinHandle;
 
 use pyrograph_core::{Channels, Clip, CookCtx, FrameSource, Image, NodeError, PortType, Value};
 
-use crate::io::{DEFAULT_FPS, IoError, ReportError, fingerprint_files};
+use crate::media::{DEFAULT_FPS, IoError, ReportError, fingerprint_files};
 
 mod probe;
 

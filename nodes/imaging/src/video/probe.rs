@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 
-use crate::io::IoError;
+use crate::media::IoError;
 
 const MISSING_FFMPEG: &str = "install ffmpeg (apt-get install ffmpeg) or convert the video to PNG frames";
 
@@ -124,7 +124,7 @@ pub fn probe_video(ffprobe: &str, path: &Path) -> Result<VideoInfo, IoError> {
     let text = ffprobe_fields(ffprobe, path, &[], entries)?;
     let mut info = parse_probe(&text).ok_or_else(|| path_error(format!("{}: no video stream found", path.display())))?;
     // Frames are decoded at the size the header states: refuse one over the budget first.
-    if let Some(m) = crate::io::files::over_budget(path, info.width, info.height) {
+    if let Some(m) = crate::media::over_budget(path, info.width, info.height) {
         return Err(path_error(m));
     }
     if !info.constant_rate {

@@ -4,10 +4,13 @@
 //! reimplemented here from its published source, blends frames t and t+1 along the decoded vectors;
 //! the result must be closer (PSNR) to the true frame t+0.5 than a plain cross-fade, and the 16-bit
 //! sheet's vectors must agree with pyrograph's optical flow within 1/4 pixel.
-//! The six-way lighting sheets of a volume (issue 62) are tested in this binary too ([`sixway`]).
+//! The six-way lighting sheets of a volume (issue 62) are tested in this binary too ([`sixway`]), and
+//! a volume's flipbook whose motion comes from the simulation's velocity ([`volume_motion`]).
 
 #[path = "engines/sixway.rs"]
 mod sixway;
+#[path = "engines/volume_motion.rs"]
+mod volume_motion;
 
 use std::path::Path;
 use std::sync::Arc;

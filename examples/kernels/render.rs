@@ -12,7 +12,7 @@ use clap::Args;
 use glam::{IVec3, Vec3, Vec4};
 use pyrograph_nodes_volume::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS, Volume};
 use pyrograph_nodes_volume::render::light::{Light, LightKind};
-use pyrograph_nodes_volume::render::march::{Look, render};
+use pyrograph_nodes_volume::render::march::{Look, Octaves, render};
 use pyrograph_render::{Camera, View};
 
 use crate::smoke::blob;
@@ -86,6 +86,7 @@ pub fn render_box(a: &RenderArgs, t: Timing) -> Result<String, String> {
         step: 0.5,
         background: Vec4::new(0.0, 0.0, 0.0, 1.0),
         seed: 0,
+        octaves: Octaves::SINGLE,
     };
     let (times, img) = t.run(|| Ok(render(&v, &view, &sun, &look)))?;
     if let Some(path) = &a.output {

@@ -4,7 +4,8 @@ Usage: mitsuba_check.py DIR --spp N [--pictures OUT_DIR]
 
 DIR holds scenes.json (camera, box, extinction, albedo, anisotropy, lights per scene) and, per
 scene k, k.density.f32 (n³ little-endian floats, x fastest, voxel centres at the cell centres of
-the box) and k.pyrograph.f32 (height × width × RGBA, premultiplied over black). Each scene is
+the box), k.pyrograph.f32 (height × width × RGBA, premultiplied over black) and k.octaves.f32
+(the same with volume.render's multiple-scattering octaves, set against all orders). Each scene is
 rendered twice with the volumetric path tracer (`volpath`, scalar_rgb): single scattering
 (max_depth 2, what pyrograph computes) and all orders (max_depth −1). The metrics, on the pixels
 where pyrograph's smoke covers at least 2 % (its "smoke pixels"), on linear RGB clamped to [0, 1]:
@@ -130,6 +131,8 @@ def main():
         mask = ours[..., 3] > 0.02
         mae_s, ssim_s = metrics(ours[..., :3], single, mask)
         mae_f, ssim_f = metrics(ours[..., :3], full, mask)
+        octaves = np.fromfile(args.dir / f"{k}.octaves.f32", dtype="<f4").reshape(h, w, 4)
+        mae_o, ssim_o = metrics(octaves[..., :3], full, mask)
         gain = float(full[mask].sum() / max(single[mask].sum(), 1e-12) - 1.0)
         results.append(
             {
@@ -139,6 +142,9 @@ def main():
                 "ssim_single": ssim_s,
                 "mae_full": mae_f,
                 "ssim_full": ssim_f,
+                "mae_octaves": mae_o,
+                "ssim_octaves": ssim_o,
+                "mean_octaves": float(octaves[..., :3][mask].mean()),
                 "multiple_gain": gain,
                 "mean_pyrograph": float(ours[..., :3][mask].mean()),
                 "mean_single": float(single[mask].mean()),
@@ -150,8 +156,8 @@ def main():
             }
         )
         diff = np.abs(np.clip(ours[..., :3], 0, 1) - np.clip(single, 0, 1)) * 4
-        rows.append([ours[..., :3], single, full, diff])
-        print(f"{s['name']}: MAE {mae_s:.4f} SSIM {ssim_s:.3f} (all orders {mae_f:.4f} {ssim_f:.3f})", file=sys.stderr)
+        rows.append([ours[..., :3], single, octaves[..., :3], full, diff])
+        print(f"{s['name']}: MAE {mae_s:.4f} SSIM {ssim_s:.3f} (all orders {mae_f:.4f} {ssim_f:.3f}; octaves {mae_o:.4f} {ssim_o:.3f})", file=sys.stderr)
     if args.pictures:
         args.pictures.mkdir(parents=True, exist_ok=True)
         picture(rows, args.pictures / "volume-mitsuba.png")

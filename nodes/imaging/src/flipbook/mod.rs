@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use image::imageops::FilterType;
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, port};
+use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, PortType, port};
 use rayon::prelude::*;
 
 use crate::color::AlphaMode;
@@ -85,6 +85,16 @@ pub fn sheet_path(path: &Path, rows: usize, cols: usize, extra: &str, ext: &str)
 
 /// Builds the colour and motion sheets of `frames` (all the same size; their count must equal rows × cols).
 pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<Flipbook, NodeError> {
+    build_flipbook_with(frames, None, opts)
+}
+
+/// [`build_flipbook`] with the motion given per frame (`vectors`: R, G the motion in frame pixels,
+/// x right, y down, one image per frame the frames' size) instead of measured by optical flow.
+pub fn build_flipbook_with(
+    frames: &[Arc<Image>],
+    vectors: Option<&[Arc<Image>]>,
+    opts: &FlipbookOptions,
+) -> Result<Flipbook, NodeError> {
     check_cells(frames.len(), opts.rows, opts.cols)?;
     let (w, h) = frames[0].size();
     if let Some((i, f)) = frames.iter().enumerate().find(|(_, f)| f.size() != (w, h)) {
@@ -105,7 +115,10 @@ pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<F
             Ok(opts.alpha.apply(&f.to_rgba()))
         })
         .collect::<Result<_, NodeError>>()?;
-    let flows = motion_of(frames, opts.convention.central_vectors());
+    let flows = match vectors {
+        Some(v) => given_motion(v, frames.len(), (w, h))?,
+        None => motion_of(frames, opts.convention.central_vectors()),
+    };
     let range = match opts.motion_range {
         r if r > 0.0 => r,
         _ if opts.convention.wants_largest_range() => largest_motion(&flows),
@@ -202,6 +215,39 @@ fn motion_of(frames: &[Arc<Image>], central: bool) -> Vec<(Plane, Plane)> {
         .collect()
 }
 
+/// The motion of each frame read from `vectors` (R and G, in pixels per frame), checked against
+/// the clip: one per frame, each the frames' size, every vector finite.
+fn given_motion(vectors: &[Arc<Image>], frames: usize, (w, h): (u32, u32)) -> Result<Vec<(Plane, Plane)>, NodeError> {
+    let port = port!(FlipbookInputs, motion_vectors);
+    if vectors.len() != frames {
+        return Err(NodeError::port(port, format!("has {} frames but the clip has {frames}; give one per frame", vectors.len())));
+    }
+    vectors
+        .iter()
+        .enumerate()
+        .map(|(k, img)| {
+            if img.size() != (w, h) {
+                let (vw, vh) = img.size();
+                return Err(NodeError::port(port, format!("frame {k} is {vw}x{vh} but the clip's frames are {w}x{h}")));
+            }
+            if img.channels() != Channels::Rgba {
+                return Err(NodeError::port(
+                    port,
+                    format!("frame {k} is gray; motion vectors need R (x) and G (y), as volume.render's motion pass gives them"),
+                ));
+            }
+            let (mut u, mut v) = (Plane::new(w as usize, h as usize), Plane::new(w as usize, h as usize));
+            for ((px, x), y) in img.data().chunks_exact(4).zip(&mut u.data).zip(&mut v.data) {
+                if !(px[0].is_finite() && px[1].is_finite()) {
+                    return Err(NodeError::port(port, format!("frame {k} holds a non-finite vector ({}, {})", px[0], px[1])));
+                }
+                (*x, *y) = (px[0], px[1]);
+            }
+            Ok((u, v))
+        })
+        .collect()
+}
+
 fn mean(mut a: Plane, b: &Plane) -> Plane {
     a.data.iter_mut().zip(&b.data).for_each(|(x, y)| *x = 0.5 * (*x + y));
     a
@@ -216,9 +262,17 @@ pyrograph_core::ports! {
     pub struct FlipbookInputs {
         /// Frames; exactly rows × cols of them
         clip: ClipOf<Arc<Image>>,
+        /// Motion vectors, one image per frame (volume.render's motion pass: R, G the motion in frame pixels
+        /// per frame, x right, y down), used instead of measuring the clip's optical flow; default none (measured)
+        motion_vectors: ClipOf<Arc<Image>> = no_vectors(),
         /// The layout.
         layout: FlipbookOptions,
     }
+}
+
+/// No motion vectors given: the flipbook measures the clip's optical flow.
+fn no_vectors() -> ClipOf<Arc<Image>> {
+    ClipOf::new(Clip::from_frames(PortType::Image, 0.0, Vec::new()))
 }
 
 impl FlipbookInputs {
@@ -227,13 +281,27 @@ impl FlipbookInputs {
         check_cells(self.clip.len(), self.layout.rows, self.layout.cols)?;
         (0..self.clip.len()).into_par_iter().map(|k| self.clip.image(k, ctx)).collect()
     }
+
+    /// The flipbook of the clip, with the given motion vectors if connected.
+    fn build(&self, ctx: &CookCtx) -> Result<Flipbook, NodeError> {
+        let frames = self.frames(ctx)?;
+        if self.motion_vectors.is_empty() {
+            return build_flipbook(&frames, &self.layout);
+        }
+        let vectors: Vec<Arc<Image>> = (0..self.motion_vectors.len())
+            .into_par_iter()
+            .map(|k| self.motion_vectors.image(k, ctx))
+            .collect::<Result<_, _>>()?;
+        build_flipbook_with(&frames, Some(&vectors), &self.layout)
+    }
 }
 
 pyrograph_core::node! {
     /// Lays a clip out as a flipbook sheet with a matching motion-vector sheet (post-processing output of the Eigenfires thesis ch. 6 for game engines).
     ///
     /// Cells run left to right, then top to bottom, from the top-left corner; rows × cols must equal the number
-    /// of frames. The motion sheet holds a Lucas–Kanade optical flow from each frame to the next, encoded for
+    /// of frames. The motion sheet holds a Lucas–Kanade optical flow from each frame to the next (or the
+    /// motion_vectors given, such as volume.render's motion pass from the simulation's velocity), encoded for
     /// `convention`: generic R = 0.5 + dx / (2·range), G = 0.5 + dy / (2·range) (x right, y down, frame pixels;
     /// 0.5 = no motion); unity, unreal and houdini-labs in the units, axes and sign their flipbook materials
     /// decode, with `motion_scale` the number to paste. `mip_levels` aligns cells so mip-maps down to that level
@@ -257,7 +325,7 @@ pyrograph_core::node! {
 
 impl Cook for FlipbookNode {
     fn cook(self, ctx: &CookCtx) -> Result<FlipbookNodeOut, NodeError> {
-        let fb = build_flipbook(&self.inputs.frames(ctx)?, &self.inputs.layout)?;
+        let fb = self.inputs.build(ctx)?;
         Ok(FlipbookNodeOut {
             sheet: Arc::new(fb.sheet),
             motion: Arc::new(fb.motion),
@@ -400,7 +468,7 @@ impl Cook for WriteFlipbook {
         let motion_depth = if motion_bits == 16 { BitDepth::Sixteen } else { BitDepth::Eight };
         let motion_format = output_format(base, motion_depth, ExrType::Half).map_err(file_error)?;
         let overwrite = self.overwrite || ctx.settings().overwrite;
-        let fb = build_flipbook(&self.inputs.frames(ctx)?, opts)?;
+        let fb = self.inputs.build(ctx)?;
         let sheet_file = sheet_path(base, opts.rows, opts.cols, "", &ext);
         let motion_path = self.motion.then(|| sheet_path(base, opts.rows, opts.cols, "_mv", &ext));
         let json_path = sheet_path(base, opts.rows, opts.cols, "", "json");

@@ -330,3 +330,53 @@ fn motion_through_non_finite_pixels_is_no_motion() {
     assert_eq!(code.encode(2.0, f32::INFINITY), (0.5, 0.5));
     assert_eq!(code.encode(4.0, 4.0), (0.75, 0.25));
 }
+
+/// Motion-vector frames: frame k moves every pixel by (k + 1, −k) pixels, over `w`×`h`.
+fn vectors(n: usize, w: u32, h: u32) -> Vec<Arc<Image>> {
+    (0..n)
+        .map(|k| {
+            let (dx, dy) = (k as f32 + 1.0, -(k as f32));
+            Arc::new(Image::from_vec(w, h, Channels::Rgba, (0..w * h).flat_map(|_| [dx, dy, 0.0, 1.0]).collect()).unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn given_motion_vectors_replace_the_optical_flow() {
+    // Constant frames have no optical flow; the given vectors are what the sheet holds.
+    let frames = numbered(4, 8, 8);
+    let opts = FlipbookOptions { rows: 2, cols: 2, motion_range: 8.0, ..Default::default() };
+    let fb = build_flipbook_with(&frames, Some(&vectors(4, 8, 8)), &opts).unwrap();
+    for k in 0..4 {
+        let (ox, oy) = cell_origin(k, 2, fb.cell);
+        let p = fb.motion.pixel(ox + 4, oy + 4);
+        let want = (0.5 + (k as f32 + 1.0) / 16.0, 0.5 - k as f32 / 16.0);
+        assert!((p[0] - want.0).abs() < 1e-6 && (p[1] - want.1).abs() < 1e-6, "cell {k}: {p:?} vs {want:?}");
+    }
+    // The automatic range of an engine convention is the largest given vector.
+    let unity = FlipbookOptions { convention: Convention::Unity, motion_range: 0.0, ..opts };
+    assert_eq!(build_flipbook_with(&frames, Some(&vectors(4, 8, 8)), &unity).unwrap().motion_range, 4.0);
+    assert!(build_flipbook(&frames, &opts).unwrap().motion.data().chunks(4).all(|p| p[0] == 0.5 && p[1] == 0.5));
+}
+
+#[test]
+fn motion_vectors_that_do_not_fit_the_clip_are_errors_naming_the_port() {
+    let frames = numbered(4, 8, 8);
+    let opts = FlipbookOptions { rows: 2, cols: 2, ..Default::default() };
+    let error = |v: Vec<Arc<Image>>| build_flipbook_with(&frames, Some(&v), &opts).unwrap_err().to_string();
+    let e = error(vectors(3, 8, 8));
+    assert!(e.contains("motion_vectors") && e.contains("has 3 frames but the clip has 4"), "{e}");
+    let mut v = vectors(4, 8, 8);
+    v[2] = vectors(1, 4, 8).remove(0);
+    let e = error(v);
+    assert!(e.contains("motion_vectors") && e.contains("frame 2 is 4x8"), "{e}");
+    let mut v = vectors(4, 8, 8);
+    v[1] = Arc::new(Image::new(8, 8, Channels::Gray));
+    assert!(error(v).contains("frame 1 is gray"));
+    let mut v = vectors(4, 8, 8);
+    let mut bad = (*v[3]).clone();
+    bad.data_mut()[9] = f32::NAN;
+    v[3] = Arc::new(bad);
+    let e = error(v);
+    assert!(e.contains("frame 3 holds a non-finite vector"), "{e}");
+}

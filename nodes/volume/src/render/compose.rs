@@ -107,6 +107,28 @@ impl PassMap<'_> {
         }
     }
 
+    /// Adds the light of particle flames inside the smoke (premultiplied per pixel, from
+    /// [`super::flames::flame_light`]) to `pixels` (from [`PassMap::pixel`]): light in the beauty and
+    /// the emission, coverage in the alpha; the scattering, depth and motion are the smoke's alone
+    /// (flames are light, not matter).
+    pub fn add_flames(&self, pixels: &mut [[f32; 4]], flames: &[[f32; 4]]) {
+        for (px, f) in pixels.iter_mut().zip(flames) {
+            let (light, cover) = (Vec3::new(f[0], f[1], f[2]), f[3]);
+            let c = Vec3::new(px[0], px[1], px[2]) * px[3] + light;
+            let alpha = match self.pass {
+                VolumePass::Beauty => px[3] + cover * (1.0 - px[3]),
+                VolumePass::Emission => c.max_element().min(1.0),
+                VolumePass::Alpha => {
+                    px[0] += cover * (1.0 - px[0]);
+                    continue;
+                }
+                VolumePass::Scattering | VolumePass::Depth | VolumePass::Motion => continue,
+            };
+            let s = if alpha > 0.0 { c / alpha } else { Vec3::ZERO };
+            *px = [s.x, s.y, s.z, alpha];
+        }
+    }
+
     /// Whether the pass is one gray channel.
     pub fn gray(&self) -> bool {
         matches!(self.pass, VolumePass::Alpha | VolumePass::Depth)

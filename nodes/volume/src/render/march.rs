@@ -42,6 +42,77 @@ pub struct Look {
     /// Seeds the per-pixel jitter (the frame, so a sequence's noise moves and a chunk of frames
     /// renders the same as the whole).
     pub seed: u64,
+    /// Multiple scattering, approximated by octaves of single scattering.
+    pub octaves: Octaves,
+}
+
+/// Most octaves [`Octaves`] takes.
+pub const MAX_OCTAVES: usize = 8;
+
+/// Per octave: its share of the light times its phase function, for one scattering angle.
+pub type Phases = [f32; MAX_OCTAVES];
+
+/// Per light, what is the same all along a ray for a directional light: its strength × phase
+/// (single scattering) or its octaves' phases (several octaves). Kept apart so single scattering's
+/// inner loop carries one vector per light, not the octaves' array.
+#[derive(Default)]
+struct PerRay {
+    lit: Vec<Option<Vec3>>,
+    phases: Vec<Option<Phases>>,
+}
+
+/// Multiple scattering approximated by octaves of single scattering (Wrenninge 2015,
+/// "Art-directable multiple volumetric scattering", as Frostbite's volumes (Hillaire 2016) and
+/// production renderers use it): octave i scatters `albedo`^i of the light, sees the shadows'
+/// extinction scaled by `extinction`^i (so its transmittance is T^(extinction^i): light that
+/// bounced inside the smoke reaches deeper) and a phase function `anisotropy`^i as anisotropic.
+/// It reuses the shadow volumes single scattering already has, so it costs a power per octave per
+/// sample instead of paths. One octave is single scattering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Octaves {
+    /// How many octaves (1 to [`MAX_OCTAVES`]).
+    pub count: u32,
+    /// a: each octave's share of the previous one's light (at most `extinction`).
+    pub albedo: f32,
+    /// b: each octave's shadow extinction relative to the previous one's.
+    pub extinction: f32,
+    /// c: each octave's anisotropy relative to the previous one's.
+    pub anisotropy: f32,
+}
+
+impl Octaves {
+    /// Single scattering.
+    pub const SINGLE: Octaves = Octaves { count: 1, albedo: 0.25, extinction: 0.25, anisotropy: 0.5 };
+
+    /// Each octave's share of the light times its Henyey–Greenstein phase for the cosine `cos`
+    /// between the light's travel and the scattered direction, base anisotropy `g`.
+    #[inline]
+    pub fn phases(&self, cos: f32, g: f32) -> Phases {
+        let mut out = [0.0; MAX_OCTAVES];
+        out[0] = henyey_greenstein(cos, g);
+        let (mut share, mut g) = (1.0, g);
+        for o in out.iter_mut().take(self.count as usize).skip(1) {
+            share *= self.albedo;
+            g *= self.anisotropy;
+            *o = share * henyey_greenstein(cos, g);
+        }
+        out
+    }
+
+    /// The octaves' light through a shadow of transmittance `t`: Σ phases[i] × t^(extinction^i).
+    #[inline]
+    pub fn through(&self, phases: &Phases, t: f32) -> f32 {
+        let mut sum = phases[0] * t;
+        if t <= 0.0 {
+            return sum;
+        }
+        let (ln_t, mut b) = (t.ln(), 1.0);
+        for p in &phases[1..(self.count as usize).min(MAX_OCTAVES)] {
+            b *= self.extinction;
+            sum += p * (b * ln_t).exp();
+        }
+        sum
+    }
 }
 
 /// Light groups a render keeps apart: the beauty adds every light into group 0; the six-way maps
@@ -195,7 +266,7 @@ pub fn gather<const C: usize>(
         .map(|(lo, hi)| (v.transform.to_world(lo.as_vec3() - 0.5), v.transform.to_world(hi.as_vec3() + 0.5)));
     let mut data = vec![[0.0f32; C]; w * h];
     data.par_chunks_mut(w).enumerate().for_each(|(row, out)| {
-        let mut fixed = Vec::with_capacity(scene.lights.len());
+        let mut fixed = PerRay::default();
         for (col, px) in out.iter_mut().enumerate() {
             let ndc = |z: f32| {
                 let x = (col as f32 + 0.5) / w as f32 * 2.0 - 1.0;
@@ -226,7 +297,7 @@ pub fn gather<const C: usize>(
 fn march(
     v: &Volume,
     f: &Fields,
-    (lights, fixed): (&[Light], &mut Vec<Option<Vec3>>),
+    (lights, fixed): (&[Light], &mut PerRay),
     look: &Look,
     table: &Table,
     segment: (Vec3, Vec3, f32),
@@ -239,11 +310,19 @@ fn march(
     let mut g = Gathered::new();
     let Some((t0, t1)) = slab(origin, d, bounds.0, bounds.1) else { return g };
     // A directional light's strength and phase are the same all along the ray.
-    fixed.clear();
-    fixed.extend(lights.iter().map(|l| match l.kind {
-        LightKind::Directional(to_light) => Some(l.color * henyey_greenstein(to_light.dot(d), look.anisotropy)),
-        LightKind::Point(_) => None,
-    }));
+    let octaves = look.octaves;
+    let several = octaves.count > 1;
+    fixed.lit.clear();
+    fixed.phases.clear();
+    for l in lights {
+        let (lit, phases) = match l.kind {
+            LightKind::Directional(to_light) if several => (None, Some(octaves.phases(to_light.dot(d), look.anisotropy))),
+            LightKind::Directional(to_light) => (Some(l.color * henyey_greenstein(to_light.dot(d), look.anisotropy)), None),
+            LightKind::Point(_) => (None, None),
+        };
+        fixed.lit.push(lit);
+        fixed.phases.push(phases);
+    }
     let (t0, t1) = (t0.max(0.0), t1.min(length).min(stop));
     let h = v.transform.voxel_size as f32;
     let step = look.step * h;
@@ -288,13 +367,28 @@ fn march(
         if sigma > 0.0 {
             let scatter = look.albedo * (sigma * through);
             g.ambient += scatter * look.ambient;
-            for ((light, fixed), (shadow, group)) in lights.iter().zip(fixed.iter()).zip(&f.shadows) {
-                // The light travels along −to_light and leaves toward the camera along −d.
-                let lit = fixed.unwrap_or_else(|| {
-                    let (to_light, strength) = light.toward(p, h);
-                    strength * henyey_greenstein(to_light.dot(d), look.anisotropy)
-                });
-                g.scattered[*group] += scatter * lit * c.sample(shadow);
+            for ((light, (shadow, group)), (lit, phases)) in
+                lights.iter().zip(&f.shadows).zip(fixed.lit.iter().zip(&fixed.phases))
+            {
+                let t = c.sample(shadow);
+                if several {
+                    // Octaves of scattering: the light's strength through each octave's thinner shadow.
+                    let (strength, phases) = match *phases {
+                        Some(phases) => (light.color, phases),
+                        None => {
+                            let (to_light, strength) = light.toward(p, h);
+                            (strength, octaves.phases(to_light.dot(d), look.anisotropy))
+                        }
+                    };
+                    g.scattered[*group] += scatter * strength * octaves.through(&phases, t);
+                } else {
+                    // The light travels along −to_light and leaves toward the camera along −d.
+                    let lit = lit.unwrap_or_else(|| {
+                        let (to_light, strength) = light.toward(p, h);
+                        strength * henyey_greenstein(to_light.dot(d), look.anisotropy)
+                    });
+                    g.scattered[*group] += scatter * lit * t;
+                }
             }
             let opacity = g.transmit * (1.0 - a);
             if let Some(vel) = f.velocity {
@@ -318,7 +412,7 @@ fn march(
 }
 
 /// Where a ray from `o` along unit `d` enters and leaves the box `lo..hi`, if it meets it.
-fn slab(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+pub(super) fn slab(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
     let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
     for k in 0..3 {
         if d[k].abs() < 1e-12 {

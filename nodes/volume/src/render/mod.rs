@@ -6,6 +6,7 @@
 pub mod blackbody;
 pub mod clear;
 pub mod compose;
+pub mod flames;
 pub mod light;
 pub mod march;
 pub mod sixway;
@@ -20,14 +21,16 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use pyrograph_core::{Cook, CookCtx, Image, NodeError, port};
 use pyrograph_nodes_particles::lit_mesh::MeshShading;
+use pyrograph_nodes_particles::swept::Exposure;
 use pyrograph_nodes_particles::types::Mesh;
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Particle, Particles};
 
 use crate::grid::Volume;
 use compose::{PassMap, VolumePass, mesh_surfaces};
+use flames::{Smoke, flame_light};
 use light::{Light, LightKind};
-use march::{Look, Scene};
+use march::{Look, MAX_OCTAVES, Octaves, Scene};
 
 pyrograph_core::ports! {
     /// How a volume's smoke absorbs, how its fire glows and how finely it is marched: the ports
@@ -51,13 +54,44 @@ pyrograph_core::ports! {
         /// March step in voxels.
         #[range(0.05, 8.0)]
         step_size: f32 = 0.5,
+        /// Orders of scattering, approximated by octaves (Wrenninge 2015): 1 is single scattering; more
+        /// brighten the smoke's shadowed, dense parts as light bouncing inside it does (4 with the octave
+        /// defaults come closest to Mitsuba 3's path tracer on dense smoke: BENCHMARKS.md).
+        #[range(1, 8)]
+        scattering_octaves: u32 = 1,
+        /// Each octave's share of the previous octave's light (at most `octave_extinction`).
+        #[range(0.0, 1.0)]
+        octave_albedo: f32 = 0.25,
+        /// Each octave's shadow extinction relative to the previous octave's (thinner shadows).
+        #[range(0.0, 1.0)]
+        octave_extinction: f32 = 0.25,
+        /// Each octave's anisotropy relative to the previous octave's (more even scattering).
+        #[range(0.0, 1.0)]
+        octave_anisotropy: f32 = 0.5,
     }
 }
 
 impl MarchPorts {
-    /// The march's look with these ports and the node's own light and colours.
-    pub fn look(&self, albedo: Vec3, anisotropy: f32, ambient: Vec3, background: Vec4, seed: u64) -> Look {
-        Look {
+    /// The march's look with these ports and the node's own light and colours; an octave that
+    /// would scatter more light than it lets through is an error.
+    pub fn look(&self, albedo: Vec3, anisotropy: f32, ambient: Vec3, background: Vec4, seed: u64) -> Result<Look, NodeError> {
+        if self.octave_albedo > self.octave_extinction {
+            return Err(NodeError::port(
+                port!(MarchPorts, octave_albedo),
+                format!(
+                    "{} is more than octave_extinction ({}): each octave would scatter more light than its thinner \
+                     shadows let through, and the smoke would glow; keep octave_albedo at most octave_extinction",
+                    self.octave_albedo, self.octave_extinction
+                ),
+            ));
+        }
+        let octaves = Octaves {
+            count: self.scattering_octaves.clamp(1, MAX_OCTAVES as u32),
+            albedo: self.octave_albedo,
+            extinction: self.octave_extinction,
+            anisotropy: self.octave_anisotropy,
+        };
+        Ok(Look {
             extinction: self.extinction,
             albedo,
             anisotropy,
@@ -68,11 +102,12 @@ impl MarchPorts {
             step: self.step_size,
             background,
             seed,
-        }
+            octaves,
+        })
     }
 }
 
-fn no_lights() -> Arc<Particles> {
+fn no_particles() -> Arc<Particles> {
     Arc::new(Particles::default())
 }
 
@@ -85,7 +120,9 @@ pyrograph_core::node! {
     /// `temperature` 0 and 1 at `kelvin_cold` and `kelvin_hot`). Steps of `step_size` voxels, jittered per pixel,
     /// skip empty bricks and stop once a ray is opaque. An opaque mesh (the burning house) hides the smoke
     /// behind it and is seen through the smoke in front of it, lit by the sun, the lights and the fire's own
-    /// light. RGBA, straight alpha, over `background`; `pass` draws a compositor's layer instead (emission,
+    /// light. Particle flames and sparks (Perry 1994 §3.2) sit inside the smoke: their light, drawn as
+    /// particles.render_flames draws it, is dimmed by the smoke in front of each particle and hidden behind
+    /// the mesh. RGBA, straight alpha, over `background`; `pass` draws a compositor's layer instead (emission,
     /// scattering, alpha, depth, motion vectors from the velocity field): render each pass with its own node
     /// and write them with imaging.write_exr_layers.
     #[node("volume.render", "Volume", PerFrame)]
@@ -93,7 +130,14 @@ pyrograph_core::node! {
         /// The volume (volume.simulate, volume.load_vdb): density, temperature and flame fields.
         volume: Arc<Volume>,
         /// Point lights (particles.flame_lights: position, colour, intensity); default none.
-        lights: Arc<Particles> = no_lights(),
+        lights: Arc<Particles> = no_particles(),
+        /// Particle flames inside the smoke (particles.particle_flame), drawn additively as
+        /// particles.render_flames draws them, each particle dimmed by the smoke in front of it; default none.
+        flames: Arc<Particles> = no_particles(),
+        /// Sparks drawn with the flames (particles.embers); default none.
+        sparks: Arc<Particles> = no_particles(),
+        /// The flames as one continuous swept shape each (the long exposure), or as their discrete steps.
+        flame_exposure: Exposure = Exposure::Continuous,
         /// An opaque mesh seen with the volume (particles.mesh_load); default none.
         mesh: Arc<Mesh> = Arc::new(Mesh::default()),
         /// The mesh's albedo.
@@ -172,6 +216,15 @@ impl Cook for Render {
                 format!("light {k} has a non-finite position, colour or intensity"),
             ));
         }
+        for (set, name) in [(&self.flames, port!(Render, flames)), (&self.sparks, port!(Render, sparks))] {
+            if let Some(k) = set
+                .particles
+                .iter()
+                .position(|q| !q.position.iter().chain(&q.size).chain(&q.center).chain(&q.edge).all(|x| x.is_finite()))
+            {
+                return Err(NodeError::port(name, format!("particle {k} has a non-finite position, size or colour")));
+            }
+        }
         check_fields(&self.volume, port!(Render, volume))?;
         if self.mesh.normals.len() != self.mesh.triangles.len() {
             return Err(NodeError::port(port!(Render, mesh), "the mesh has no face normals: load it with particles.mesh_load"));
@@ -200,13 +253,19 @@ impl Cook for Render {
             Vec3::from_array(self.ambient),
             Vec4::from_array(self.background),
             self.volume.time.to_bits(),
-        );
+        )?;
         let surfaces = (!self.mesh.triangles.is_empty()).then(|| self.surfaces(&view, sun));
         let scene =
             Scene { lights: &lights, groups: &[], surfaces: surfaces.as_deref(), motion: self.pass == VolumePass::Motion };
         let map =
             PassMap { pass: self.pass, background: look.background, view: &view, frame_seconds: (1.0 / self.frame_rate) as f32 };
-        let pixels = march::gather(&self.volume, &view, &scene, &look, |g, s, ray| map.pixel(g, s, ray));
+        let mut pixels = march::gather(&self.volume, &view, &scene, &look, |g, s, ray| map.pixel(g, s, ray));
+        if !(self.flames.particles.is_empty() && self.sparks.particles.is_empty()) {
+            ctx.check_cancel()?;
+            let smoke = Smoke { extinction: look.extinction, step: look.step * self.volume.transform.voxel_size as f32 };
+            let families = [&*self.sparks, &*self.flames];
+            map.add_flames(&mut pixels, &flame_light(&view, &self.volume, smoke, &families, self.flame_exposure, &self.mesh));
+        }
         Ok(RenderOut { image: Arc::new(map.image(pixels)) })
     }
 }

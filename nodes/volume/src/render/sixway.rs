@@ -58,7 +58,8 @@ impl Cook for RenderSixway {
         let view = self.camera.view()?;
         check_fields(&self.volume, port!(RenderSixway, volume))?;
         ctx.check_cancel()?;
-        let look = self.march.look(Vec3::splat(self.albedo), self.anisotropy, Vec3::ZERO, Vec4::ZERO, self.volume.time.to_bits());
+        let look =
+            self.march.look(Vec3::splat(self.albedo), self.anisotropy, Vec3::ZERO, Vec4::ZERO, self.volume.time.to_bits())?;
         let (positive, negative) = sixway_maps(&self.volume, &view, &look, self.emission_scale);
         Ok(RenderSixwayOut { positive: Arc::new(positive), negative: Arc::new(negative) })
     }

@@ -9,6 +9,7 @@ use pyrograph_render::{Camera, View};
 
 use super::*;
 use crate::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS};
+use crate::render::march::Octaves;
 
 /// A dense puff on a thinner column, with a flame at the puff's foot, over 4 × 4 × 4 bricks.
 fn smoke() -> Volume {
@@ -53,6 +54,7 @@ fn look() -> Look {
         step: 0.5,
         background: Vec4::ZERO,
         seed: 3,
+        octaves: Octaves::SINGLE,
     }
 }
 

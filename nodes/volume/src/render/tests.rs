@@ -11,8 +11,8 @@ use pyrograph_render::{Camera, Particle, Particles, View};
 
 use super::compose::VolumePass;
 use super::light::{Light, LightKind};
-use super::march::{Look, render};
-use super::{MarchPorts, Render, no_lights};
+use super::march::{Look, Octaves, render};
+use super::{MarchPorts, Render, no_particles};
 use crate::grid::{Field, FieldData, SimStats, Topology, Transform, VOXELS, Volume};
 use pyrograph_nodes_particles::types::Mesh;
 
@@ -56,6 +56,7 @@ fn look(extinction: f32) -> Look {
         step: 0.5,
         background: Vec4::ONE,
         seed: 7,
+        octaves: Octaves::SINGLE,
     }
 }
 
@@ -148,13 +149,24 @@ fn an_empty_volume_renders_the_background() {
 
 /// The march ports with `exposure` and `glow`, extinction 8, step half a voxel.
 fn march(exposure: f32, glow: f32) -> MarchPorts {
-    MarchPorts { extinction: 8.0, exposure, glow, kelvin_cold: 1000.0, kelvin_hot: 2600.0, step_size: 0.5 }
+    MarchPorts {
+        extinction: 8.0,
+        exposure,
+        glow,
+        kelvin_cold: 1000.0,
+        kelvin_hot: 2600.0,
+        step_size: 0.5,
+        ..MarchPorts::default()
+    }
 }
 
 fn node(v: Volume) -> Render {
     Render {
         volume: Arc::new(v),
-        lights: no_lights(),
+        lights: no_particles(),
+        flames: no_particles(),
+        sparks: no_particles(),
+        flame_exposure: pyrograph_nodes_particles::swept::Exposure::Continuous,
         camera: CameraPorts::looking(16, 9, [0.4, 0.4, 6.0], [0.4, 0.4, 0.0]),
         march: march(8.0, 0.1),
         albedo: [0.85; 3],
@@ -287,4 +299,116 @@ fn the_motion_pass_projects_the_smokes_velocity_to_pixels_per_frame() {
     println!("motion {m} vs {want} pixels per frame");
     assert!((m.x - want).abs() < 0.05 * want && m.y.abs() < 0.02 * want && m.w > 0.5, "{m} vs {want}");
     assert_eq!(pixel(&img, 0, 0), Vec4::ZERO, "no smoke, no motion");
+}
+
+/// One additive flame particle at `z` on the slab's axis, `half` wide, in front of the camera of [`node`].
+fn flame_at(z: f32) -> Arc<Particles> {
+    let q = Particle {
+        position: [0.4, 0.4, z],
+        size: [0.3, 0.3],
+        center: [0.6, 0.4, 0.2, 0.9],
+        edge: [0.6, 0.4, 0.2, 0.0],
+        ..Particle::default()
+    };
+    Arc::new(Particles { particles: vec![q], sides: 8, ..Particles::default() })
+}
+
+#[test]
+fn flames_inside_the_smoke_are_dimmed_by_the_smoke_in_front_of_them_and_hidden_by_the_mesh() {
+    let ctx = CookCtx::new();
+    // The slab absorbs only; its twin holds the same bricks and no smoke.
+    let clear = || {
+        let mut n = slab_node(Mesh::default());
+        let mut v = (*n.volume).clone();
+        v.fields[0].data = FieldData::Scalar(vec![0.0; v.topology.voxels()]);
+        n.volume = Arc::new(v);
+        n
+    };
+    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap().image, 8, 4);
+    // Behind the slab (world z 0.4..2.0, optical depth 1.2): dimmed by Beer–Lambert.
+    let seen = centre(Render { flames: flame_at(-0.5), ..slab_node(Mesh::default()) });
+    let bare = centre(Render { flames: flame_at(-0.5), ..clear() });
+    let want = (-1.2f32).exp();
+    println!("a flame behind optical depth 1.2: {seen} against {bare} without smoke (Beer–Lambert {want})");
+    assert!(bare.x > 0.03, "the flame is seen: {bare}");
+    for k in 0..3 {
+        assert!(((seen[k] / bare[k] - want) / want).abs() < 0.01, "channel {k}: {seen} / {bare} vs {want}");
+    }
+    // In front of the slab: untouched by the smoke behind it.
+    let front = centre(Render { flames: flame_at(3.0), ..slab_node(Mesh::default()) });
+    let alone = centre(Render { flames: flame_at(3.0), ..clear() });
+    assert!((front - alone).abs().max_element() < 1e-6 && front.x > 0.03, "{front} vs {alone}");
+    // Sparks are dimmed the same way.
+    let sparks = centre(Render { sparks: flame_at(-0.5), ..slab_node(Mesh::default()) });
+    assert!((sparks - seen).abs().max_element() < 1e-6, "{sparks} vs {seen}");
+    // A mesh in front hides the flame; one behind it is seen with it, both dimmed by the smoke.
+    let hidden = centre(Render { flames: flame_at(-0.5), ..slab_node(square(4.0, 3.0)) });
+    assert_eq!(hidden, Vec4::new(0.5, 0.5, 0.5, 1.0), "the flame behind the mesh");
+    let over = centre(Render { flames: flame_at(-0.5), ..slab_node(square(-1.0, 3.0)) });
+    let sum = bare.truncate() * want + Vec3::splat(0.5 * want);
+    assert!((over.truncate() - sum).abs().max_element() < 0.01 * sum.max_element(), "{over} vs {sum}");
+    // The flame is light: in the emission pass, and in the alpha over a clear background.
+    let emission = centre(Render { flames: flame_at(-0.5), pass: VolumePass::Emission, ..slab_node(Mesh::default()) });
+    assert!((emission.truncate() * emission.w - seen.truncate()).abs().max_element() < 1e-5, "{emission} vs {seen}");
+    let alpha = |flames| {
+        let n = Render { flames, pass: VolumePass::Alpha, background: [0.0; 4], ..clear() };
+        n.cook(&ctx).unwrap().image.pixel(8, 4)[0]
+    };
+    assert!(alpha(no_particles()) == 0.0 && alpha(flame_at(-0.5)) > 0.05, "the flame's coverage");
+}
+
+#[test]
+fn a_flame_particle_with_a_nan_is_an_error_naming_the_port() {
+    let mut bad = (*flame_at(0.0)).clone();
+    bad.particles[0].size[1] = f32::NAN;
+    let n = Render { sparks: Arc::new(bad), ..slab_node(Mesh::default()) };
+    let e = n.cook(&CookCtx::new()).err().expect("a NaN size is refused").to_string();
+    assert!(e.contains("sparks") && e.contains("particle 0"), "{e}");
+}
+
+#[test]
+fn scattering_octaves_lift_the_shadowed_smoke_more_than_the_lit_smoke() {
+    // The plume and puff of the shadow test, lit by the sun along +x, seen with 1 and 4 octaves.
+    let plume = |p: IVec3| if (p - IVec3::new(8, 8, 8)).abs().max_element() <= 3 { 0.2 } else { 0.0 };
+    let puff = |p: IVec3| if (p - IVec3::new(40, 8, 8)).abs().max_element() <= 5 { 4.0 } else { 0.0 };
+    let (lo, hi) = (IVec3::new(0, 0, 0), IVec3::new(6, 1, 1));
+    let (alone, shadowed) = (volume(lo, hi, plume), volume(lo, hi, |p| plume(p) + puff(p)));
+    let sun = [Light { kind: LightKind::Directional(Vec3::X), color: Vec3::splat(3.0) }];
+    let view = front(Vec3::splat(8.0 * H as f32), 5, 1.0);
+    let seen = |v: &Volume, octaves: Octaves| {
+        let l = Look { background: Vec4::new(0.0, 0.0, 0.0, 1.0), octaves, ..look(8.0) };
+        pixel(&render(v, &view, &sun, &l), 2, 2).x
+    };
+    let four = Octaves { count: 4, albedo: 0.5, extinction: 0.5, anisotropy: 0.5 };
+    let (lit, lit4) = (seen(&alone, Octaves::SINGLE), seen(&alone, four));
+    let (dark, dark4) = (seen(&shadowed, Octaves::SINGLE), seen(&shadowed, four));
+    println!("lit plume {lit} → {lit4}; shadowed {dark} → {dark4}");
+    // Isotropic phase: octave i adds 0.5^i of single scattering through thinner shadows, so at least 0.5^i of it.
+    assert!(lit4 >= lit * 1.875 * 0.999, "{lit4} vs {lit}");
+    assert!(dark4 / dark > 2.0 * (lit4 / lit), "the shadow opens up: {dark} → {dark4} against {lit} → {lit4}");
+    assert!(dark4 < lit4, "still in shadow: {dark4} vs {lit4}");
+}
+
+#[test]
+fn octaves_sum_their_shares_through_thinned_shadows() {
+    let o = Octaves { count: 3, albedo: 0.5, extinction: 0.25, anisotropy: 0.5 };
+    let p = o.phases(0.3, 0.6);
+    let hg = super::light::henyey_greenstein;
+    assert_eq!(p[0], hg(0.3, 0.6));
+    assert!((p[1] - 0.5 * hg(0.3, 0.3)).abs() < 1e-7 && (p[2] - 0.25 * hg(0.3, 0.15)).abs() < 1e-7, "{p:?}");
+    assert!(p[3..].iter().all(|x| *x == 0.0));
+    let t = (-4.0f32).exp();
+    let want = p[0] * t + p[1] * (-1.0f32).exp() + p[2] * (-0.25f32).exp();
+    assert!((o.through(&p, t) - want).abs() < 1e-6, "{} vs {want}", o.through(&p, t));
+    assert_eq!(o.through(&p, 0.0), 0.0);
+    assert_eq!(Octaves::SINGLE.through(&Octaves::SINGLE.phases(0.3, 0.6), t), hg(0.3, 0.6) * t);
+}
+
+#[test]
+fn an_octave_scattering_more_than_it_lets_through_is_an_error() {
+    let mut n = slab_node(Mesh::default());
+    n.march.scattering_octaves = 3;
+    n.march.octave_albedo = 0.8;
+    let e = n.cook(&CookCtx::new()).err().expect("a glowing octave is refused").to_string();
+    assert!(e.contains("octave_albedo") && e.contains("octave_extinction"), "{e}");
 }

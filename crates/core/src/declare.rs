@@ -202,19 +202,40 @@ impl Port for f32 {
     }
 }
 
-impl Port for i64 {
-    fn port_type() -> PortType {
-        PortType::Int
-    }
-    fn into_value(self) -> Value {
-        Value::Int(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::Int(x) => Ok(*x),
-            other => Err(wrong("Int", other)),
+/// Ports whose type is one `Value` variant, read back only from that variant: the type, the
+/// variant (also the type's name in errors) and a doc line each.
+macro_rules! value_port {
+    ($($(#[$doc:meta])* $t:ty => $variant:ident),* $(,)?) => {$(
+        $(#[$doc])*
+        impl Port for $t {
+            fn port_type() -> PortType {
+                PortType::$variant
+            }
+            fn into_value(self) -> Value {
+                Value::$variant(self)
+            }
+            fn from_value(v: &Value) -> Result<Self, String> {
+                match v {
+                    Value::$variant(x) => Ok(x.to_owned()),
+                    other => Err(wrong(stringify!($variant), other)),
+                }
+            }
         }
-    }
+    )*};
+}
+value_port! {
+    /// An Int port.
+    i64 => Int,
+    /// A Bool port.
+    bool => Bool,
+    /// A Color port: linear RGBA.
+    [f32; 4] => Color,
+    /// A Vec2 port.
+    [f64; 2] => Vec2,
+    /// A Vec3 port.
+    [f64; 3] => Vec3,
+    /// A String port.
+    String => String,
 }
 
 macro_rules! int_port {
@@ -237,67 +258,6 @@ macro_rules! int_port {
 }
 int_port!(i32, u8, u16, u32, u64, usize);
 
-impl Port for bool {
-    fn port_type() -> PortType {
-        PortType::Bool
-    }
-    fn into_value(self) -> Value {
-        Value::Bool(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::Bool(x) => Ok(*x),
-            other => Err(wrong("Bool", other)),
-        }
-    }
-}
-
-/// A Color port: linear RGBA.
-impl Port for [f32; 4] {
-    fn port_type() -> PortType {
-        PortType::Color
-    }
-    fn into_value(self) -> Value {
-        Value::Color(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::Color(x) => Ok(*x),
-            other => Err(wrong("Color", other)),
-        }
-    }
-}
-
-impl Port for [f64; 2] {
-    fn port_type() -> PortType {
-        PortType::Vec2
-    }
-    fn into_value(self) -> Value {
-        Value::Vec2(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::Vec2(x) => Ok(*x),
-            other => Err(wrong("Vec2", other)),
-        }
-    }
-}
-
-impl Port for [f64; 3] {
-    fn port_type() -> PortType {
-        PortType::Vec3
-    }
-    fn into_value(self) -> Value {
-        Value::Vec3(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::Vec3(x) => Ok(*x),
-            other => Err(wrong("Vec3", other)),
-        }
-    }
-}
-
 impl Port for [f32; 3] {
     fn port_type() -> PortType {
         PortType::Vec3
@@ -308,21 +268,6 @@ impl Port for [f32; 3] {
     fn from_value(v: &Value) -> Result<Self, String> {
         // As for f32: the nodes that declare [f32; 3] compute in f32.
         <[f64; 3]>::from_value(v).map(|x| x.map(|c| c as f32))
-    }
-}
-
-impl Port for String {
-    fn port_type() -> PortType {
-        PortType::String
-    }
-    fn into_value(self) -> Value {
-        Value::String(self)
-    }
-    fn from_value(v: &Value) -> Result<Self, String> {
-        match v {
-            Value::String(x) => Ok(x.clone()),
-            other => Err(wrong("String", other)),
-        }
     }
 }
 

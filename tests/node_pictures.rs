@@ -383,6 +383,39 @@ fn card(name: &str, ports: &[String], eval: &mut Evaluator, graph: &Graph, ctx: 
     pyrograph::wedge::sheet(&[(blank, labels)], 1, SIZE.0)
 }
 
+/// Node pictures that show one realization of a random process: `flame_model.arp_learn` fits its
+/// model with a particle filter whose resampling flips on the last bit of a float, and the flame
+/// fit's numbers before it differ in that bit between builds and machines (the same commit drew one
+/// realization in a local debug build, another in the clean-clone CI on the same machine, and a third
+/// on the machine that made the pictures; not tracked down further), so each draws its own. They are compared by
+/// their 12×12-pixel block means (the curves' envelopes): two realizations differ there by 0.7–1.0/255
+/// on average and at most 8.3/255, a plot shifted 6 pixels or flattened by 4–6/255 and up to 47/255.
+const REALIZATIONS: [&str; 2] = ["flame_model.arp_learn", "flame_model.arp_sample"];
+
+/// [`REALIZATIONS`]' comparison: the mean of 12×12-pixel block means' differences at most 2/255,
+/// none over 16/255.
+fn envelopes_match(made: &image::RgbaImage, want: &image::RgbaImage) -> Result<(), String> {
+    const BLOCK: u32 = 12;
+    if made.dimensions() != want.dimensions() {
+        return Err(format!("size {:?}, committed {:?}", made.dimensions(), want.dimensions()));
+    }
+    let (w, h) = (made.width() / BLOCK, made.height() / BLOCK);
+    let mean = |img: &image::RgbaImage, bx: u32, by: u32, c: usize| {
+        let pixels = (0..BLOCK * BLOCK).map(|k| img.get_pixel(bx * BLOCK + k % BLOCK, by * BLOCK + k / BLOCK).0[c]);
+        pixels.map(f64::from).sum::<f64>() / f64::from(BLOCK * BLOCK)
+    };
+    let diffs: Vec<f64> = (0..w * h)
+        .flat_map(|b| (0..4).map(move |c| (b, c)))
+        .map(|(b, c)| (mean(made, b % w, b / w, c) - mean(want, b % w, b / w, c)).abs())
+        .collect();
+    let average = diffs.iter().sum::<f64>() / diffs.len().max(1) as f64;
+    let largest = diffs.iter().copied().fold(0.0, f64::max);
+    if average > 2.0 || largest > 16.0 {
+        return Err(format!("block means differ by {average:.2}/255 on average, up to {largest:.1}/255"));
+    }
+    Ok(())
+}
+
 fn regenerate() -> bool {
     std::env::var("REGENERATE").is_ok_and(|v| v == "1")
 }
@@ -409,7 +442,11 @@ fn check_picture(desc: &NodeDesc, files: &Files) -> Option<String> {
     match image::open(&file) {
         Ok(want) => {
             let want = want.to_rgba8();
-            let matched = pyrograph_testing::pictures_match(made.as_raw(), made.dimensions(), want.as_raw(), want.dimensions());
+            let matched = if REALIZATIONS.contains(&name.as_str()) {
+                envelopes_match(&made, &want)
+            } else {
+                pyrograph_testing::pictures_match(made.as_raw(), made.dimensions(), want.as_raw(), want.dimensions())
+            };
             matched.err().map(|e| format!("{name}: {} is stale ({e}); REGENERATE=1 renews it", file.display()))
         }
         Err(e) => Some(format!("{name}: {}: {e} (REGENERATE=1 makes it)", file.display())),

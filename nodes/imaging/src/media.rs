@@ -12,6 +12,12 @@ use pyrograph_core::fingerprint::{Fingerprinter, hash_metadata};
 /// Frame rate of image sequences when none is given.
 pub const DEFAULT_FPS: f64 = 24.0;
 
+/// An empty image clip: the default of optional clip inputs (imaging.write_exr_layers' extra
+/// layers, the flipbooks' motion vectors).
+pub fn no_images() -> pyrograph_core::ClipOf<std::sync::Arc<pyrograph_core::Image>> {
+    pyrograph_core::ClipOf::new(pyrograph_core::Clip::from_frames(pyrograph_core::PortType::Image, 0.0, Vec::new()))
+}
+
 /// Why reading or writing image files failed, by what the problem concerns; the node that read or
 /// wrote turns it into a [`NodeError`] on the matching port.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

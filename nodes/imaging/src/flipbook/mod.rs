@@ -8,12 +8,13 @@ use std::sync::Arc;
 
 use image::imageops::FilterType;
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{Channels, Clip, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, PortType, port};
+use pyrograph_core::{Channels, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, port};
 use rayon::prelude::*;
 
 use crate::color::AlphaMode;
 use crate::filters::Plane;
 use crate::io::{BitDepth, ExrType, IoError, OutputFormat, output_format, write_image_file};
+use crate::media::no_images;
 use crate::resize::resize;
 
 mod engine;
@@ -264,15 +265,10 @@ pyrograph_core::ports! {
         clip: ClipOf<Arc<Image>>,
         /// Motion vectors, one image per frame (volume.render's motion pass: R, G the motion in frame pixels
         /// per frame, x right, y down), used instead of measuring the clip's optical flow; default none (measured)
-        motion_vectors: ClipOf<Arc<Image>> = no_vectors(),
+        motion_vectors: ClipOf<Arc<Image>> = no_images(),
         /// The layout.
         layout: FlipbookOptions,
     }
-}
-
-/// No motion vectors given: the flipbook measures the clip's optical flow.
-fn no_vectors() -> ClipOf<Arc<Image>> {
-    ClipOf::new(Clip::from_frames(PortType::Image, 0.0, Vec::new()))
 }
 
 impl FlipbookInputs {

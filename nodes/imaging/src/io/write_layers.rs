@@ -4,18 +4,14 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, PortType, port};
+use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, Image, NodeError, OutputPath, port};
 
 use super::IoError;
 use super::exr_layers::{LayerOut, encode_exr_layers};
 use super::files::{ExrType, OutputFormat};
 use super::sequence::{WriteOptions, write_frames};
 use crate::color::{AlphaMode, premultiply};
-
-/// An empty image clip: the default of the optional layer inputs.
-fn no_layer() -> ClipOf<Arc<Image>> {
-    ClipOf::new(Clip::from_frames(PortType::Image, 0.0, Vec::new()))
-}
+use crate::media::no_images;
 
 pyrograph_core::node! {
     /// Writes a clip and up to four more as the named layers of one OpenEXR file per frame: the multi-layer files compositors read as passes.
@@ -31,25 +27,25 @@ pyrograph_core::node! {
         /// The main layer (R, G, B, A).
         main: ClipOf<Arc<Image>>,
         /// A second layer (optional).
-        layer1: ClipOf<Arc<Image>> = no_layer(),
+        layer1: ClipOf<Arc<Image>> = no_images(),
         /// The second layer's name (emission, mask, motion…).
         name1: String = String::new(),
         /// Sample type of the second layer.
         type1: ExrType = ExrType::Half,
         /// A third layer (optional).
-        layer2: ClipOf<Arc<Image>> = no_layer(),
+        layer2: ClipOf<Arc<Image>> = no_images(),
         /// The third layer's name.
         name2: String = String::new(),
         /// Sample type of the third layer.
         type2: ExrType = ExrType::Half,
         /// A fourth layer (optional).
-        layer3: ClipOf<Arc<Image>> = no_layer(),
+        layer3: ClipOf<Arc<Image>> = no_images(),
         /// The fourth layer's name.
         name3: String = String::new(),
         /// Sample type of the fourth layer.
         type3: ExrType = ExrType::Half,
         /// A fifth layer (optional).
-        layer4: ClipOf<Arc<Image>> = no_layer(),
+        layer4: ClipOf<Arc<Image>> = no_images(),
         /// The fifth layer's name.
         name4: String = String::new(),
         /// Sample type of the fifth layer.
@@ -188,7 +184,7 @@ impl Cook for WriteExrLayers {
 
 #[cfg(test)]
 mod tests {
-    use pyrograph_core::{Channels, Value};
+    use pyrograph_core::{Channels, PortType, Value};
 
     use super::*;
     use crate::io::{SequenceOptions, open_sequence};
@@ -213,10 +209,10 @@ mod tests {
             layer2: clip_of(3, Channels::Gray, 0.7),
             name2: "mask".into(),
             type2: ExrType::Half,
-            layer3: no_layer(),
+            layer3: no_images(),
             name3: String::new(),
             type3: ExrType::Half,
-            layer4: no_layer(),
+            layer4: no_images(),
             name4: String::new(),
             type4: ExrType::Half,
             pattern: OutputPath(dir.join("passes_####.exr")),

@@ -260,7 +260,9 @@ impl Cook for Render {
         let map =
             PassMap { pass: self.pass, background: look.background, view: &view, frame_seconds: (1.0 / self.frame_rate) as f32 };
         let mut pixels = march::gather(&self.volume, &view, &scene, &look, |g, s, ray| map.pixel(g, s, ray));
-        if !(self.flames.particles.is_empty() && self.sparks.particles.is_empty()) {
+        // Flames are light: the scattering, depth and motion passes are the smoke's alone.
+        let shows_flames = matches!(self.pass, VolumePass::Beauty | VolumePass::Emission | VolumePass::Alpha);
+        if shows_flames && !(self.flames.particles.is_empty() && self.sparks.particles.is_empty()) {
             ctx.check_cancel()?;
             let smoke = Smoke { extinction: look.extinction, step: look.step * self.volume.transform.voxel_size as f32 };
             let families = [&*self.sparks, &*self.flames];

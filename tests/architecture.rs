@@ -332,29 +332,63 @@ fn edges(tree: &Tree) -> Edges {
     out
 }
 
-/// The structs a file declares inside `node! { ... }` blocks: node types and their outputs.
-fn node_structs(text: &str) -> BTreeSet<String> {
-    let mut out = BTreeSet::new();
+/// The bodies of a file's `node! { ... }` blocks.
+fn node_blocks(text: &str) -> Vec<&str> {
+    let mut out = Vec::new();
     for (i, _) in text.match_indices("node!") {
         let rest = &text[i + 5..];
         let Some(open) = rest.find('{').filter(|&o| rest[..o].trim().is_empty()) else { continue };
-        let mut depth = 0;
-        let mut end = rest.len();
-        for (j, c) in rest[open..].char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' => {
-                    depth -= 1;
-                    if depth == 0 {
-                        end = open + j;
-                        break;
-                    }
+        out.push(&rest[open..open + closing(&rest[open..])]);
+    }
+    out
+}
+
+/// The offset of the brace that closes the one `text` opens with (its length when unclosed).
+fn closing(text: &str) -> usize {
+    let mut depth = 0;
+    for (j, c) in text.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return j;
                 }
-                _ => {}
             }
+            _ => {}
         }
-        let block = &rest[open..end];
+    }
+    text.len()
+}
+
+/// The structs a file declares inside `node! { ... }` blocks: node types and their outputs.
+fn node_structs(text: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    for block in node_blocks(text) {
         out.extend(block.match_indices("struct ").map(|(k, m)| ident_at(block, k + m.len())));
+    }
+    out
+}
+
+/// The output structs of a file's `node!` blocks that hold one field: a node with one output
+/// declares it `-> name: Type` instead. Each as (struct name, field).
+fn single_output_structs(text: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for block in node_blocks(text) {
+        let structs: Vec<usize> = block.match_indices("struct ").map(|(k, m)| k + m.len()).collect();
+        let [_, at] = structs[..] else { continue };
+        let body_start = at + block[at..].find('{').unwrap_or(block.len() - at);
+        let body = &block[body_start..body_start + closing(&block[body_start..])];
+        // A field is a name followed by one colon (not a path's `::`) at the top level of the body.
+        let fields: Vec<String> = body
+            .lines()
+            .filter_map(|l| l.trim().split_once(':').filter(|(_, ty)| !ty.starts_with(':')).map(|(n, _)| n))
+            .filter(|n| !n.is_empty() && n.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '#'))
+            .map(str::to_string)
+            .collect();
+        if let [field] = &fields[..] {
+            out.push((ident_at(block, at), field.clone()));
+        }
     }
     out
 }
@@ -456,6 +490,11 @@ fn problems(root: &Path, base: &Path) -> Vec<String> {
             }
         }
     }
+    for m in tree.values() {
+        for (name, field) in single_output_structs(&m.text) {
+            out.push(format!("{} declares the one output of a node as struct {name}: write `-> {field}: ..`", rel(&m.path)));
+        }
+    }
     for group in cycles(&graph) {
         let names: Vec<String> = group.iter().map(|p| rel(p)).collect();
         if names.iter().all(|n| ALLOWED_CYCLE.contains(&n.as_str())) {
@@ -507,7 +546,7 @@ fn algorithms_do_not_import_nodes_and_files_form_no_cycle() {
 
 /// The checker itself, on a made-up crate that breaks both rules: it must say so.
 #[test]
-fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
+fn the_checker_finds_an_algorithm_importing_a_node_a_cycle_and_a_one_field_output_struct() {
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("src");
     for folder in ["io", "video"] {
@@ -517,7 +556,14 @@ fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
         ("lib.rs", "pub mod io;\npub mod blur;\npub mod a;\npub mod b;\npub mod video;\n"),
         ("io/mod.rs", "mod files;\npub mod nodes;\nmod sequence;\npub use files::*;\npub use nodes::*;\n"),
         ("io/files.rs", "use crate::io::LoadSequence;\npub fn read() { port!(LoadSequence, path); }\n"),
-        ("io/nodes.rs", "node! {\n    pub struct LoadSequence { path: u8 }\n    pub struct Out {}\n}\n"),
+        (
+            "io/nodes.rs",
+            concat!(
+                "node! {\n    pub struct LoadSequence { path: u8 }\n    pub struct Out { clip: u8, fps: f64 }\n}\n",
+                "node! {\n    pub struct Write { clip: u8 }\n    pub struct WriteOut {\n        frames: std::num::NonZeroU8,\n    }\n}\n",
+                "node! {\n    pub struct Blur { image: u8 }\n    -> image: u8\n}\n",
+            ),
+        ),
         ("blur.rs", "use super::io::read;\npub fn blur() { read() }\n#[cfg(test)]\nuse crate::io::nodes::LoadSequence;\n"),
         ("a.rs", "use crate::b::{self, helper};\npub fn f() { helper() }\n"),
         ("b.rs", "pub fn helper() { crate::a::f() }\npub fn text() -> &'static str { \"; use at most {n}; \" }\n"),
@@ -536,8 +582,13 @@ fn the_checker_finds_an_algorithm_importing_a_node_and_a_cycle() {
     );
     assert!(found.contains(&"import cycle between src/a.rs, src/b.rs".to_string()), "{found:?}");
     assert!(found.iter().any(|f| f.starts_with("module cycle in ") && f.ends_with(" between io, video")), "{found:?}");
+    assert!(
+        found
+            .contains(&"src/io/nodes.rs declares the one output of a node as struct WriteOut: write `-> frames: ..`".to_string()),
+        "{found:?}"
+    );
     // blur.rs reaches files.rs (an algorithm) only; its test code is not counted.
-    assert_eq!(found.len(), 3, "{found:?}");
+    assert_eq!(found.len(), 4, "{found:?}");
 }
 
 /// The folders of the workspace from the bottom layer up: a crate may depend on crates in its own

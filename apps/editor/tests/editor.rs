@@ -273,14 +273,12 @@ pyrograph_frontend::core::node! {
         #[range(0.0, 100.0)]
         seconds: f64 = 1.0,
     }
-    pub struct SlowOut {
-        /// The duration.
-        value: f64,
-    }
+    /// The duration.
+    -> value: f64
 }
 
 impl Cook for Slow {
-    fn cook(self, ctx: &CookCtx) -> Result<SlowOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<f64, NodeError> {
         let secs = self.seconds;
         let start = Instant::now();
         let mut n = 0;
@@ -290,7 +288,7 @@ impl Cook for Slow {
             n += 1;
             ctx.frame_progress(n, (secs * 500.0) as usize);
         }
-        Ok(SlowOut { value: secs })
+        Ok(secs)
     }
 }
 
@@ -336,18 +334,16 @@ pyrograph_frontend::core::node! {
         #[range(0.0, 1.0)]
         level: f64 = 0.9,
     }
-    pub struct WarnOut {
-        /// The level.
-        value: f64,
-    }
+    /// The level.
+    -> value: f64
 }
 
 impl Cook for Warn {
-    fn cook(self, ctx: &CookCtx) -> Result<WarnOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<f64, NodeError> {
         if self.level > 0.5 {
             ctx.warn(format!("level {} is above 0.5", self.level));
         }
-        Ok(WarnOut { value: self.level })
+        Ok(self.level)
     }
 }
 

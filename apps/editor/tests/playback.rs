@@ -18,18 +18,16 @@ pyrograph_frontend::core::node! {
         #[range(0, 100)]
         a: f64 = 0.0,
     }
-    pub struct CountedOut {
-        /// a
-        value: f64,
-    }
+    /// a
+    -> value: f64
 }
 
 impl Cook for Counted {
-    fn cook(self, _: &CookCtx) -> Result<CountedOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         if let Some(c) = COOKED.get(self.a as usize) {
             c.fetch_add(1, Ordering::SeqCst);
         }
-        Ok(CountedOut { value: self.a })
+        Ok(self.a)
     }
 }
 

@@ -44,15 +44,13 @@ crate::node! {
         #[range(-BIG, BIG)]
         value: f64 = 0.0,
     }
-    pub struct FloatValueOut {
-        /// The value.
-        value: f64,
-    }
+    /// The value.
+    -> value: f64
 }
 
 impl Cook for FloatValue {
-    fn cook(self, _: &CookCtx) -> Result<FloatValueOut, NodeError> {
-        Ok(FloatValueOut { value: self.value })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.value)
     }
 }
 
@@ -64,15 +62,13 @@ crate::node! {
         #[range(-(1i64 << 40), 1i64 << 40)]
         value: i64 = 0,
     }
-    pub struct IntValueOut {
-        /// The value.
-        value: i64,
-    }
+    /// The value.
+    -> value: i64
 }
 
 impl Cook for IntValue {
-    fn cook(self, _: &CookCtx) -> Result<IntValueOut, NodeError> {
-        Ok(IntValueOut { value: self.value })
+    fn cook(self, _: &CookCtx) -> Result<i64, NodeError> {
+        Ok(self.value)
     }
 }
 
@@ -95,15 +91,13 @@ crate::node! {
         /// The operands.
         operands: Operands,
     }
-    pub struct AddOut {
-        /// The result.
-        value: f64,
-    }
+    /// The result.
+    -> value: f64
 }
 
 impl Cook for Add {
-    fn cook(self, _: &CookCtx) -> Result<AddOut, NodeError> {
-        Ok(AddOut { value: self.operands.a + self.operands.b })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.operands.a + self.operands.b)
     }
 }
 
@@ -114,14 +108,12 @@ crate::node! {
         /// The operands.
         operands: Operands,
     }
-    pub struct MultiplyOut {
-        /// The result.
-        value: f64,
-    }
+    /// The result.
+    -> value: f64
 }
 
 impl Cook for Multiply {
-    fn cook(self, _: &CookCtx) -> Result<MultiplyOut, NodeError> {
-        Ok(MultiplyOut { value: self.operands.a * self.operands.b })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.operands.a * self.operands.b)
     }
 }

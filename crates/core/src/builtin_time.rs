@@ -66,16 +66,14 @@ crate::node! {
         #[range(-BIG, BIG)]
         value: Anim<f64> = Anim::constant(0.0),
     }
-    pub struct TimeChannelOut {
-        /// The curve sampled at every frame.
-        value: ClipOf<f64>,
-    }
+    /// The curve sampled at every frame.
+    -> value: ClipOf<f64>
 }
 
 impl Cook for TimeChannel {
-    fn cook(self, _: &CookCtx) -> Result<TimeChannelOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<f64>, NodeError> {
         let Timeline { frames, fps } = self.timeline;
-        Ok(TimeChannelOut { value: ClipOf::new(Timed { what: What::Channel(self.value), frames, fps }.clip()) })
+        Ok(ClipOf::new(Timed { what: What::Channel(self.value), frames, fps }.clip()))
     }
 }
 
@@ -166,14 +164,12 @@ crate::node! {
         /// Keep the result within the output range (off: continue the line beyond it).
         clamp: bool = true,
     }
-    pub struct FitOut {
-        /// The mapped value.
-        value: f64,
-    }
+    /// The mapped value.
+    -> value: f64
 }
 
 impl Cook for Fit {
-    fn cook(self, _: &CookCtx) -> Result<FitOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         let value = fit(self.x, self.from_min, self.from_max, self.to_min, self.to_max, self.clamp);
         // Only an unclamped fit of a range a few ulps wide can overflow; say which range, not "inf".
         if !value.is_finite() {
@@ -183,7 +179,7 @@ impl Cook for Fit {
             );
             return Err(NodeError::port(crate::port!(Fit, from_max), message));
         }
-        Ok(FitOut { value })
+        Ok(value)
     }
 }
 
@@ -212,21 +208,19 @@ crate::node! {
         #[range(-BIG, BIG)]
         max: f64 = 1.0,
     }
-    pub struct ClampOut {
-        /// x, limited.
-        value: f64,
-    }
+    /// x, limited.
+    -> value: f64
 }
 
 impl Cook for Clamp {
-    fn cook(self, _: &CookCtx) -> Result<ClampOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         // Refused rather than picking one bound: swapped bounds are almost always a wiring mistake,
         // and a silent choice would hide it.
         if self.min > self.max {
             let message = format!("min ({}) is above max ({}): swap them, or lower min", self.min, self.max);
             return Err(NodeError::port(crate::port!(Clamp, min), message));
         }
-        Ok(ClampOut { value: self.x.clamp(self.min, self.max) })
+        Ok(self.x.clamp(self.min, self.max))
     }
 }
 
@@ -245,15 +239,13 @@ crate::node! {
         #[range(-BIG, BIG)]
         t: f64 = 0.5,
     }
-    pub struct MixOut {
-        /// The blend of a and b.
-        value: f64,
-    }
+    /// The blend of a and b.
+    -> value: f64
 }
 
 impl Cook for Mix {
-    fn cook(self, _: &CookCtx) -> Result<MixOut, NodeError> {
-        Ok(MixOut { value: self.a + (self.b - self.a) * self.t })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.a + (self.b - self.a) * self.t)
     }
 }
 
@@ -278,15 +270,13 @@ crate::node! {
         #[range(-BIG, BIG)]
         offset: f64 = 0.0,
     }
-    pub struct SineOut {
-        /// The wave's value at x.
-        value: f64,
-    }
+    /// The wave's value at x.
+    -> value: f64
 }
 
 impl Cook for Sine {
-    fn cook(self, _: &CookCtx) -> Result<SineOut, NodeError> {
-        Ok(SineOut { value: self.amplitude * (TAU * (self.frequency * self.x + self.phase)).sin() + self.offset })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.amplitude * (TAU * (self.frequency * self.x + self.phase)).sin() + self.offset)
     }
 }
 
@@ -308,15 +298,13 @@ crate::node! {
         #[range(0, u32::MAX)]
         seed: u32 = 0,
     }
-    pub struct NoiseOut {
-        /// The noise at x.
-        value: f64,
-    }
+    /// The noise at x.
+    -> value: f64
 }
 
 impl Cook for Noise {
-    fn cook(self, _: &CookCtx) -> Result<NoiseOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         // The expressions' own noise, so the node and `noise(frequency * x, seed)` agree bit for bit.
-        Ok(NoiseOut { value: self.amplitude * crate::anim::expr::perlin(self.frequency * self.x, f64::from(self.seed)) })
+        Ok(self.amplitude * crate::anim::expr::perlin(self.frequency * self.x, f64::from(self.seed)))
     }
 }

@@ -97,7 +97,7 @@ pub fn port_name(field: &str) -> &str {
 
 /// A node's declared inputs and outputs; implemented by [`node!`](crate::node).
 pub trait Declared: Sized + Send + Sync + 'static {
-    /// The outputs struct, in port order.
+    /// What `cook` returns: the one output's value, or the outputs struct in port order.
     type Outputs: OutputSet;
     /// The static description.
     fn desc() -> NodeDesc;
@@ -105,10 +105,17 @@ pub trait Declared: Sized + Send + Sync + 'static {
     fn read(inputs: &Inputs<'_>) -> Result<Self, NodeError>;
 }
 
-/// A node's outputs as port values, in declaration order; implemented by [`node!`](crate::node).
+/// A node's outputs as port values, in declaration order; implemented by [`node!`](crate::node)
+/// for an outputs struct, and here for any single port value (a node with one output returns it).
 pub trait OutputSet {
     /// The values, in port order.
     fn into_values(self) -> Vec<Value>;
+}
+
+impl<T: Port> OutputSet for T {
+    fn into_values(self) -> Vec<Value> {
+        vec![self.into_value()]
+    }
 }
 
 /// What a declared node computes: the one function a node author writes beside its declaration.
@@ -435,11 +442,15 @@ macro_rules! port {
 }
 
 /// Declares a node: a struct of its inputs (each field one port, or a [`ports!`](crate::ports)
-/// group flattened in), a struct of its outputs, and from them its [`NodeDesc`] and typed
-/// reader. The author then writes `impl Cook for Name { fn cook(self, ctx) -> Result<NameOut, _> }`
-/// and registers `Name::node()`.
+/// group flattened in), its outputs, and from them its [`NodeDesc`] and typed reader. The author
+/// then writes `impl Cook for Name { fn cook(self, ctx) -> Result<.., NodeError> }` and registers
+/// `Name::node()`.
 ///
 /// A field without `= default` is a required input; `#[range(lo, hi)]` bounds a number.
+///
+/// A node with one output declares it as `-> name: Type`, and its cook returns that value; a node
+/// with several declares a struct of them (`pub struct NameOut { a: A, b: B }`), which its cook
+/// returns. The first example has one output, the second two.
 ///
 /// ```
 /// use std::sync::Arc;
@@ -456,27 +467,56 @@ macro_rules! port {
 ///         #[range(0.0, 8.0)]
 ///         gain: f32 = 1.0,
 ///     }
-///     pub struct GainOut {
-///         /// The brighter image.
-///         image: Arc<Image>,
-///     }
+///     /// The brighter image.
+///     -> image: Arc<Image>
 /// }
 ///
 /// impl Cook for Gain {
-///     fn cook(self, _: &CookCtx) -> Result<GainOut, NodeError> {
+///     fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
 ///         let mut img = (*self.image).clone();
 ///         img.data_mut().iter_mut().for_each(|v| *v *= self.gain);
-///         Ok(GainOut { image: Arc::new(img) })
+///         Ok(Arc::new(img))
 ///     }
 /// }
 ///
 /// let desc = Gain::node().desc().clone();
 /// assert_eq!(desc.inputs[1].name, "gain");
 /// assert_eq!(desc.inputs[1].range, Some((0.0, 8.0)));
+/// assert_eq!(desc.outputs[0].name, "image");
+/// ```
+///
+/// ```
+/// use pyrograph_core::declare::Cook;
+/// use pyrograph_core::{CookCtx, NodeError};
+///
+/// pyrograph_core::node! {
+///     /// Splits a number into its whole and fractional parts.
+///     #[node("example.split", "Examples", PerFrame)]
+///     pub struct Split {
+///         /// The number.
+///         x: f64 = 0.0,
+///     }
+///     pub struct SplitOut {
+///         /// The whole part.
+///         whole: f64,
+///         /// The fractional part.
+///         fraction: f64,
+///     }
+/// }
+///
+/// impl Cook for Split {
+///     fn cook(self, _: &CookCtx) -> Result<SplitOut, NodeError> {
+///         Ok(SplitOut { whole: self.x.trunc(), fraction: self.x.fract() })
+///     }
+/// }
+///
+/// assert_eq!(Split::node().desc().outputs[1].name, "fraction");
 /// ```
 #[macro_export]
 macro_rules! node {
+    // The input struct and the `Declared` impl, for both forms below.
     (
+        @declare
         $(#[doc = $doc:literal])*
         #[node($type_name:literal, $category:literal, $time:ident)]
         $vis:vis struct $name:ident {
@@ -484,14 +524,13 @@ macro_rules! node {
                 $(#[doc = $fdoc:literal])*
                 $(#[range($lo:expr, $hi:expr)])?
                 $field:ident : $fty:ty $(= $fdef:expr)?
-            ),* $(,)?
+            ),*
         }
-        $ovis:vis struct $out:ident {
-            $(
-                $(#[doc = $odoc:literal])*
-                $ofield:ident : $oty:ty
-            ),* $(,)?
-        }
+        type Outputs = $outs:ty;
+        $(
+            $(#[doc = $odoc:literal])*
+            $ofield:ident : $oty:ty
+        ),*
     ) => {
         $(#[doc = $doc])*
         #[derive(Clone, Debug)]
@@ -499,13 +538,8 @@ macro_rules! node {
             $( $(#[doc = $fdoc])* pub $field: $fty, )*
         }
 
-        #[doc = concat!("The outputs of [`", stringify!($name), "`], in port order.")]
-        $ovis struct $out {
-            $( $(#[doc = $odoc])* pub $ofield: $oty, )*
-        }
-
         impl $crate::declare::Declared for $name {
-            type Outputs = $out;
+            type Outputs = $outs;
 
             fn desc() -> $crate::NodeDesc {
                 let mut desc = $crate::NodeDesc::new(
@@ -538,6 +572,65 @@ macro_rules! node {
                     $( $field: <$fty as $crate::declare::Field>::read(inputs, stringify!($field))?, )*
                 })
             }
+        }
+    };
+    // One output, `-> name: Type`: the cook returns the value itself.
+    (
+        $(#[doc = $doc:literal])*
+        #[node($type_name:literal, $category:literal, $time:ident)]
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty $(= $fdef:expr)?
+            ),* $(,)?
+        }
+        $(#[doc = $odoc:literal])*
+        -> $ofield:ident : $oty:ty
+    ) => {
+        $crate::node! {
+            @declare
+            $(#[doc = $doc])*
+            #[node($type_name, $category, $time)]
+            $vis struct $name {
+                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty $(= $fdef)? ),*
+            }
+            type Outputs = $oty;
+            $(#[doc = $odoc])* $ofield : $oty
+        }
+    };
+    // Several outputs, as a struct the cook returns.
+    (
+        $(#[doc = $doc:literal])*
+        #[node($type_name:literal, $category:literal, $time:ident)]
+        $vis:vis struct $name:ident {
+            $(
+                $(#[doc = $fdoc:literal])*
+                $(#[range($lo:expr, $hi:expr)])?
+                $field:ident : $fty:ty $(= $fdef:expr)?
+            ),* $(,)?
+        }
+        $ovis:vis struct $out:ident {
+            $(
+                $(#[doc = $odoc:literal])*
+                $ofield:ident : $oty:ty
+            ),* $(,)?
+        }
+    ) => {
+        $crate::node! {
+            @declare
+            $(#[doc = $doc])*
+            #[node($type_name, $category, $time)]
+            $vis struct $name {
+                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty $(= $fdef)? ),*
+            }
+            type Outputs = $out;
+            $( $(#[doc = $odoc])* $ofield : $oty ),*
+        }
+
+        #[doc = concat!("The outputs of [`", stringify!($name), "`], in port order.")]
+        $ovis struct $out {
+            $( $(#[doc = $odoc])* pub $ofield: $oty, )*
         }
 
         impl $crate::declare::OutputSet for $out {

@@ -21,15 +21,13 @@ pyrograph_core::node! {
         #[range(-1000.0, 1000.0)]
         offset: f64 = 0.0,
     }
-    pub struct GainOut {
-        /// result
-        value: f64,
-    }
+    /// result
+    -> value: f64
 }
 
 impl Cook for Gain {
-    fn cook(self, _: &CookCtx) -> Result<GainOut, NodeError> {
-        Ok(GainOut { value: self.value * self.gain + self.offset })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.value * self.gain + self.offset)
     }
 }
 

@@ -17,15 +17,13 @@ pyrograph_core::node! {
         #[range(-1e9, 1e9)]
         a: f64 = 0.0,
     }
-    pub struct RoundOut {
-        /// round(a)
-        value: i64,
-    }
+    /// round(a)
+    -> value: i64
 }
 
 impl Cook for Round {
-    fn cook(self, _: &CookCtx) -> Result<RoundOut, NodeError> {
-        Ok(RoundOut { value: self.a.round() as i64 })
+    fn cook(self, _: &CookCtx) -> Result<i64, NodeError> {
+        Ok(self.a.round() as i64)
     }
 }
 

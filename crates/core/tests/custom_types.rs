@@ -39,15 +39,13 @@ pyrograph_core::node! {
         #[range(0.0, 10.0)]
         level: f32 = 1.0,
     }
-    pub struct MakeHeatOut {
-        /// The strip.
-        heat: Arc<Heat>,
-    }
+    /// The strip.
+    -> heat: Arc<Heat>
 }
 
 impl Cook for MakeHeat {
-    fn cook(self, _: &CookCtx) -> Result<MakeHeatOut, NodeError> {
-        Ok(MakeHeatOut { heat: Arc::new(Heat(vec![self.level; self.cells as usize])) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Heat>, NodeError> {
+        Ok(Arc::new(Heat(vec![self.level; self.cells as usize])))
     }
 }
 
@@ -58,15 +56,13 @@ pyrograph_core::node! {
         /// The strip.
         heat: Arc<Heat>,
     }
-    pub struct TotalOut {
-        /// Its total.
-        total: f64,
-    }
+    /// Its total.
+    -> total: f64
 }
 
 impl Cook for Total {
-    fn cook(self, _: &CookCtx) -> Result<TotalOut, NodeError> {
-        Ok(TotalOut { total: self.heat.0.iter().map(|&x| f64::from(x)).sum() })
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
+        Ok(self.heat.0.iter().map(|&x| f64::from(x)).sum())
     }
 }
 

@@ -24,19 +24,17 @@ pyrograph_core::node! {
         /// whether to panic, as a node with a bug would
         panic: bool = false,
     }
-    pub struct FailOut {
-        /// a
-        value: f64,
-    }
+    /// a
+    -> value: f64
 }
 
 impl Cook for Fail {
-    fn cook(self, _: &CookCtx) -> Result<FailOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         if self.fail {
             return Err(NodeError::port(port!(Fail, fail), "asked to fail"));
         }
         assert!(!self.panic, "asked to panic");
-        Ok(FailOut { value: self.a })
+        Ok(self.a)
     }
 }
 
@@ -47,17 +45,15 @@ pyrograph_core::node! {
         /// input
         clip: ClipOf<f64>,
     }
-    pub struct SumOut {
-        /// sum
-        value: f64,
-    }
+    /// sum
+    -> value: f64
 }
 
 impl Cook for Sum {
-    fn cook(self, ctx: &CookCtx) -> Result<SumOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<f64, NodeError> {
         let frames = self.clip.materialize(ctx)?;
         let value = frames.iter().map(|v| if let Value::Float(f) = v { *f } else { 0.0 }).sum();
-        Ok(SumOut { value })
+        Ok(value)
     }
 }
 
@@ -68,16 +64,14 @@ pyrograph_core::node! {
         /// file to read
         path: InputPath,
     }
-    pub struct FileSizeOut {
-        /// its size
-        value: f64,
-    }
+    /// its size
+    -> value: f64
 }
 
 impl Cook for FileSize {
-    fn cook(self, _: &CookCtx) -> Result<FileSizeOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         let bytes = std::fs::read(&*self.path).map_err(|e| NodeError::port(port!(FileSize, path), e.to_string()))?;
-        Ok(FileSizeOut { value: bytes.len() as f64 })
+        Ok(bytes.len() as f64)
     }
 }
 
@@ -89,16 +83,14 @@ pyrograph_core::node! {
         #[range(-1e9, 1e9)]
         a: f64 = 0.0,
     }
-    pub struct SlowOut {
-        /// a
-        value: f64,
-    }
+    /// a
+    -> value: f64
 }
 
 impl Cook for Slow {
-    fn cook(self, _: &CookCtx) -> Result<SlowOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<f64, NodeError> {
         std::thread::sleep(std::time::Duration::from_millis(5));
-        Ok(SlowOut { value: self.a })
+        Ok(self.a)
     }
 }
 

@@ -34,15 +34,13 @@ pyrograph_core::node! {
         /// input
         clip: ClipOf<f64>,
     }
-    pub struct LenOut {
-        /// its length
-        n: i64,
-    }
+    /// its length
+    -> n: i64
 }
 
 impl Cook for Len {
-    fn cook(self, _: &CookCtx) -> Result<LenOut, NodeError> {
-        Ok(LenOut { n: self.clip.len() as i64 })
+    fn cook(self, _: &CookCtx) -> Result<i64, NodeError> {
+        Ok(self.clip.len() as i64)
     }
 }
 

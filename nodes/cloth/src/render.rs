@@ -246,10 +246,8 @@ pyrograph_core::node! {
         /// How the cloths are drawn.
         params: RenderParams,
     }
-    pub struct ClothRenderOut {
-        /// The rendered frame (RGBA, straight alpha).
-        image: Arc<Image>,
-    }
+    /// The rendered frame (RGBA, straight alpha).
+    -> image: Arc<Image>
 }
 
 pyrograph_core::node! {
@@ -269,10 +267,8 @@ pyrograph_core::node! {
         /// How the cloths are drawn.
         params: RenderParams,
     }
-    pub struct ClothRenderTexturedOut {
-        /// The rendered frame (RGBA, straight alpha).
-        image: Arc<Image>,
-    }
+    /// The rendered frame (RGBA, straight alpha).
+    -> image: Arc<Image>
 }
 
 /// `p` when its line width is usable; the error names the port.
@@ -300,17 +296,17 @@ fn checked_cloth<'a>(cloth: &'a Arc<ClothState>, port: &str) -> Result<&'a Arc<C
 }
 
 impl Cook for ClothRender {
-    fn cook(self, ctx: &CookCtx) -> Result<ClothRenderOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         let cloth = checked_cloth(&self.cloth, port!(ClothRender, cloth))?;
         let p = checked_params(self.params)?;
         ctx.check_cancel()?;
-        Ok(ClothRenderOut { image: Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)) })
+        Ok(Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)))
     }
 }
 
 impl Cook for ClothRenderTextured {
-    fn cook(self, ctx: &CookCtx) -> Result<ClothRenderTexturedOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         let cloth = checked_cloth(&self.cloth, port!(ClothRenderTextured, cloth))?;
         if self.texture.width() == 0 || self.texture.height() == 0 {
@@ -318,7 +314,7 @@ impl Cook for ClothRenderTextured {
         }
         let p = checked_params(self.params)?;
         ctx.check_cancel()?;
-        Ok(ClothRenderTexturedOut { image: Arc::new(render_cloth(&view, cloth, Textures::Single(&self.texture), &p)) })
+        Ok(Arc::new(render_cloth(&view, cloth, Textures::Single(&self.texture), &p)))
     }
 }
 

@@ -297,19 +297,17 @@ pyrograph_core::node! {
         /// Replace an existing database.
         overwrite: bool = false,
     }
-    pub struct SaveDatabaseOut {
-        /// The database folder.
-        path: OutputPath,
-    }
+    /// The database folder.
+    -> path: OutputPath
 }
 
 impl Cook for SaveDatabase {
-    fn cook(self, ctx: &CookCtx) -> Result<SaveDatabaseOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<OutputPath, NodeError> {
         let db = Database { basis: Arc::unwrap_or_clone(self.basis), weights: Arc::unwrap_or_clone(self.weights) };
         let written = save(&db, &self.path, self.pack_size, self.overwrite || ctx.settings().overwrite)
             .map_err(|m| NodeError::port(port!(SaveDatabase, path), m))?;
         written.iter().for_each(|f| ctx.record_written(f));
-        Ok(SaveDatabaseOut { path: self.path })
+        Ok(self.path)
     }
 }
 

@@ -327,14 +327,12 @@ pyrograph_core::node! {
         #[range(0.001, 1000.0)]
         fps: f64 = 30.0,
     }
-    pub struct FramesToClipOut {
-        /// The frames.
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// The frames.
+    -> clip: ClipOf<Arc<Image>>
 }
 
 impl Cook for FramesToClip {
-    fn cook(self, ctx: &CookCtx) -> Result<FramesToClipOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
         let (list, basis, db) = (&*self.frames, &*self.basis, &*self.weights);
         let frames_port = port!(FramesToClip, frames);
         if list.items.is_empty() {
@@ -347,7 +345,7 @@ impl Cook for FramesToClip {
             samples_to_clip(basis, samples, clamp, fps)
         };
         if self.mode == ClipMode::Reconstruct {
-            return Ok(FramesToClipOut { clip: ClipOf::new(rendered(&list.items)?) });
+            return Ok(ClipOf::new(rendered(&list.items)?));
         }
         let clips: [(&str, &Clip); 3] = [
             (port!(FramesToClip, clip1), &*self.clip1),
@@ -397,7 +395,7 @@ impl Cook for FramesToClip {
             .collect::<Vec<_>>();
         // Sequential so the error reported is the first in list order, not whichever thread lost.
         let frames = frames.into_iter().collect::<Result<Vec<_>, _>>()?;
-        Ok(FramesToClipOut { clip: ClipOf::new(Clip::from_frames(PortType::Image, fps, frames)) })
+        Ok(ClipOf::new(Clip::from_frames(PortType::Image, fps, frames)))
     }
 }
 
@@ -485,14 +483,12 @@ pyrograph_core::node! {
         /// Replace the weights or add to them.
         mode: EditMode = EditMode::Set,
     }
-    pub struct WeightsEditOut {
-        /// One row of weights.
-        weights: Arc<Weights>,
-    }
+    /// One row of weights.
+    -> weights: Arc<Weights>
 }
 
 impl Cook for WeightsEdit {
-    fn cook(self, _: &CookCtx) -> Result<WeightsEditOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Weights>, NodeError> {
         let (basis, db) = (&*self.basis, &*self.weights);
         let edits = parse_edits(&self.edits, basis.components()).map_err(|m| NodeError::port(port!(WeightsEdit, edits), m))?;
         // -1 (any negative frame) starts from zeros.
@@ -501,7 +497,7 @@ impl Cook for WeightsEdit {
             .map_err(|m| NodeError::port(port!(WeightsEdit, frame), m))?;
         let n = w.len();
         let w = Weights::new(1, n, w).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
-        Ok(WeightsEditOut { weights: Arc::new(w) })
+        Ok(Arc::new(w))
     }
 }
 

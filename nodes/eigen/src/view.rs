@@ -281,16 +281,14 @@ pyrograph_core::node! {
         #[range(0, 1_000_000)]
         k: usize = 1,
     }
-    pub struct EigenfireViewOut {
-        /// The eigenfire (gray, 8-bit steps).
-        image: Arc<Image>,
-    }
+    /// The eigenfire (gray, 8-bit steps).
+    -> image: Arc<Image>
 }
 
 impl Cook for EigenfireView {
-    fn cook(self, _: &CookCtx) -> Result<EigenfireViewOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let img = eigenfire_image(&self.basis, self.k).map_err(|m| NodeError::port(port!(EigenfireView, k), m))?;
-        Ok(EigenfireViewOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -311,17 +309,15 @@ pyrograph_core::node! {
         /// Print each eigenfire's number under it.
         labels: bool = true,
     }
-    pub struct EigenfireGridOut {
-        /// The sheet (RGBA).
-        image: Arc<Image>,
-    }
+    /// The sheet (RGBA).
+    -> image: Arc<Image>
 }
 
 impl Cook for EigenfireGrid {
-    fn cook(self, _: &CookCtx) -> Result<EigenfireGridOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let img = eigenfire_grid(&self.basis, self.count, self.columns, self.labels)
             .map_err(|m| NodeError::port(port!(EigenfireGrid, count), m))?;
-        Ok(EigenfireGridOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -353,10 +349,8 @@ pyrograph_core::node! {
         #[range(16, 8192)]
         height: u32 = 640,
     }
-    pub struct PcaPlotOut {
-        /// The plot (RGBA).
-        image: Arc<Image>,
-    }
+    /// The plot (RGBA).
+    -> image: Arc<Image>
 }
 
 /// Weight vectors of a frame list: database frames are rows of `weights`.
@@ -374,7 +368,7 @@ pub fn frame_list_weights(list: &FrameList, weights: &Weights) -> Result<Vec<Vec
 }
 
 impl Cook for PcaPlot {
-    fn cook(self, _: &CookCtx) -> Result<PcaPlotOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let (basis, weights) = (&*self.basis, &*self.weights);
         let clip_of: Vec<u32> =
             if basis.sources.len() == weights.frames { basis.sources.iter().map(|s| s.clip).collect() } else { Vec::new() };
@@ -382,7 +376,7 @@ impl Cook for PcaPlot {
         let size = (self.width, self.height);
         let img = pca_plot(weights, &clip_of, &overlay, size, self.yaw, self.pitch, self.paths)
             .map_err(|m| NodeError::port(port!(PcaPlot, weights), m))?;
-        Ok(PcaPlotOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -410,18 +404,16 @@ pyrograph_core::node! {
         #[range(32, 8192)]
         height: u32 = 360,
     }
-    pub struct WeightBarsOut {
-        /// The chart (RGBA).
-        image: Arc<Image>,
-    }
+    /// The chart (RGBA).
+    -> image: Arc<Image>
 }
 
 impl Cook for WeightBars {
-    fn cook(self, _: &CookCtx) -> Result<WeightBarsOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let size = (self.width, self.height);
         let img = weight_bars(&self.weights, self.first, self.frames, self.components, size)
             .map_err(|m| NodeError::port(port!(WeightBars, frames), m))?;
-        Ok(WeightBarsOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 

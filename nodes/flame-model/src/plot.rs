@@ -130,17 +130,15 @@ pyrograph_core::node! {
         #[range(16, 4096)]
         cell_height: u32 = 80,
     }
-    pub struct ParamPlotOut {
-        /// The plots (RGBA).
-        image: Arc<Image>,
-    }
+    /// The plots (RGBA).
+    -> image: Arc<Image>
 }
 
 impl Cook for ParamPlot {
-    fn cook(self, _: &CookCtx) -> Result<ParamPlotOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let layout = PlotLayout { columns: self.columns, cell: (self.cell_width, self.cell_height), max_frames: self.frames };
         let img = param_plot(&self.real, &self.synth, &layout)?;
-        Ok(ParamPlotOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 

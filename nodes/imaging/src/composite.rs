@@ -54,10 +54,8 @@ pyrograph_core::node! {
         #[range(0.0, 1.0)]
         opacity: f32 = 1.0,
     }
-    pub struct CompositeOut {
-        /// The composite.
-        image: Arc<Image>,
-    }
+    /// The composite.
+    -> image: Arc<Image>
 }
 
 /// One straight-alpha RGBA pixel of `b` combined onto `a` with foreground weight `opacity`.
@@ -99,8 +97,8 @@ pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<
 }
 
 impl Cook for Composite {
-    fn cook(self, _: &CookCtx) -> Result<CompositeOut, NodeError> {
-        Ok(CompositeOut { image: Arc::new(composite(&self.a, &self.b, self.mode, self.opacity)?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(composite(&self.a, &self.b, self.mode, self.opacity)?))
     }
 }
 

@@ -19,10 +19,8 @@ pyrograph_core::node! {
         /// The fill colour (linear RGBA, straight alpha).
         color: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
     }
-    pub struct ConstantColorOut {
-        /// The filled image.
-        image: Arc<Image>,
-    }
+    /// The filled image.
+    -> image: Arc<Image>
 }
 
 /// A `width × height` RGBA image of `color`.
@@ -38,10 +36,10 @@ fn check_size(v: u32, port: &str) -> Result<u32, NodeError> {
 }
 
 impl Cook for ConstantColor {
-    fn cook(self, _: &CookCtx) -> Result<ConstantColorOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let width = check_size(self.width, port!(ConstantColor, width))?;
         let height = check_size(self.height, port!(ConstantColor, height))?;
-        Ok(ConstantColorOut { image: Arc::new(constant_color(width, height, self.color)) })
+        Ok(Arc::new(constant_color(width, height, self.color)))
     }
 }
 

@@ -28,10 +28,8 @@ pyrograph_core::node! {
         #[range(0, MAX_OFFSET)]
         height: u32 = 0,
     }
-    pub struct CropOut {
-        /// The cropped image.
-        image: Arc<Image>,
-    }
+    /// The cropped image.
+    -> image: Arc<Image>
 }
 
 /// Resolves one axis of a crop: `(start, length)` within `size`, or an error naming the ports.
@@ -67,8 +65,8 @@ pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Imag
 }
 
 impl Cook for Crop {
-    fn cook(self, _: &CookCtx) -> Result<CropOut, NodeError> {
-        Ok(CropOut { image: Arc::new(crop(&self.image, self.x, self.y, self.width, self.height)?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(crop(&self.image, self.x, self.y, self.width, self.height)?))
     }
 }
 

@@ -41,10 +41,8 @@ pyrograph_core::node! {
         /// Weights: rec601 (OpenCV), rec709, average or max of R, G, B.
         mode: GrayMode = GrayMode::Rec601,
     }
-    pub struct ToGrayOut {
-        /// The gray image.
-        image: Arc<Image>,
-    }
+    /// The gray image.
+    -> image: Arc<Image>
 }
 
 /// The gray version of `img` (alpha ignored).
@@ -60,8 +58,8 @@ pub fn to_gray(img: &Image, mode: GrayMode) -> Image {
 }
 
 impl Cook for ToGray {
-    fn cook(self, _: &CookCtx) -> Result<ToGrayOut, NodeError> {
-        Ok(ToGrayOut { image: Arc::new(to_gray(&self.image, self.mode)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(to_gray(&self.image, self.mode)))
     }
 }
 

@@ -37,18 +37,16 @@ pyrograph_core::node! {
         /// Clamps t to 0..1, so nothing leaves the output range (off keeps HDR highlights above white).
         clamp: bool = true,
     }
-    pub struct LevelsOut {
-        /// The adjusted image.
-        image: Arc<Image>,
-    }
+    /// The adjusted image.
+    -> image: Arc<Image>
 }
 
 impl Cook for Levels {
-    fn cook(self, _: &CookCtx) -> Result<LevelsOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         if self.white <= self.black {
             return Err(NodeError::port(port!(Levels, white), format!("{} must be above black {}", self.white, self.black)));
         }
-        Ok(LevelsOut { image: Arc::new(levels(&self.image, &self)) })
+        Ok(Arc::new(levels(&self.image, &self)))
     }
 }
 
@@ -127,7 +125,7 @@ mod tests {
             d.inputs.iter().map(|p| p.default.clone().unwrap_or_else(|| pyrograph_core::Value::Image(img.clone()))).collect();
         let p = Levels::read(&pyrograph_core::Inputs::new(&d, &values)).unwrap();
         let out = p.cook(&CookCtx::new()).unwrap();
-        assert_eq!(out.image.data(), img.data());
+        assert_eq!(out.data(), img.data());
     }
 
     #[test]

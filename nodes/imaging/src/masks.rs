@@ -54,16 +54,14 @@ pyrograph_core::node! {
         /// How b combines with a.
         mode: MaskOp = MaskOp::Add,
     }
-    pub struct MaskCombineOut {
-        /// The combined mask.
-        mask: Arc<Mask>,
-    }
+    /// The combined mask.
+    -> mask: Arc<Mask>
 }
 
 impl Cook for MaskCombine {
-    fn cook(self, _: &CookCtx) -> Result<MaskCombineOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Mask>, NodeError> {
         let out = combine_masks(&self.a, &self.b, self.mode).map_err(|m| NodeError::port(port!(MaskCombine, b), m))?;
-        Ok(MaskCombineOut { mask: Arc::new(out) })
+        Ok(Arc::new(out))
     }
 }
 
@@ -74,15 +72,13 @@ pyrograph_core::node! {
         /// The mask.
         mask: Arc<Mask>,
     }
-    pub struct MaskToImageOut {
-        /// The gray image.
-        image: Arc<Image>,
-    }
+    /// The gray image.
+    -> image: Arc<Image>
 }
 
 impl Cook for MaskToImage {
-    fn cook(self, _: &CookCtx) -> Result<MaskToImageOut, NodeError> {
-        Ok(MaskToImageOut { image: Arc::new(convert::mask_to_image(&self.mask)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(convert::mask_to_image(&self.mask)))
     }
 }
 

@@ -45,10 +45,8 @@ pyrograph_core::node! {
         #[range(1, 8)]
         octaves: usize = 5,
     }
-    pub struct TurbulenceFlameOut {
-        /// RGBA frames, straight alpha.
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// RGBA frames, straight alpha.
+    -> clip: ClipOf<Arc<Image>>
 }
 
 /// Black → deep red → orange → yellow → near white: the colours of a hydrocarbon flame by temperature.
@@ -121,13 +119,13 @@ impl FrameSource for FlameSource {
 }
 
 impl Cook for TurbulenceFlame {
-    fn cook(self, _: &CookCtx) -> Result<TurbulenceFlameOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
         // Every parameter, the frame count included, is in the Debug text.
         let mut h = Fingerprinter::new();
         std::hash::Hash::hash(&format!("{self:?}"), &mut h);
         let fp = std::hash::Hasher::finish(&h);
         let clip = Clip::new(PortType::Image, self.timeline.fps, fp, Arc::new(FlameSource(self)));
-        Ok(TurbulenceFlameOut { clip: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }
 

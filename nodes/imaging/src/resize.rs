@@ -52,10 +52,8 @@ pyrograph_core::node! {
         /// Resampling filter.
         filter: ResizeFilter = ResizeFilter::Bilinear,
     }
-    pub struct ResizeOut {
-        /// The scaled image.
-        image: Arc<Image>,
-    }
+    /// The scaled image.
+    -> image: Arc<Image>
 }
 
 /// The output size, filling a 0 side from the other one to keep the aspect ratio.
@@ -94,8 +92,8 @@ pub fn resize(img: &Image, width: u32, height: u32, filter: FilterType) -> Resul
 }
 
 impl Cook for Resize {
-    fn cook(self, _: &CookCtx) -> Result<ResizeOut, NodeError> {
-        Ok(ResizeOut { image: Arc::new(resize(&self.image, self.width, self.height, self.filter.filter_type())?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(resize(&self.image, self.width, self.height, self.filter.filter_type())?))
     }
 }
 

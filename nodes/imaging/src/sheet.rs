@@ -50,16 +50,14 @@ pyrograph_core::node! {
         /// Colour of the gap and of padding.
         background: [f32; 4] = [0.08, 0.08, 0.08, 1.0],
     }
-    pub struct StackOut {
-        /// The stacked image (RGBA).
-        image: Arc<Image>,
-    }
+    /// The stacked image (RGBA).
+    -> image: Arc<Image>
 }
 
 impl Cook for Stack {
-    fn cook(self, _: &CookCtx) -> Result<StackOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let vertical = self.direction == StackDirection::Vertical;
-        Ok(StackOut { image: Arc::new(stack(&self.a, &self.b, vertical, self.gap, self.background)) })
+        Ok(Arc::new(stack(&self.a, &self.b, vertical, self.gap, self.background)))
     }
 }
 
@@ -117,14 +115,12 @@ pyrograph_core::node! {
         /// Colour of the gaps.
         background: [f32; 4] = [0.08, 0.08, 0.08, 1.0],
     }
-    pub struct ContactSheetOut {
-        /// The sheet (RGBA).
-        image: Arc<Image>,
-    }
+    /// The sheet (RGBA).
+    -> image: Arc<Image>
 }
 
 impl Cook for ContactSheet {
-    fn cook(self, ctx: &CookCtx) -> Result<ContactSheetOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let clip = &self.clip;
         if clip.is_empty() {
             return Err(NodeError::port(port!(ContactSheet, clip), "the clip has no frames"));
@@ -134,7 +130,7 @@ impl Cook for ContactSheet {
         let refs: Vec<&Image> = frames.iter().map(|f| f.as_ref()).collect();
         let sheet = contact_sheet(&refs, self.columns, self.gap, self.background)
             .map_err(|m| NodeError::port(port!(ContactSheet, clip), m))?;
-        Ok(ContactSheetOut { image: Arc::new(sheet) })
+        Ok(Arc::new(sheet))
     }
 }
 

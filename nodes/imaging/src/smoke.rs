@@ -115,15 +115,13 @@ pyrograph_core::node! {
         /// The smoke settings.
         params: SmokeParams,
     }
-    pub struct SmokeOut {
-        /// Smoke frames (RGBA)
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// Smoke frames (RGBA)
+    -> clip: ClipOf<Arc<Image>>
 }
 
 impl Cook for Smoke {
-    fn cook(self, _: &CookCtx) -> Result<SmokeOut, NodeError> {
-        Ok(SmokeOut { clip: ClipOf::new(smoke_clip(&self.clip, self.params)?) })
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
+        Ok(ClipOf::new(smoke_clip(&self.clip, self.params)?))
     }
 }
 

@@ -21,10 +21,8 @@ pyrograph_core::node! {
         #[range(-(1i64 << 40), 1i64 << 40)]
         last: i64 = -1,
     }
-    pub struct TimeRangeOut {
-        /// The trimmed clip.
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// The trimmed clip.
+    -> clip: ClipOf<Arc<Image>>
 }
 
 /// Frames `first..first + len` of another clip.
@@ -82,8 +80,8 @@ pub fn time_range(clip: &Clip, first: i64, last: i64) -> Result<Clip, NodeError>
 }
 
 impl Cook for TimeRange {
-    fn cook(self, _: &CookCtx) -> Result<TimeRangeOut, NodeError> {
-        Ok(TimeRangeOut { clip: ClipOf::new(time_range(&self.clip, self.first, self.last)?) })
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
+        Ok(ClipOf::new(time_range(&self.clip, self.first, self.last)?))
     }
 }
 

@@ -99,15 +99,13 @@ pyrograph_core::node! {
         /// The look of the marks.
         look: CharParams,
     }
-    pub struct CharOut {
-        /// Char discs.
-        char: Arc<Particles>,
-    }
+    /// Char discs.
+    -> char: Arc<Particles>
 }
 
 impl Cook for Char {
-    fn cook(self, _: &CookCtx) -> Result<CharOut, NodeError> {
-        Ok(CharOut { char: Arc::new(char_particles(&self.spread, &self.look)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Particles>, NodeError> {
+        Ok(Arc::new(char_particles(&self.spread, &self.look)))
     }
 }
 

@@ -204,10 +204,8 @@ pyrograph_core::node! {
         /// The sparks.
         params: EmberParams,
     }
-    pub struct EmbersOut {
-        /// Per frame, every live spark's streak.
-        sparks: ClipOf<Arc<Particles>>,
-    }
+    /// Per frame, every live spark's streak.
+    -> sparks: ClipOf<Arc<Particles>>
 }
 
 struct EmberSource {
@@ -228,7 +226,7 @@ impl FrameSource for EmberSource {
 }
 
 impl Cook for Embers {
-    fn cook(self, _: &CookCtx) -> Result<EmbersOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Particles>>, NodeError> {
         let roots: Vec<(Vec3, Vec3)> =
             self.roots.particles.iter().map(|q| (Vec3::from_array(q.position), Vec3::from_array(q.velocity))).collect();
         if let Some(k) = roots.iter().position(|(p, d)| !p.is_finite() || !d.is_finite()) {
@@ -249,7 +247,7 @@ impl Cook for Embers {
             frames: self.timeline.frames,
         };
         let clip = Clip::new(PortType::of::<Particles>(), self.timeline.fps, h.finish(), Arc::new(source));
-        Ok(EmbersOut { sparks: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }
 

@@ -260,18 +260,16 @@ pyrograph_core::node! {
         /// What to draw: the frame, the flames' emission alone, or the mesh's depth.
         pass: RenderPass = RenderPass::Beauty,
     }
-    pub struct RenderFireOut {
-        /// The rendered frame (RGBA, straight alpha).
-        image: Arc<Image>,
-    }
+    /// The rendered frame (RGBA, straight alpha).
+    -> image: Arc<Image>
 }
 
 impl Cook for RenderFire {
-    fn cook(self, ctx: &CookCtx) -> Result<RenderFireOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         ctx.check_cancel()?;
         let image = render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look, self.pass)?;
-        Ok(RenderFireOut { image: Arc::new(image) })
+        Ok(Arc::new(image))
     }
 }
 

@@ -423,10 +423,8 @@ pyrograph_core::node! {
         #[range(0, u32::MAX)]
         seed: u32 = 0,
     }
-    pub struct RootsOut {
-        /// Root particles.
-        roots: Arc<Particles>,
-    }
+    /// Root particles.
+    -> roots: Arc<Particles>
 }
 
 /// Root positions and directions for a layout (see `particles.roots`).
@@ -470,7 +468,7 @@ pub fn layout_roots(
 }
 
 impl Cook for Roots {
-    fn cook(self, _: &CookCtx) -> Result<RootsOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Particles>, NodeError> {
         let roots = layout_roots(
             self.layout,
             self.count,
@@ -491,7 +489,7 @@ impl Cook for Roots {
                 ..Particle::default()
             })
             .collect();
-        Ok(RootsOut { roots: Arc::new(Particles { particles, sides: 0, time: 0.0, trails: false }) })
+        Ok(Arc::new(Particles { particles, sides: 0, time: 0.0, trails: false }))
     }
 }
 
@@ -515,10 +513,8 @@ pyrograph_core::node! {
         /// The flames.
         params: FlameParams,
     }
-    pub struct ParticleFlameOut {
-        /// Per frame, every live flame's particles.
-        flames: ClipOf<Arc<Particles>>,
-    }
+    /// Per frame, every live flame's particles.
+    -> flames: ClipOf<Arc<Particles>>
 }
 
 struct FlameSource {
@@ -542,7 +538,7 @@ impl FrameSource for FlameSource {
 }
 
 impl Cook for ParticleFlame {
-    fn cook(self, _: &CookCtx) -> Result<ParticleFlameOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Particles>>, NodeError> {
         let roots = Root::from_particles(&self.roots);
         if let Some(k) = roots.iter().position(|r| !r.position.is_finite() || !r.direction.is_finite()) {
             return Err(NodeError::port(port!(ParticleFlame, roots), format!("root {k} has a non-finite position or direction")));
@@ -559,7 +555,7 @@ impl Cook for ParticleFlame {
         let (frames, fps) = (self.timeline.frames, self.timeline.fps);
         let source = FlameSource { roots, wind: (*self.wind).clone(), params: self.params, frames, fps };
         let clip = Clip::new(PortType::of::<Particles>(), self.timeline.fps, h.finish(), Arc::new(source));
-        Ok(ParticleFlameOut { flames: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }
 

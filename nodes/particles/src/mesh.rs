@@ -547,14 +547,12 @@ pyrograph_core::node! {
         /// Degenerate faces and non-manifold edges are errors (off: dropped / boundaries).
         strict: bool = true,
     }
-    pub struct MeshLoadOut {
-        /// The triangle mesh with adjacency and edge rotations.
-        mesh: Arc<Mesh>,
-    }
+    /// The triangle mesh with adjacency and edge rotations.
+    -> mesh: Arc<Mesh>
 }
 
 impl Cook for MeshLoad {
-    fn cook(self, _: &CookCtx) -> Result<MeshLoadOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Mesh>, NodeError> {
         let (size, div) = (self.size, self.divisions);
         let path_port = port!(MeshLoad, path);
         let mut soup = match self.source {
@@ -579,7 +577,7 @@ impl Cook for MeshLoad {
             MeshSource::Obj => NodeError::port(path_port, format!("{}: {m}", self.path.display())),
             _ => NodeError::port(port!(MeshLoad, source), m),
         })?;
-        Ok(MeshLoadOut { mesh: Arc::new(mesh) })
+        Ok(Arc::new(mesh))
     }
 }
 

@@ -37,10 +37,8 @@ pyrograph_core::node! {
         #[range(0, u32::MAX)]
         seed: u32 = 0,
     }
-    pub struct MeshRootsOut {
-        /// Root particles.
-        roots: Arc<Particles>,
-    }
+    /// Root particles.
+    -> roots: Arc<Particles>
 }
 
 /// Roots on `mesh` (see `particles.mesh_roots`); `None` when no face faces up enough.
@@ -81,7 +79,7 @@ pub fn mesh_roots(mesh: &Mesh, count: usize, facing: f32, offset: f32, upright: 
 }
 
 impl Cook for MeshRoots {
-    fn cook(self, _: &CookCtx) -> Result<MeshRootsOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Particles>, NodeError> {
         if self.mesh.normals.len() != self.mesh.triangles.len() {
             return Err(NodeError::port(
                 port!(MeshRoots, mesh),
@@ -95,7 +93,7 @@ impl Cook for MeshRoots {
                     format!("no face of the mesh has a normal pointing up by {} or more: lower facing", self.facing),
                 )
             })?;
-        Ok(MeshRootsOut { roots: Arc::new(Particles { particles, sides: 0, time: 0.0, trails: false }) })
+        Ok(Arc::new(Particles { particles, sides: 0, time: 0.0, trails: false }))
     }
 }
 

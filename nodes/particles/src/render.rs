@@ -219,14 +219,12 @@ pyrograph_core::node! {
         /// What to draw: the frame, the flames' emission alone, or the opaque geometry's depth.
         pass: RenderPass = RenderPass::Beauty,
     }
-    pub struct RenderFlamesOut {
-        /// The rendered frame (RGBA, straight alpha).
-        image: Arc<Image>,
-    }
+    /// The rendered frame (RGBA, straight alpha).
+    -> image: Arc<Image>
 }
 
 impl Cook for RenderFlames {
-    fn cook(self, ctx: &CookCtx) -> Result<RenderFlamesOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         for (set, name) in [(&self.flames, port!(RenderFlames, flames)), (&self.sparks, port!(RenderFlames, sparks))] {
             if let Some(k) = set.particles.iter().position(|q| !q.position.iter().chain(&q.size).all(|x| x.is_finite())) {
@@ -268,7 +266,7 @@ impl Cook for RenderFlames {
             lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
             lists.extend(particle_lists(&view, &self.flames, self.exposure, blend));
             let image = if holdouts { emission_image(&view, &lists) } else { render_image(&view, &lists, [0.0; 4]) };
-            return Ok(RenderFlamesOut { image: Arc::new(image) });
+            return Ok(Arc::new(image));
         }
         if !self.mesh.triangles.is_empty() {
             let shading = MeshShading {
@@ -286,11 +284,11 @@ impl Cook for RenderFlames {
                 draw_ground(&mut list, g, view.camera().target(), &self.lights, false);
                 lists.push(list);
             }
-            return Ok(RenderFlamesOut { image: Arc::new(depth_image(&view, &lists)) });
+            return Ok(Arc::new(depth_image(&view, &lists)));
         }
         lists.extend(particle_lists(&view, &self.sparks, self.exposure, blend));
         let image = render_with(&view, &self.flames, self.exposure, blend, self.background, ground, &self.lights, lists);
-        Ok(RenderFlamesOut { image: Arc::new(image) })
+        Ok(Arc::new(image))
     }
 }
 
@@ -362,15 +360,13 @@ pyrograph_core::node! {
         /// The lights' intensity and flicker.
         params: LightParams,
     }
-    pub struct FlameLightsOut {
-        /// One light per flame.
-        lights: Arc<Particles>,
-    }
+    /// One light per flame.
+    -> lights: Arc<Particles>
 }
 
 impl Cook for FlameLights {
-    fn cook(self, _: &CookCtx) -> Result<FlameLightsOut, NodeError> {
-        Ok(FlameLightsOut { lights: Arc::new(flame_lights(&self.flames, &self.params)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Particles>, NodeError> {
+        Ok(Arc::new(flame_lights(&self.flames, &self.params)))
     }
 }
 
@@ -488,7 +484,7 @@ mod tests {
         set("pass", Value::Enum(pass.into()));
         set("mesh", Value::custom(Arc::new(mesh)));
         set("blend", Value::Enum(blend.into()));
-        Ok(pyrograph_core::testing::read::<RenderFlames>(&values)?.cook(&CookCtx::default())?.image)
+        Ok(pyrograph_core::testing::read::<RenderFlames>(&values)?.cook(&CookCtx::default())?)
     }
 
     #[test]

@@ -270,10 +270,8 @@ pyrograph_core::node! {
         #[range(0.0001, 1000.0)]
         height_unit: f32 = 1.0,
     }
-    pub struct WindFieldNodeOut {
-        /// The wind field, for particles.particle_flame.
-        wind: Arc<WindField>,
-    }
+    /// The wind field, for particles.particle_flame.
+    -> wind: Arc<WindField>
 }
 
 /// `v` when every component is finite, else an error naming `port`.
@@ -332,8 +330,8 @@ impl WindFieldNode {
 }
 
 impl Cook for WindFieldNode {
-    fn cook(self, _: &CookCtx) -> Result<WindFieldNodeOut, NodeError> {
-        Ok(WindFieldNodeOut { wind: Arc::new(self.field()?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<WindField>, NodeError> {
+        Ok(Arc::new(self.field()?))
     }
 }
 

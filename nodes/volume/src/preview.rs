@@ -44,14 +44,12 @@ pyrograph_core::node! {
         /// Background colour behind the volume.
         background: [f32; 4] = [0.0, 0.0, 0.0, 1.0],
     }
-    pub struct PreviewOut {
-        /// The view, RGBA.
-        image: Arc<Image>,
-    }
+    /// The view, RGBA.
+    -> image: Arc<Image>
 }
 
 impl Cook for Preview {
-    fn cook(self, _: &CookCtx) -> Result<PreviewOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         if self.center.iter().chain(&self.background).any(|v| !v.is_finite()) {
             return Err(NodeError::port(port!(Preview, center), "the centre and background must be finite"));
         }
@@ -65,7 +63,7 @@ impl Cook for Preview {
             exposure: self.exposure,
             background: self.background,
         };
-        Ok(PreviewOut { image: Arc::new(preview(&self.volume, &view)) })
+        Ok(Arc::new(preview(&self.volume, &view)))
     }
 }
 

@@ -10,15 +10,13 @@ pyrograph_core::node! {
         #[range(0, 100_000)]
         frames: usize = 10,
     }
-    pub struct RampOut {
-        /// the ramp
-        clip: ClipOf<f64>,
-    }
+    /// the ramp
+    -> clip: ClipOf<f64>
 }
 
 impl Cook for Ramp {
-    fn cook(self, _: &CookCtx) -> Result<RampOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<f64>, NodeError> {
         let frames = (0..self.frames).map(|f| Value::Float(f as f64)).collect();
-        Ok(RampOut { clip: ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)) })
+        Ok(ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)))
     }
 }

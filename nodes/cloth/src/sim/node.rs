@@ -43,14 +43,12 @@ pyrograph_core::node! {
         /// The simulation.
         params: ClothParams,
     }
-    pub struct MassSpringFlameOut {
-        /// Per frame, every flame's cloth.
-        cloth: ClipOf<Arc<ClothState>>,
-    }
+    /// Per frame, every flame's cloth.
+    -> cloth: ClipOf<Arc<ClothState>>
 }
 
 impl Cook for MassSpringFlame {
-    fn cook(self, _: &CookCtx) -> Result<MassSpringFlameOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<ClothState>>, NodeError> {
         let params = self.params;
         validate(&params)?;
         let roots: Vec<Vec3> = if self.roots.particles.is_empty() {
@@ -77,6 +75,6 @@ impl Cook for MassSpringFlame {
         frames.hash(&mut h);
         let clip =
             Clip::new(PortType::of::<ClothState>(), params.fps as f64, h.finish(), Arc::new(ClothSource::new(sim, frames)));
-        Ok(MassSpringFlameOut { cloth: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }

@@ -19,7 +19,7 @@ pub mod training;
 
 pub use blocks::{BlockSource, ReadFrames, train_blocks};
 pub use clips::{components_to_use, empty_clip, gather_frames, samples_to_clip};
-pub use nodes::{Eigenfires, EigenfiresOut, Project, ProjectOut, Reconstruct, ReconstructOut};
+pub use nodes::{Eigenfires, EigenfiresOut, Project, Reconstruct};
 pub use projection::{project, reconstruct};
 pub use training::{Database, RELATIVE_EIGENVALUE_FLOOR, train};
 

@@ -158,17 +158,15 @@ pyrograph_core::node! {
         #[range(0, 1_000_000)]
         components: usize = 0,
     }
-    pub struct ProjectOut {
-        /// Frames × components weights.
-        weights: Arc<Weights>,
-    }
+    /// Frames × components weights.
+    -> weights: Arc<Weights>
 }
 
 /// Frames per batch while projecting a clip.
 const PROJECT_BATCH: usize = 256;
 
 impl Cook for Project {
-    fn cook(self, ctx: &CookCtx) -> Result<ProjectOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Weights>, NodeError> {
         let (basis, clip) = (&*self.basis, &*self.clip);
         let port = port!(Project, clip);
         let e = components_to_use(self.components, basis.components(), port!(Project, components))?;
@@ -193,7 +191,7 @@ impl Cook for Project {
             start = end;
         }
         let w = Weights::new(clip.len(), e, data).ok_or_else(|| NodeError::msg("weights size mismatch"))?;
-        Ok(ProjectOut { weights: Arc::new(w) })
+        Ok(Arc::new(w))
     }
 }
 
@@ -221,14 +219,12 @@ pyrograph_core::node! {
         #[range(0.001, 1000.0)]
         fps: f64 = 30.0,
     }
-    pub struct ReconstructOut {
-        /// The reconstructed gray frames.
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// The reconstructed gray frames.
+    -> clip: ClipOf<Arc<Image>>
 }
 
 impl Cook for Reconstruct {
-    fn cook(self, _: &CookCtx) -> Result<ReconstructOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
         let (basis, weights) = (&*self.basis, &*self.weights);
         if weights.frames == 0 {
             return Err(NodeError::port(port!(Reconstruct, weights), "there are no rows of weights to reconstruct"));
@@ -237,6 +233,6 @@ impl Cook for Reconstruct {
         let e = components_to_use(self.components, basis.components().min(weights.components), components)?;
         let samples = reconstruct(basis, weights, e).map_err(|m| NodeError::port(components, m))?;
         let clip = samples_to_clip(basis, samples, self.clamp, self.fps)?;
-        Ok(ReconstructOut { clip: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }

@@ -166,20 +166,18 @@ pyrograph_core::node! {
         #[range(0, i64::MAX)]
         seed: u64 = 0,
     }
-    pub struct LowpassTransitionOut {
-        /// 2·span synthesized weight vectors (the transition).
-        frames: Arc<FrameList>,
-    }
+    /// 2·span synthesized weight vectors (the transition).
+    -> frames: Arc<FrameList>
 }
 
 impl Cook for LowpassTransition {
-    fn cook(self, _: &CookCtx) -> Result<LowpassTransitionOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<FrameList>, NodeError> {
         let db = &*self.motions.weights;
         let (t1, t2) = self.motions.ranges()?;
         let e = components_to_use(self.components, db.components, port!(LowpassTransition, components))?;
         let out = lowpass_transition(db, t1, t2, e, &self.kernel.weights(), self.span, self.detail, self.seed)
             .map_err(|m| NodeError::port(port!(LowpassTransition, span), m))?;
-        Ok(LowpassTransitionOut { frames: Arc::new(FrameList { items: out.into_iter().map(FrameItem::Weights).collect() }) })
+        Ok(Arc::new(FrameList { items: out.into_iter().map(FrameItem::Weights).collect() }))
     }
 }
 
@@ -207,21 +205,19 @@ pyrograph_core::node! {
         #[range(0.0, 1e9)]
         theta_min: f64 = 0.0,
     }
-    pub struct DirectBridgingOut {
-        /// The inserted database frames.
-        frames: Arc<FrameList>,
-    }
+    /// The inserted database frames.
+    -> frames: Arc<FrameList>
 }
 
 impl Cook for DirectBridging {
-    fn cook(self, _: &CookCtx) -> Result<DirectBridgingOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<FrameList>, NodeError> {
         let db = &*self.motions.weights;
         let (t1, t2) = self.motions.ranges()?;
         let e = components_to_use(self.components, db.components, port!(DirectBridging, components))?;
         let excluded = exclusion_mask(db.frames, &[t1.clone(), t2.clone()]);
         let path = direct_bridging(db, *t1.end(), *t2.start(), self.steps, e, self.theta_min, &excluded)
             .map_err(|m| NodeError::port(port!(DirectBridging, theta_min), m))?;
-        Ok(DirectBridgingOut { frames: frames_value(path) })
+        Ok(frames_value(path))
     }
 }
 

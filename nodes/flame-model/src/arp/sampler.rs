@@ -395,17 +395,15 @@ pyrograph_core::node! {
         /// The §5.1 controls.
         controls: ControlPorts,
     }
-    pub struct ArpSampleOut {
-        /// The synthesized series, in the training series' columns.
-        params: Arc<ParamSeries>,
-    }
+    /// The synthesized series, in the training series' columns.
+    -> params: Arc<ParamSeries>
 }
 
 impl Cook for ArpSample {
-    fn cook(self, ctx: &CookCtx) -> Result<ArpSampleOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<ParamSeries>, NodeError> {
         let controls = self.controls.controls(self.model.fps)?;
         ctx.check_cancel()?;
         let out = sample(&self.model, self.frames, self.warmup, self.seed, &controls)?;
-        Ok(ArpSampleOut { params: Arc::new(out) })
+        Ok(Arc::new(out))
     }
 }

@@ -73,19 +73,17 @@ pyrograph_core::node! {
         /// Which way to convert
         direction: AlphaDirection = AlphaDirection::Premultiply,
     }
-    pub struct PremultiplyOut {
-        /// Converted image
-        image: Arc<Image>,
-    }
+    /// Converted image
+    -> image: Arc<Image>
 }
 
 impl Cook for Premultiply {
-    fn cook(self, _: &CookCtx) -> Result<PremultiplyOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let out = match self.direction {
             AlphaDirection::Premultiply => premultiply(&self.image),
             AlphaDirection::Unpremultiply => unpremultiply(&self.image),
         };
-        Ok(PremultiplyOut { image: Arc::new(out) })
+        Ok(Arc::new(out))
     }
 }
 
@@ -112,14 +110,12 @@ pyrograph_core::node! {
         /// Alpha matte, same size
         matte: Arc<Image>,
     }
-    pub struct SetAlphaOut {
-        /// RGBA image with the matte as alpha
-        image: Arc<Image>,
-    }
+    /// RGBA image with the matte as alpha
+    -> image: Arc<Image>
 }
 
 impl Cook for SetAlpha {
-    fn cook(self, _: &CookCtx) -> Result<SetAlphaOut, NodeError> {
-        Ok(SetAlphaOut { image: Arc::new(set_alpha(&self.image, &self.matte)?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(set_alpha(&self.image, &self.matte)?))
     }
 }

@@ -124,17 +124,15 @@ pyrograph_core::node! {
         /// The threshold.
         threshold: ColoringThreshold,
     }
-    pub struct OriginalColoringOut {
-        /// Coloured flame (RGBA)
-        image: Arc<Image>,
-    }
+    /// Coloured flame (RGBA)
+    -> image: Arc<Image>
 }
 
 impl Cook for OriginalColoring {
-    fn cook(self, _: &CookCtx) -> Result<OriginalColoringOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let (frames, threshold) = (&self.frames, self.threshold.threshold);
         let img = original_coloring(&frames.source, &frames.original, threshold, ColoringLayers::default())?;
-        Ok(OriginalColoringOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -153,19 +151,17 @@ pyrograph_core::node! {
         /// The threshold.
         threshold: ColoringThreshold,
     }
-    pub struct OriginalColoringLayeredOut {
-        /// Coloured flame (RGBA)
-        image: Arc<Image>,
-    }
+    /// Coloured flame (RGBA)
+    -> image: Arc<Image>
 }
 
 impl Cook for OriginalColoringLayered {
-    fn cook(self, _: &CookCtx) -> Result<OriginalColoringLayeredOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let (frames, threshold) = (&self.frames, self.threshold.threshold);
         let layers =
             ColoringLayers { destination: Some(&self.layers.destination), smoke: Some(&self.layers.smoke), custom_mask: None };
         let img = original_coloring(&frames.source, &frames.original, threshold, layers)?;
-        Ok(OriginalColoringLayeredOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -185,14 +181,12 @@ pyrograph_core::node! {
         /// The threshold.
         threshold: ColoringThreshold,
     }
-    pub struct OriginalColoringMaskedOut {
-        /// Coloured flame (RGBA)
-        image: Arc<Image>,
-    }
+    /// Coloured flame (RGBA)
+    -> image: Arc<Image>
 }
 
 impl Cook for OriginalColoringMasked {
-    fn cook(self, _: &CookCtx) -> Result<OriginalColoringMaskedOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let (frames, threshold) = (&self.frames, self.threshold.threshold);
         let layers = ColoringLayers {
             destination: Some(&self.layers.destination),
@@ -200,6 +194,6 @@ impl Cook for OriginalColoringMasked {
             custom_mask: Some(&self.custom_mask),
         };
         let img = original_coloring(&frames.source, &frames.original, threshold, layers)?;
-        Ok(OriginalColoringMaskedOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }

@@ -211,14 +211,12 @@ pyrograph_core::node! {
         /// Colour ramp of modes ramp and ramp_direct: `[(position, (r, g, b)), …]`.
         ramp: ColorRamp = ColorRamp::preset(DEFAULT_RAMP),
     }
-    pub struct SyntheticColoringOut {
-        /// Coloured flame (RGBA)
-        image: Arc<Image>,
-    }
+    /// Coloured flame (RGBA)
+    -> image: Arc<Image>
 }
 
 impl Cook for SyntheticColoring {
-    fn cook(self, _: &CookCtx) -> Result<SyntheticColoringOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let img = match self.mode {
             SyntheticMode::Solid => {
                 let c = self.color;
@@ -230,7 +228,7 @@ impl Cook for SyntheticColoring {
                 synthetic_coloring(&self.source, &blend)?
             }
         };
-        Ok(SyntheticColoringOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }
 
@@ -243,15 +241,13 @@ pyrograph_core::node! {
         /// Blend texture, same size as the source
         texture: Arc<Image>,
     }
-    pub struct SyntheticColoringTextureOut {
-        /// Coloured flame (RGBA)
-        image: Arc<Image>,
-    }
+    /// Coloured flame (RGBA)
+    -> image: Arc<Image>
 }
 
 impl Cook for SyntheticColoringTexture {
-    fn cook(self, _: &CookCtx) -> Result<SyntheticColoringTextureOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let img = synthetic_coloring(&self.source, &Blend::Texture(&self.texture))?;
-        Ok(SyntheticColoringTextureOut { image: Arc::new(img) })
+        Ok(Arc::new(img))
     }
 }

@@ -37,17 +37,15 @@ pyrograph_core::node! {
         /// The layer of OpenEXR files to read (`diffuse`, `beauty.spec`…); empty = the main layer.
         layer: String = String::new(),
     }
-    pub struct LoadSequenceOut {
-        /// The frames.
-        clip: ClipOf<Arc<Image>>,
-    }
+    /// The frames.
+    -> clip: ClipOf<Arc<Image>>
 }
 
 impl Cook for LoadSequence {
-    fn cook(self, ctx: &CookCtx) -> Result<LoadSequenceOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<ClipOf<Arc<Image>>, NodeError> {
         let options = SequenceOptions { fps: self.fps, gaps: self.gaps, layer: self.layer };
         let clip = open_sequence(&self.path, &options, ctx, LoadSequence::node_error);
-        Ok(LoadSequenceOut { clip: ClipOf::new(clip.map_err(LoadSequence::node_error)?) })
+        Ok(ClipOf::new(clip.map_err(LoadSequence::node_error)?))
     }
 }
 
@@ -80,15 +78,13 @@ pyrograph_core::node! {
         /// The layer of an OpenEXR file to read (`diffuse`, `beauty.spec`…); empty = the main layer.
         layer: String = String::new(),
     }
-    pub struct LoadImageOut {
-        /// The image.
-        image: Arc<Image>,
-    }
+    /// The image.
+    -> image: Arc<Image>
 }
 
 impl Cook for LoadImage {
-    fn cook(self, _: &CookCtx) -> Result<LoadImageOut, NodeError> {
-        Ok(LoadImageOut { image: Arc::new(read_image_file(&self.path, &self.layer).map_err(LoadImage::node_error)?) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(read_image_file(&self.path, &self.layer).map_err(LoadImage::node_error)?))
     }
 }
 
@@ -195,18 +191,16 @@ pyrograph_core::node! {
         /// Replace the file if it already exists.
         overwrite: bool = false,
     }
-    pub struct WriteImageOut {
-        /// The file written.
-        path: OutputPath,
-    }
+    /// The file written.
+    -> path: OutputPath
 }
 
 impl Cook for WriteImage {
-    fn cook(self, ctx: &CookCtx) -> Result<WriteImageOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<OutputPath, NodeError> {
         let format = output_format(&self.path, self.bit_depth, self.exr_type).map_err(WriteImage::node_error)?;
         write_image(&self.image, &self.path, format, self.overwrite || ctx.settings().overwrite)?;
         ctx.record_written(&self.path);
-        Ok(WriteImageOut { path: self.path })
+        Ok(self.path)
     }
 }
 

@@ -362,15 +362,13 @@ pyrograph_core::node! {
         /// Binary mask to trace
         mask: Arc<Mask>,
     }
-    pub struct TraceContoursOut {
-        /// Every border, parents before children
-        contours: Arc<Contours>,
-    }
+    /// Every border, parents before children
+    -> contours: Arc<Contours>
 }
 
 impl Cook for TraceContours {
-    fn cook(self, _: &CookCtx) -> Result<TraceContoursOut, NodeError> {
-        Ok(TraceContoursOut { contours: Arc::new(trace_contours(&self.mask)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Contours>, NodeError> {
+        Ok(Arc::new(trace_contours(&self.mask)))
     }
 }
 
@@ -395,16 +393,14 @@ pyrograph_core::node! {
         #[range(0, 1_000_000)]
         keep_largest: usize = 0,
     }
-    pub struct HoleRemovalOut {
-        /// Kept contours, parents re-indexed
-        contours: Arc<Contours>,
-    }
+    /// Kept contours, parents re-indexed
+    -> contours: Arc<Contours>
 }
 
 impl Cook for HoleRemoval {
-    fn cook(self, _: &CookCtx) -> Result<HoleRemovalOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Contours>, NodeError> {
         let kept = remove_holes(&self.contours, self.max_depth, self.min_area);
-        Ok(HoleRemovalOut { contours: Arc::new(keep_largest(&kept, self.keep_largest)) })
+        Ok(Arc::new(keep_largest(&kept, self.keep_largest)))
     }
 }
 
@@ -420,15 +416,13 @@ pyrograph_core::node! {
         #[range(0.0, 1000.0)]
         tolerance: f64 = 2.0,
     }
-    pub struct SimplifyContoursOut {
-        /// Simplified contours
-        contours: Arc<Contours>,
-    }
+    /// Simplified contours
+    -> contours: Arc<Contours>
 }
 
 impl Cook for SimplifyContours {
-    fn cook(self, _: &CookCtx) -> Result<SimplifyContoursOut, NodeError> {
-        Ok(SimplifyContoursOut { contours: Arc::new(simplify_contours(&self.contours, self.tolerance)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Contours>, NodeError> {
+        Ok(Arc::new(simplify_contours(&self.contours, self.tolerance)))
     }
 }
 
@@ -441,15 +435,13 @@ pyrograph_core::node! {
         /// Contours to fill
         contours: Arc<Contours>,
     }
-    pub struct ContourMaskOut {
-        /// Filled mask
-        mask: Arc<Mask>,
-    }
+    /// Filled mask
+    -> mask: Arc<Mask>
 }
 
 impl Cook for ContourMask {
-    fn cook(self, _: &CookCtx) -> Result<ContourMaskOut, NodeError> {
-        Ok(ContourMaskOut { mask: Arc::new(fill_contours(&self.contours)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Mask>, NodeError> {
+        Ok(Arc::new(fill_contours(&self.contours)))
     }
 }
 
@@ -468,15 +460,13 @@ pyrograph_core::node! {
         /// Colour of hole borders (odd depth)
         hole_color: [f32; 4] = [1.0, 0.0, 1.0, 1.0],
     }
-    pub struct ContourOverlayOut {
-        /// RGBA preview
-        image: Arc<Image>,
-    }
+    /// RGBA preview
+    -> image: Arc<Image>
 }
 
 impl Cook for ContourOverlay {
-    fn cook(self, _: &CookCtx) -> Result<ContourOverlayOut, NodeError> {
-        Ok(ContourOverlayOut { image: Arc::new(overlay_contours(&self.image, &self.contours, self.color, self.hole_color)) })
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
+        Ok(Arc::new(overlay_contours(&self.image, &self.contours, self.color, self.hole_color)))
     }
 }
 

@@ -92,16 +92,14 @@ pyrograph_core::node! {
         /// The frame and thresholds.
         inputs: HermiteInputs,
     }
-    pub struct HermiteBackgroundOut {
-        /// Gray image with the background darkened
-        image: Arc<Image>,
-    }
+    /// Gray image with the background darkened
+    -> image: Arc<Image>
 }
 
 impl Cook for HermiteBackground {
-    fn cook(self, _: &CookCtx) -> Result<HermiteBackgroundOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let HermiteInputs { image, i_min, i_max } = self.inputs;
-        Ok(HermiteBackgroundOut { image: Arc::new(hermite_background(&image, i_min, i_max, None)?) })
+        Ok(Arc::new(hermite_background(&image, i_min, i_max, None)?))
     }
 }
 
@@ -117,16 +115,14 @@ pyrograph_core::node! {
         /// Pixels inside this mask (the filled flame contour) keep their gray value
         protect: Arc<Mask>,
     }
-    pub struct HermiteBackgroundMaskedOut {
-        /// Gray image with the background darkened
-        image: Arc<Image>,
-    }
+    /// Gray image with the background darkened
+    -> image: Arc<Image>
 }
 
 impl Cook for HermiteBackgroundMasked {
-    fn cook(self, _: &CookCtx) -> Result<HermiteBackgroundMaskedOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let HermiteInputs { image, i_min, i_max } = self.inputs;
-        Ok(HermiteBackgroundMaskedOut { image: Arc::new(hermite_background(&image, i_min, i_max, Some(&self.protect))?) })
+        Ok(Arc::new(hermite_background(&image, i_min, i_max, Some(&self.protect))?))
     }
 }
 

@@ -393,10 +393,8 @@ pyrograph_core::node! {
         /// Layer 3 (yellow by default)
         layer3: HsvLayerPorts = YELLOW_DEFAULTS,
     }
-    pub struct HsvMaskOut {
-        /// 255 where the blended layers select the pixel
-        mask: Arc<Mask>,
-    }
+    /// 255 where the blended layers select the pixel
+    -> mask: Arc<Mask>
 }
 
 impl HsvMask {
@@ -412,9 +410,9 @@ impl HsvMask {
 }
 
 impl Cook for HsvMask {
-    fn cook(self, _: &CookCtx) -> Result<HsvMaskOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Mask>, NodeError> {
         let layers = self.layers()?;
-        Ok(HsvMaskOut { mask: Arc::new(hsv_mask(&self.image, &layers)?) })
+        Ok(Arc::new(hsv_mask(&self.image, &layers)?))
     }
 }
 

@@ -361,16 +361,14 @@ pyrograph_core::node! {
         #[range(1, 99)]
         size: u32 = 5,
     }
-    pub struct MorphologyOut {
-        /// Filtered mask
-        mask: Arc<Mask>,
-    }
+    /// Filtered mask
+    -> mask: Arc<Mask>
 }
 
 impl Cook for Morphology {
-    fn cook(self, _: &CookCtx) -> Result<MorphologyOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Mask>, NodeError> {
         let element = structuring_element(self.shape, self.size)?;
-        Ok(MorphologyOut { mask: Arc::new(morphology(&self.mask, self.op, &element)) })
+        Ok(Arc::new(morphology(&self.mask, self.op, &element)))
     }
 }
 
@@ -395,17 +393,15 @@ pyrograph_core::node! {
         #[range(0.0, 100.0)]
         sigma: f32 = 0.0,
     }
-    pub struct GaussianBlurOut {
-        /// Blurred image
-        image: Arc<Image>,
-    }
+    /// Blurred image
+    -> image: Arc<Image>
 }
 
 impl Cook for GaussianBlur {
-    fn cook(self, _: &CookCtx) -> Result<GaussianBlurOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         // Sigma 0 is the common case in presets (a fan-out point), so keep the same Arc and skip the copy.
         let image = if self.sigma > 0.0 { Arc::new(gaussian_blur(&self.image, self.sigma)) } else { self.image };
-        Ok(GaussianBlurOut { image })
+        Ok(image)
     }
 }
 

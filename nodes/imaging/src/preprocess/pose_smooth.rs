@@ -56,14 +56,12 @@ pyrograph_core::node! {
         #[range(0.0, 100.0)]
         sigma: f64 = 2.0,
     }
-    pub struct SmoothAngleOut {
-        /// Smoothed angle per frame, in degrees
-        angle: ClipOf<f64>,
-    }
+    /// Smoothed angle per frame, in degrees
+    -> angle: ClipOf<f64>
 }
 
 impl Cook for SmoothAngle {
-    fn cook(self, ctx: &CookCtx) -> Result<SmoothAngleOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<ClipOf<f64>, NodeError> {
         let clip: &Clip = &self.angle;
         if clip.is_empty() {
             return Err(NodeError::port(port!(SmoothAngle, angle), "the angle clip has no frames"));
@@ -85,7 +83,7 @@ impl Cook for SmoothAngle {
             .collect::<Result<Vec<f64>, NodeError>>()?;
         let smooth = gaussian_filter(&median_filter(&values, self.median_radius), self.sigma);
         let frames = smooth.into_iter().map(Value::Float).collect();
-        Ok(SmoothAngleOut { angle: ClipOf::new(Clip::from_frames(PortType::Float, clip.fps(), frames)) })
+        Ok(ClipOf::new(Clip::from_frames(PortType::Float, clip.fps(), frames)))
     }
 }
 
@@ -181,8 +179,8 @@ mod tests {
             SmoothAngle { angle: ClipOf::new(Clip::from_frames(PortType::Float, 24.0, frames)), median_radius: 0, sigma: 1.0 };
         let ctx = CookCtx::new();
         let out = node.cook(&ctx).unwrap();
-        assert_eq!(out.angle.len(), 6);
-        let mid = match out.angle.get(3, &ctx).unwrap() {
+        assert_eq!(out.len(), 6);
+        let mid = match out.get(3, &ctx).unwrap() {
             Value::Float(v) => v,
             other => panic!("{other:?}"),
         };

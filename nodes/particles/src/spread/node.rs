@@ -46,14 +46,12 @@ pyrograph_core::node! {
         /// The spread.
         params: SpreadParams,
     }
-    pub struct FireSpreadOut {
-        /// Per frame: boundary, live flame roots, extinguished points, char.
-        spread: ClipOf<Arc<SpreadState>>,
-    }
+    /// Per frame: boundary, live flame roots, extinguished points, char.
+    -> spread: ClipOf<Arc<SpreadState>>
 }
 
 impl Cook for FireSpread {
-    fn cook(self, _: &CookCtx) -> Result<FireSpreadOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<SpreadState>>, NodeError> {
         let surface = Arc::new(Surface::new(&self.mesh).map_err(|m| NodeError::port(port!(FireSpread, mesh), m))?);
         validate_wind(&self.wind, port!(FireSpread, wind))?;
         validate(&self.params, self.timeline.fps as f32).map_err(port_error)?;
@@ -67,7 +65,7 @@ impl Cook for FireSpread {
         (frames, fps.to_bits(), substeps).hash(&mut h);
         let spread = Spread::new(surface, ignitions, self.params, fps as f32).map_err(port_error)?;
         let source = SpreadSource::new(spread, (*self.wind).clone(), frames, fps as f32, substeps);
-        Ok(FireSpreadOut { spread: ClipOf::new(Clip::new(PortType::of::<SpreadState>(), fps, h.finish(), Arc::new(source))) })
+        Ok(ClipOf::new(Clip::new(PortType::of::<SpreadState>(), fps, h.finish(), Arc::new(source))))
     }
 }
 

@@ -169,14 +169,12 @@ pyrograph_core::node! {
         #[range(0.001, 1e4)]
         frame_rate: f64 = 24.0,
     }
-    pub struct RenderOut {
-        /// The rendered frame (RGBA, straight alpha).
-        image: Arc<Image>,
-    }
+    /// The rendered frame (RGBA, straight alpha).
+    -> image: Arc<Image>
 }
 
 impl Cook for Render {
-    fn cook(self, ctx: &CookCtx) -> Result<RenderOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
         for (name, v) in [
@@ -268,7 +266,7 @@ impl Cook for Render {
             let families = [&*self.sparks, &*self.flames];
             map.add_flames(&mut pixels, &flame_light(&view, &self.volume, smoke, &families, self.flame_exposure, &self.mesh));
         }
-        Ok(RenderOut { image: Arc::new(map.image(pixels)) })
+        Ok(Arc::new(map.image(pixels)))
     }
 }
 

@@ -205,7 +205,7 @@ fn bad_lights_directions_and_densities_are_errors_naming_the_port() {
     let e = Render { mesh: Arc::new(bad), ..node(blob()) }.cook(&ctx).err().expect("a bad triangle").to_string();
     assert!(e.contains("mesh") && e.contains("triangle 1"), "{e}");
     let out = node(blob()).cook(&ctx).expect("a good volume renders");
-    assert_eq!((out.image.width(), out.image.height()), (16, 9));
+    assert_eq!((out.width(), out.height()), (16, 9));
 }
 
 /// A square at depth `z` facing +z, `half` wide each way, as two triangles.
@@ -238,7 +238,7 @@ fn slab_node(mesh: Mesh) -> Render {
 #[test]
 fn a_mesh_in_front_hides_the_volume_and_one_behind_is_attenuated_by_it() {
     let ctx = CookCtx::new();
-    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap().image, 8, 4);
+    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap(), 8, 4);
     // Lit by the ambient light alone: albedo × 1.
     let front = centre(slab_node(square(4.0, 3.0)));
     assert_eq!(front, Vec4::new(0.5, 0.5, 0.5, 1.0), "the mesh in front, untouched by the smoke behind it");
@@ -248,7 +248,7 @@ fn a_mesh_in_front_hides_the_volume_and_one_behind_is_attenuated_by_it() {
     assert!(((behind.x - want) / want).abs() < 0.01 && behind.w == 1.0, "{behind} vs {want}");
     // The depth pass: where the smoke's opacity reaches one half (optical depth ln 2, 0.924 into
     // the slab from its near face at z = 2), or the mesh in front of it.
-    let depth = |n: Render| n.cook(&ctx).unwrap().image.pixel(8, 4)[0];
+    let depth = |n: Render| n.cook(&ctx).unwrap().pixel(8, 4)[0];
     let smoke = depth(Render { pass: VolumePass::Depth, ..slab_node(Mesh::default()) });
     let want = 6.0 - (2.0 - 2f32.ln() / 1.2 * 1.6);
     assert!((smoke - want).abs() < 0.03, "smoke depth {smoke} vs {want}");
@@ -264,7 +264,7 @@ fn the_passes_split_the_beauty_into_emission_and_scattering() {
     v.fields.push(Field { name: "flame".into(), data: FieldData::Scalar(flame) });
     let ctx = CookCtx::new();
     let camera = CameraPorts::looking(32, 24, [0.4, 0.4, 2.0], [0.4, 0.4, 0.4]);
-    let cook = |pass| Render { pass, camera: camera.clone(), ..node(v.clone()) }.cook(&ctx).unwrap().image;
+    let cook = |pass| Render { pass, camera: camera.clone(), ..node(v.clone()) }.cook(&ctx).unwrap();
     let (beauty, emission, scattering) = (cook(VolumePass::Beauty), cook(VolumePass::Emission), cook(VolumePass::Scattering));
     let premultiplied = |img: &Image, x, y| {
         let p = pixel(img, x, y);
@@ -291,7 +291,7 @@ fn the_motion_pass_projects_the_smokes_velocity_to_pixels_per_frame() {
     v.fields.push(Field { name: "vel".into(), data: FieldData::Vector(vec![[1.2, 0.0, 0.0]; n]) });
     let n = Render { pass: VolumePass::Motion, frame_rate: 24.0, ..node(v) };
     let view = n.camera.view().unwrap();
-    let img = n.cook(&CookCtx::new()).unwrap().image;
+    let img = n.cook(&CookCtx::new()).unwrap();
     let m = pixel(&img, 8, 4);
     // The blob's centre (0.4, 0.4, 0.4) moves 1.2 / 24 world units along +x in a frame.
     let at = Vec3::splat(0.4);
@@ -324,7 +324,7 @@ fn flames_inside_the_smoke_are_dimmed_by_the_smoke_in_front_of_them_and_hidden_b
         n.volume = Arc::new(v);
         n
     };
-    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap().image, 8, 4);
+    let centre = |n: Render| pixel(&n.cook(&ctx).unwrap(), 8, 4);
     // Behind the slab (world z 0.4..2.0, optical depth 1.2): dimmed by Beer–Lambert.
     let seen = centre(Render { flames: flame_at(-0.5), ..slab_node(Mesh::default()) });
     let bare = centre(Render { flames: flame_at(-0.5), ..clear() });
@@ -352,7 +352,7 @@ fn flames_inside_the_smoke_are_dimmed_by_the_smoke_in_front_of_them_and_hidden_b
     assert!((emission.truncate() * emission.w - seen.truncate()).abs().max_element() < 1e-5, "{emission} vs {seen}");
     let alpha = |flames| {
         let n = Render { flames, pass: VolumePass::Alpha, background: [0.0; 4], ..clear() };
-        n.cook(&ctx).unwrap().image.pixel(8, 4)[0]
+        n.cook(&ctx).unwrap().pixel(8, 4)[0]
     };
     assert!(alpha(no_particles()) == 0.0 && alpha(flame_at(-0.5)) > 0.05, "the flame's coverage");
 }

@@ -54,18 +54,16 @@ pyrograph_core::node! {
         /// The simulation.
         params: SimParams,
     }
-    pub struct SimulateOut {
-        /// Per frame, the fire and smoke.
-        volume: ClipOf<Arc<Volume>>,
-    }
+    /// Per frame, the fire and smoke.
+    -> volume: ClipOf<Arc<Volume>>
 }
 
 impl Cook for Simulate {
-    fn cook(self, ctx: &CookCtx) -> Result<SimulateOut, NodeError> {
+    fn cook(self, ctx: &CookCtx) -> Result<ClipOf<Arc<Volume>>, NodeError> {
         let p = self.params;
         validate(&p)?;
         if let (Some(dir), Some(node)) = (&ctx.settings().sim_cache, ctx.node_id()) {
-            return Ok(SimulateOut { volume: ClipOf::new(cached_clip(dir, node, &p, self.timeline)) });
+            return Ok(ClipOf::new(cached_clip(dir, node, &p, self.timeline)));
         }
         validate_wind(&self.wind, port!(Simulate, wind))?;
         let h = p.voxel_size;
@@ -93,7 +91,7 @@ impl Cook for Simulate {
         let fps = self.timeline.fps;
         let sim = Simulation { params: p, fps, sources, wind: uses_wind.then(|| (*self.wind).clone()), setup };
         let frames = VolumeFrames::new(sim, self.timeline.frames, h);
-        Ok(SimulateOut { volume: ClipOf::new(Clip::new(PortType::of::<Volume>(), fps, fp.finish(), Arc::new(frames))) })
+        Ok(ClipOf::new(Clip::new(PortType::of::<Volume>(), fps, fp.finish(), Arc::new(frames))))
     }
 }
 

@@ -84,14 +84,12 @@ pyrograph_core::node! {
         #[range(-1e3, 1e3)]
         inherit: f32 = 0.0,
     }
-    pub struct SourceOut {
-        /// The emitters.
-        source: Arc<VolumeSource>,
-    }
+    /// The emitters.
+    -> source: Arc<VolumeSource>
 }
 
 impl Cook for Source {
-    fn cook(self, _: &CookCtx) -> Result<SourceOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<Arc<VolumeSource>, NodeError> {
         let rates = Rates {
             fuel: self.fuel_rate.clone(),
             smoke: self.smoke_rate.clone(),
@@ -132,7 +130,7 @@ impl Cook for Source {
                 "nothing emits: connect particles, roots, a spread, cloth or a mesh, or set shape to sphere or points",
             ));
         }
-        Ok(SourceOut { source: Arc::new(VolumeSource { emitters }) })
+        Ok(Arc::new(VolumeSource { emitters }))
     }
 }
 

@@ -167,10 +167,8 @@ pyrograph_core::node! {
         #[range(0.001, 1000.0)]
         fps: f64 = 24.0,
     }
-    pub struct LoadVdbOut {
-        /// Per frame, the volume.
-        volume: ClipOf<Arc<Volume>>,
-    }
+    /// Per frame, the volume.
+    -> volume: ClipOf<Arc<Volume>>
 }
 
 /// The files of a VDB sequence, in frame order.
@@ -214,7 +212,7 @@ impl FrameSource for VdbFrames {
 }
 
 impl Cook for LoadVdb {
-    fn cook(self, _: &CookCtx) -> Result<LoadVdbOut, NodeError> {
+    fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<Volume>>, NodeError> {
         let files = vdb_files(&self.path).map_err(|m| NodeError::port(port!(LoadVdb, path), m))?;
         let mut h = Fingerprinter::new();
         "volume.load_vdb".hash(&mut h);
@@ -225,6 +223,6 @@ impl Cook for LoadVdb {
             (meta.len(), meta.modified().ok()).hash(&mut h);
         }
         let clip = Clip::new(PortType::of::<Volume>(), self.fps, h.finish(), Arc::new(VdbFrames { files }));
-        Ok(LoadVdbOut { volume: ClipOf::new(clip) })
+        Ok(ClipOf::new(clip))
     }
 }

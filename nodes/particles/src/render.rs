@@ -484,7 +484,7 @@ mod tests {
         set("pass", Value::Enum(pass.into()));
         set("mesh", Value::custom(Arc::new(mesh)));
         set("blend", Value::Enum(blend.into()));
-        Ok(pyrograph_core::testing::read::<RenderFlames>(&values)?.cook(&CookCtx::default())?)
+        pyrograph_core::testing::read::<RenderFlames>(&values)?.cook(&CookCtx::default())
     }
 
     #[test]

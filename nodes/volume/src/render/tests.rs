@@ -192,17 +192,17 @@ fn bad_lights_directions_and_densities_are_errors_naming_the_port() {
         particles: vec![Particle { position: [0.0, f32::NAN, 0.0], weight: 1.0, ..Particle::default() }],
         ..Particles::default()
     });
-    let e = n.cook(&ctx).err().expect("a NaN light is refused").to_string();
+    let e = n.cook(&ctx).expect_err("a NaN light is refused").to_string();
     assert!(e.contains("lights") && e.contains("light 0"), "{e}");
     let mut n = node(blob());
     n.sun_direction = [0.0; 3];
-    let e = n.cook(&ctx).err().expect("no sun direction").to_string();
+    let e = n.cook(&ctx).expect_err("no sun direction").to_string();
     assert!(e.contains("sun_direction"), "{e}");
-    let e = node(volume(IVec3::ZERO, IVec3::ONE, |p| if p.x == 3 { -0.5 } else { 0.0 })).cook(&ctx).err().expect("negative");
+    let e = node(volume(IVec3::ZERO, IVec3::ONE, |p| if p.x == 3 { -0.5 } else { 0.0 })).cook(&ctx).expect_err("negative");
     assert!(e.to_string().contains("volume") && e.to_string().contains("negative"), "{e}");
     let mut bad = square(0.0, 1.0);
     bad.triangles[1] = [0, 2, 9];
-    let e = Render { mesh: Arc::new(bad), ..node(blob()) }.cook(&ctx).err().expect("a bad triangle").to_string();
+    let e = Render { mesh: Arc::new(bad), ..node(blob()) }.cook(&ctx).expect_err("a bad triangle").to_string();
     assert!(e.contains("mesh") && e.contains("triangle 1"), "{e}");
     let out = node(blob()).cook(&ctx).expect("a good volume renders");
     assert_eq!((out.width(), out.height()), (16, 9));
@@ -362,7 +362,7 @@ fn a_flame_particle_with_a_nan_is_an_error_naming_the_port() {
     let mut bad = (*flame_at(0.0)).clone();
     bad.particles[0].size[1] = f32::NAN;
     let n = Render { sparks: Arc::new(bad), ..slab_node(Mesh::default()) };
-    let e = n.cook(&CookCtx::new()).err().expect("a NaN size is refused").to_string();
+    let e = n.cook(&CookCtx::new()).expect_err("a NaN size is refused").to_string();
     assert!(e.contains("sparks") && e.contains("particle 0"), "{e}");
 }
 
@@ -409,6 +409,6 @@ fn an_octave_scattering_more_than_it_lets_through_is_an_error() {
     let mut n = slab_node(Mesh::default());
     n.march.scattering_octaves = 3;
     n.march.octave_albedo = 0.8;
-    let e = n.cook(&CookCtx::new()).err().expect("a glowing octave is refused").to_string();
+    let e = n.cook(&CookCtx::new()).expect_err("a glowing octave is refused").to_string();
     assert!(e.contains("octave_albedo") && e.contains("octave_extinction"), "{e}");
 }

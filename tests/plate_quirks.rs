@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use pyrograph_frontend::core::{CookCtx, Image};
-use pyrograph_nodes_imaging::io::{Gaps, LoadSequence, SequenceOptions, load_sequence, open_sequence};
+use pyrograph_nodes_imaging::io::{Gaps, LoadSequence, SequenceOptions, open_sequence};
 use pyrograph_testing::footage;
 
 /// Runs ffmpeg with `args` (quiet, no stdin) and asserts it succeeded.
@@ -85,7 +85,7 @@ fn a_header_that_overstates_the_frame_count_loses_only_the_missing_frames() {
     let want = decoded(&trimmed, &[], "rgb24", 480 * 320 * 3);
     assert!(want.len() < 48 && want.len() > 30, "ffmpeg decodes {}", want.len());
     let ctx = CookCtx::new();
-    let clip = load_sequence(&trimmed, 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&trimmed, 0.0, &ctx).unwrap();
     assert_frames(&clip, &want, &ctx);
     one_warning(&ctx, &format!("states 48 frames but {} decode", want.len()));
 }
@@ -99,7 +99,7 @@ fn a_variable_frame_rate_clip_is_resampled_by_timestamps_with_a_warning() {
     let vfr = dir.path().join("vfr.mp4");
     ffmpeg(&["-i", s(&base), "-vf", "select='lt(n\\,30)+not(mod(n\\,2))'", "-fps_mode", "vfr", "-c:v", "libx264", s(&vfr)]);
     let ctx = CookCtx::new();
-    let clip = load_sequence(&vfr, 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&vfr, 0.0, &ctx).unwrap();
     assert_eq!(clip.fps(), 30.0, "resampled to its base rate");
     let want = decoded(&vfr, &["-vf", "fps=30"], "rgb24", 480 * 320 * 3);
     assert!(want.len() >= 46, "the held frames are there: {}", want.len());
@@ -116,7 +116,7 @@ fn a_rotation_tag_is_applied_as_players_apply_it() {
     ffmpeg(&["-i", s(&base), "-c", "copy", "-metadata:s:v:0", "rotate=90", s(&turned)]);
     let want = decoded(&turned, &[], "rgb24", 480 * 320 * 3);
     let ctx = CookCtx::new();
-    let clip = load_sequence(&turned, 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&turned, 0.0, &ctx).unwrap();
     assert_eq!((clip.len(), clip.image(0, &ctx).unwrap().size()), (48, (320, 480)), "a quarter turn stands the frame up");
     assert!(ctx.warnings().is_empty());
     assert_frames(&clip, &want, &ctx);
@@ -131,7 +131,7 @@ fn a_ten_bit_clip_keeps_its_precision() {
     ffmpeg(&["-i", s(&source), "-frames:v", "12", "-an", "-c:v", "libx264", "-pix_fmt", "yuv420p10le", s(&deep)]);
     let want = decoded(&deep, &[], "rgb48le", 480 * 480 * 6);
     let ctx = CookCtx::new();
-    let clip = load_sequence(&deep, 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&deep, 0.0, &ctx).unwrap();
     assert_eq!((clip.len(), want.len()), (12, 12));
     for (i, frame) in want.iter().enumerate() {
         let img = clip.image(i, &ctx).unwrap();
@@ -162,8 +162,8 @@ fn dpx_and_sixteen_bit_tiff_sequences_load_with_their_precision() {
     let dpx16 = stills(dir.path(), "d16", "dpx", "rgb48le");
     let dpx10 = stills(dir.path(), "d10", "dpx", "gbrp10le");
     let dpx8 = stills(dir.path(), "d8", "dpx", "rgb24");
-    let (tiff_clip, dpx16_clip) = (load_sequence(&tiff, 0.0, &ctx).unwrap(), load_sequence(&dpx16, 0.0, &ctx).unwrap());
-    let (dpx10_clip, dpx8_clip) = (load_sequence(&dpx10, 0.0, &ctx).unwrap(), load_sequence(&dpx8, 0.0, &ctx).unwrap());
+    let (tiff_clip, dpx16_clip) = (LoadSequence::load(&tiff, 0.0, &ctx).unwrap(), LoadSequence::load(&dpx16, 0.0, &ctx).unwrap());
+    let (dpx10_clip, dpx8_clip) = (LoadSequence::load(&dpx10, 0.0, &ctx).unwrap(), LoadSequence::load(&dpx8, 0.0, &ctx).unwrap());
     for clip in [&tiff_clip, &dpx16_clip, &dpx10_clip, &dpx8_clip] {
         assert_eq!(clip.len(), 6);
     }
@@ -200,7 +200,7 @@ fn a_sequence_with_two_missing_numbers_is_refused_with_the_list_or_held() {
         std::fs::remove_file(dir.path().join(format!("f_{gone:04}.png"))).unwrap();
     }
     let ctx = CookCtx::new();
-    let e = load_sequence(&pattern, 0.0, &ctx).unwrap_err().to_string();
+    let e = LoadSequence::load(&pattern, 0.0, &ctx).unwrap_err().to_string();
     assert!(e.contains("frames 4, 7 are missing (2 of the numbers 1-10)"), "{e}");
     let options = SequenceOptions { gaps: Gaps::Hold, ..SequenceOptions::default() };
     let held = open_sequence(&pattern, &options, &ctx, LoadSequence::node_error).unwrap();

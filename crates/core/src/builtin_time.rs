@@ -102,7 +102,7 @@ impl Timed {
         match &self.what {
             What::Frame => Ok(frame),
             What::Seconds => Ok(frame / self.fps),
-            What::Channel(curve) => curve.at(frame, self.fps),
+            What::Channel(curve) => Ok(curve.at(frame, self.fps)?),
         }
     }
 

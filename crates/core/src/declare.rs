@@ -18,7 +18,7 @@ use crate::node::{Inputs, Node, NodeDesc, PathRole, PortDesc};
 use crate::value::{Clip, Contours, Image, Mask, Points, PortType, Value};
 
 mod anim_port;
-pub use anim_port::Anim;
+pub use anim_port::{Anim, AnimError};
 
 /// A type that one port carries: how it is described and how it converts to and from a [`Value`].
 pub trait Port: Sized {

@@ -64,6 +64,20 @@ impl NodeError {
     }
 }
 
+/// Names the port an algorithm's error concerns, in a cook: `crop_span(..).at_port(port!(Crop, x))?`.
+/// Algorithms return their own errors (they know values, not ports); the node that called them
+/// knows which port the value came from.
+pub trait AtPort<T> {
+    /// The error as a [`NodeError::Port`] on `port`, its message the error's text.
+    fn at_port(self, port: &str) -> Result<T, NodeError>;
+}
+
+impl<T, E: fmt::Display> AtPort<T> for Result<T, E> {
+    fn at_port(self, port: &str) -> Result<T, NodeError> {
+        self.map_err(|e| NodeError::port(port, e.to_string()))
+    }
+}
+
 /// Where in a graph file a problem was found.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Location {

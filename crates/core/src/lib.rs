@@ -28,7 +28,7 @@ pub use anim::Animated;
 pub use ctx::{CancelToken, CookCtx, CookSettings, Progress, ProgressFn, Warning};
 pub use declare::{ClipOf, Cook, InputPath, OutputPath};
 pub use document::{CommentDoc, GraphDoc, GroupDoc, NodeDoc, ParamValue};
-pub use error::{Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
+pub use error::{AtPort, Diagnostic, DiagnosticKind, Diagnostics, Location, NodeError};
 pub use eval::{CookResult, Evaluator};
 pub use frames::FrameSet;
 pub use graph::{BuildOptions, Graph};

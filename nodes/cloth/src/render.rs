@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use pyrograph_core::declare::Cook;
-use pyrograph_core::{CookCtx, Image, NodeError, port};
+use pyrograph_core::{AtPort, CookCtx, Image, NodeError, port};
 use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, Camera, DrawList, TextureId, Vertex, View, render_image};
 use rayon::prelude::*;
@@ -271,35 +271,38 @@ pyrograph_core::node! {
     -> image: Arc<Image>
 }
 
-/// `p` when its line width is usable; the error names the port.
-fn checked_params(p: RenderParams) -> Result<RenderParams, NodeError> {
-    let line_width = p.line_width;
-    if !line_width.is_finite() || line_width < 0.0 {
-        return Err(NodeError::port(
-            port!(RenderParams, line_width),
-            format!("must be a finite non-negative width, got {line_width}"),
-        ));
+impl RenderParams {
+    /// The parameters when the line width is usable; the error names the port.
+    fn checked(self) -> Result<RenderParams, NodeError> {
+        let line_width = self.line_width;
+        if !line_width.is_finite() || line_width < 0.0 {
+            return Err(NodeError::port(
+                port!(RenderParams, line_width),
+                format!("must be a finite non-negative width, got {line_width}"),
+            ));
+        }
+        Ok(self)
     }
-    Ok(p)
 }
 
-/// `cloth` when its arrays agree and its positions are finite; errors name `port`.
-fn checked_cloth<'a>(cloth: &'a Arc<ClothState>, port: &str) -> Result<&'a Arc<ClothState>, NodeError> {
+/// Why `cloth` cannot be drawn, if it cannot: its arrays disagree, or a position is not finite.
+fn check_cloth(cloth: &ClothState) -> Result<(), &'static str> {
     let n = cloth.width as usize * cloth.height as usize;
     if cloth.positions.len() != n * cloth.flames() || cloth.seeds.len() != cloth.flames() {
-        return Err(NodeError::port(port, "inconsistent cloth state: positions or seeds do not match the flame count"));
+        return Err("inconsistent cloth state: positions or seeds do not match the flame count");
     }
     if !cloth.positions.iter().chain(&cloth.roots).all(|p| p.iter().all(|x| x.is_finite())) {
-        return Err(NodeError::port(port, "the cloth has non-finite positions"));
+        return Err("the cloth has non-finite positions");
     }
-    Ok(cloth)
+    Ok(())
 }
 
 impl Cook for ClothRender {
     fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
-        let cloth = checked_cloth(&self.cloth, port!(ClothRender, cloth))?;
-        let p = checked_params(self.params)?;
+        check_cloth(&self.cloth).at_port(port!(ClothRender, cloth))?;
+        let cloth = &self.cloth;
+        let p = self.params.checked()?;
         ctx.check_cancel()?;
         Ok(Arc::new(render_cloth(&view, cloth, Textures::Builtin, &p)))
     }
@@ -308,11 +311,12 @@ impl Cook for ClothRender {
 impl Cook for ClothRenderTextured {
     fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
-        let cloth = checked_cloth(&self.cloth, port!(ClothRenderTextured, cloth))?;
+        check_cloth(&self.cloth).at_port(port!(ClothRenderTextured, cloth))?;
+        let cloth = &self.cloth;
         if self.texture.width() == 0 || self.texture.height() == 0 {
             return Err(NodeError::port(port!(ClothRenderTextured, texture), "is an empty image"));
         }
-        let p = checked_params(self.params)?;
+        let p = self.params.checked()?;
         ctx.check_cancel()?;
         Ok(Arc::new(render_cloth(&view, cloth, Textures::Single(&self.texture), &p)))
     }

@@ -27,7 +27,7 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<database::LoadDatabase>();
     registry.declare::<transition::nodes::Recognize>();
     registry.declare::<transition::nodes::LowpassTransition>();
-    registry.declare::<transition::nodes::DirectBridging>();
+    registry.declare::<transition::nodes::DirectBridgingTransition>();
     registry.declare::<transition::nodes::EndGrowingConnection>();
     registry.declare::<motion::MotionList>();
     registry.declare::<motion::FramesToClip>();

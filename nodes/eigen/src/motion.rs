@@ -232,11 +232,13 @@ impl Cook for MotionList {
             check_range(r, db.frames, &format!("motion {name}")).map_err(|m| NodeError::port(motions_port, m))?;
         }
         let segments = parse_scenario(&self.scenario, &motions).map_err(|m| NodeError::port(port!(MotionList, scenario), m))?;
-        let components = || components_to_use(self.components, db.components, port!(MotionList, components));
+        let components =
+            || components_to_use(self.components, db.components).map_err(|m| NodeError::port(port!(MotionList, components), m));
         let method = match self.method {
             MethodKind::Cut => Method::Cut,
             MethodKind::LowPass => Method::LowPass {
-                components: components_to_use(self.lowpass_components, db.components, port!(MotionList, lowpass_components))?,
+                components: components_to_use(self.lowpass_components, db.components)
+                    .map_err(|m| NodeError::port(port!(MotionList, lowpass_components), m))?,
                 kernel: self.kernel.weights(),
                 span: self.span,
             },
@@ -338,11 +340,12 @@ impl Cook for FramesToClip {
         if list.items.is_empty() {
             return Err(NodeError::port(frames_port, "the frame list is empty"));
         }
-        let e = components_to_use(self.components, basis.components().min(db.components), port!(FramesToClip, components))?;
+        let e = components_to_use(self.components, basis.components().min(db.components))
+            .map_err(|m| NodeError::port(port!(FramesToClip, components), m))?;
         let (clamp, fps) = (self.clamp, self.fps);
         let rendered = |items: &[FrameItem]| -> Result<Clip, NodeError> {
             let samples = frames_to_samples(basis, db, items, e).map_err(|m| NodeError::port(frames_port, m))?;
-            samples_to_clip(basis, samples, clamp, fps)
+            samples_to_clip(basis, samples, clamp, fps).map_err(NodeError::msg)
         };
         if self.mode == ClipMode::Reconstruct {
             return Ok(ClipOf::new(rendered(&list.items)?));

@@ -34,24 +34,48 @@ impl Default for PlotLayout {
     }
 }
 
+/// Why [`param_plot`] cannot draw: which series is at fault, or that the plot is too large.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlotError {
+    /// The real series has no columns or frames, or the wrong number of values.
+    #[error("the series is empty or malformed")]
+    Real,
+    /// The synthesized series has other columns than the real one.
+    #[error("its columns ({synth}) differ from the real series' ({real})")]
+    SynthColumns {
+        /// The synthesized series' column names, comma separated.
+        synth: String,
+        /// The real series' column names, comma separated.
+        real: String,
+    },
+    /// The synthesized series has the wrong number of values.
+    #[error("the series is malformed")]
+    Synth,
+    /// The grid of plots would exceed 100 million pixels.
+    #[error("the plot would be {width}x{height} pixels")]
+    TooLarge {
+        /// Width in pixels.
+        width: i64,
+        /// Height in pixels.
+        height: i64,
+    },
+}
+
 /// One small plot per parameter: `real` in orange on the left, then (after a gray separator)
 /// `synth` in blue on the same value scale; a dark line marks the real series' mean; the number
 /// is the column index. `synth` may be empty (no columns) to plot the real series alone; else it
 /// must have the same columns.
-pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) -> Result<Image, NodeError> {
+pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) -> Result<Image, PlotError> {
     let dim = real.dim();
     if dim == 0 || real.frames == 0 || real.data.len() != real.frames * dim {
-        return Err(NodeError::port(port!(ParamPlot, real), "the series is empty or malformed"));
+        return Err(PlotError::Real);
     }
     let has_synth = synth.dim() > 0;
     if has_synth && synth.names != real.names {
-        return Err(NodeError::port(
-            port!(ParamPlot, synth),
-            format!("its columns ({}) differ from the real series' ({})", synth.names.join(", "), real.names.join(", ")),
-        ));
+        return Err(PlotError::SynthColumns { synth: synth.names.join(", "), real: real.names.join(", ") });
     }
     if has_synth && synth.data.len() != synth.frames * dim {
-        return Err(NodeError::port(port!(ParamPlot, synth), "the series is malformed"));
+        return Err(PlotError::Synth);
     }
     let (tr, ts) =
         (real.frames.min(layout.max_frames.max(1)), if has_synth { synth.frames.min(layout.max_frames.max(1)) } else { 0 });
@@ -62,7 +86,7 @@ pub fn param_plot(real: &ParamSeries, synth: &ParamSeries, layout: &PlotLayout) 
     let width = columns as i64 * (cw + gap) + gap;
     let height = rows as i64 * (ch + gap) + gap;
     if width * height > 100_000_000 {
-        return Err(NodeError::port(port!(ParamPlot, cell_width), format!("the plot would be {width}x{height} pixels")));
+        return Err(PlotError::TooLarge { width, height });
     }
     let mut canvas = Canvas::new(width as u32, height as u32, BACKGROUND);
     let total = (tr + ts).max(2) as f64;
@@ -137,8 +161,21 @@ pyrograph_core::node! {
 impl Cook for ParamPlot {
     fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let layout = PlotLayout { columns: self.columns, cell: (self.cell_width, self.cell_height), max_frames: self.frames };
-        let img = param_plot(&self.real, &self.synth, &layout)?;
+        let img = param_plot(&self.real, &self.synth, &layout).map_err(ParamPlot::plot_error)?;
         Ok(Arc::new(img))
+    }
+}
+
+impl ParamPlot {
+    /// The node's error for a failed [`param_plot`]: the series at fault, or `cell_width` for a
+    /// plot too large.
+    fn plot_error(e: PlotError) -> NodeError {
+        let port = match e {
+            PlotError::Real => port!(ParamPlot, real),
+            PlotError::SynthColumns { .. } | PlotError::Synth => port!(ParamPlot, synth),
+            PlotError::TooLarge { .. } => port!(ParamPlot, cell_width),
+        };
+        NodeError::port(port, e.to_string())
     }
 }
 
@@ -165,7 +202,7 @@ mod tests {
     #[test]
     fn mismatched_columns_are_an_error_naming_synth() {
         let other = ParamSeries::new(vec!["a".into(), "b".into()], 3, vec![0.0; 6], 25.0).unwrap();
-        let e = param_plot(&series(10, 0.0), &other, &PlotLayout::default()).unwrap_err();
+        let e = param_plot(&series(10, 0.0), &other, &PlotLayout::default()).map_err(ParamPlot::plot_error).unwrap_err();
         assert!(matches!(&e, NodeError::Port { port, .. } if port == "synth"), "{e}");
         assert!(param_plot(&ParamSeries::default(), &ParamSeries::default(), &PlotLayout::default()).is_err());
     }

@@ -145,7 +145,7 @@ fn bench_chain(c: &mut Criterion) {
 fn tealight_frames(count: usize) -> Option<Vec<Image>> {
     let root = pyrograph_testing::footage();
     let ctx = pyrograph_core::CookCtx::new();
-    let clip = match pyrograph_nodes_imaging::io::load_sequence(&root.join("tealight-candle/candle.mp4"), 0.0, &ctx) {
+    let clip = match pyrograph_nodes_imaging::io::LoadSequence::load(&root.join("tealight-candle/candle.mp4"), 0.0, &ctx) {
         Ok(clip) => clip,
         Err(e) => {
             eprintln!("skipping the tealight case: {e}");

@@ -62,9 +62,9 @@ fn planes(img: &Image) -> Vec<Plane> {
 
 /// The bloom of §6.2: `max(source, strength·Σ_k G_σk ∗ source)` per channel (lighten blend), then the
 /// optional tint. The thesis's matte is the sum of that result's intensity and the source's.
-pub fn bloom(source: &Image, params: &BloomParams) -> Result<Bloom, NodeError> {
+pub fn bloom(source: &Image, params: &BloomParams) -> Result<Bloom, String> {
     if !(params.sigma.is_finite() && params.shrink.is_finite() && params.strength.is_finite()) {
-        return Err(NodeError::msg("bloom sigma, shrink and strength must be finite numbers"));
+        return Err("bloom sigma, shrink and strength must be finite numbers".into());
     }
     let sigmas = params.sigmas();
     let (w, h) = source.size();
@@ -107,8 +107,8 @@ pub fn bloom(source: &Image, params: &BloomParams) -> Result<Bloom, NodeError> {
             Image::from_vec(w, h, Channels::Rgba, data)
         }
     }
-    .ok_or_else(|| NodeError::msg("image data does not match its size"))?;
-    let matte = Image::from_vec(w, h, Channels::Gray, matte).ok_or_else(|| NodeError::msg("matte size mismatch"))?;
+    .ok_or_else(|| "image data does not match its size".to_string())?;
+    let matte = Image::from_vec(w, h, Channels::Gray, matte).ok_or_else(|| "matte size mismatch".to_string())?;
     Ok(Bloom { image, matte })
 }
 
@@ -137,7 +137,7 @@ pyrograph_core::node! {
 
 impl Cook for BloomNode {
     fn cook(self, _: &CookCtx) -> Result<BloomNodeOut, NodeError> {
-        let b = bloom(&self.image, &self.params)?;
+        let b = bloom(&self.image, &self.params).map_err(NodeError::msg)?;
         Ok(BloomNodeOut { image: Arc::new(b.image), matte: Arc::new(b.matte) })
     }
 }

@@ -75,13 +75,36 @@ fn composite_rgba(a: &[f32], b: &[f32], mode: BlendMode, opacity: f32) -> [f32; 
     out
 }
 
+/// Why two images cannot be composited, by the input it concerns (`Composite`'s cook names the
+/// port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CompositeError {
+    /// The background's data does not match its size.
+    #[error("{0}")]
+    A(String),
+    /// The foreground's size is not the background's.
+    #[error("{0}")]
+    B(String),
+}
+
+/// A composite's error on the port of `imaging.composite` it concerns.
+impl From<CompositeError> for NodeError {
+    fn from(e: CompositeError) -> NodeError {
+        match e {
+            CompositeError::A(m) => NodeError::port(port!(Composite, a), m),
+            CompositeError::B(m) => NodeError::port(port!(Composite, b), m),
+        }
+    }
+}
+
 /// `b` combined onto `a`; both must have the same size.
-pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<Image, NodeError> {
+pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<Image, CompositeError> {
     if a.size() != b.size() {
-        return Err(NodeError::port(
-            port!(Composite, b),
-            format!("b is {} but a is {}; composite needs images of the same size", image_size_text(b), image_size_text(a)),
-        ));
+        return Err(CompositeError::B(format!(
+            "b is {} but a is {}; composite needs images of the same size",
+            image_size_text(b),
+            image_size_text(a)
+        )));
     }
     let (w, h) = a.size();
     let both_gray = a.channels() == Channels::Gray && b.channels() == Channels::Gray;
@@ -92,8 +115,7 @@ pub fn composite(a: &Image, b: &Image, mode: BlendMode, opacity: f32) -> Result<
         a.data().chunks_exact(4).zip(b.data().chunks_exact(4)).flat_map(|(p, q)| composite_rgba(p, q, mode, opacity)).collect()
     };
     let channels = if both_gray { Channels::Gray } else { Channels::Rgba };
-    Image::from_vec(w, h, channels, data)
-        .ok_or_else(|| NodeError::port(port!(Composite, a), "image data does not match its size"))
+    Image::from_vec(w, h, channels, data).ok_or_else(|| CompositeError::A("image data does not match its size".into()))
 }
 
 impl Cook for Composite {

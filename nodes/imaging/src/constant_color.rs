@@ -29,17 +29,24 @@ pub fn constant_color(width: u32, height: u32, color: [f32; 4]) -> Image {
     Image::from_vec(width, height, Channels::Rgba, data).unwrap_or_else(|| Image::new(width, height, Channels::Rgba))
 }
 
-/// `v` when it is a size the nodes here create (1..=[`MAX_SIZE`]), else an error on `port`: the
-/// port's range is only a hint to editors, and a 0 or huge image would fail later and less clearly.
-fn check_size(v: u32, port: &str) -> Result<u32, NodeError> {
-    if v >= 1 && i64::from(v) <= MAX_SIZE { Ok(v) } else { Err(NodeError::port(port, format!("{v} is outside 1..={MAX_SIZE}"))) }
-}
-
 impl Cook for ConstantColor {
     fn cook(self, _: &CookCtx) -> Result<Arc<Image>, NodeError> {
-        let width = check_size(self.width, port!(ConstantColor, width))?;
-        let height = check_size(self.height, port!(ConstantColor, height))?;
+        let width = ConstantColor::check_size(self.width, port!(ConstantColor, width))?;
+        let height = ConstantColor::check_size(self.height, port!(ConstantColor, height))?;
         Ok(Arc::new(constant_color(width, height, self.color)))
+    }
+}
+
+impl ConstantColor {
+    /// `v` when it is a size the nodes here create (1..=[`MAX_SIZE`]), else an error on `port`: the
+    /// port's range is only a hint to editors, and a 0 or huge image would fail later and less
+    /// clearly.
+    fn check_size(v: u32, port: &str) -> Result<u32, NodeError> {
+        if v >= 1 && i64::from(v) <= MAX_SIZE {
+            Ok(v)
+        } else {
+            Err(NodeError::port(port, format!("{v} is outside 1..={MAX_SIZE}")))
+        }
     }
 }
 

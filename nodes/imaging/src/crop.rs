@@ -32,25 +32,43 @@ pyrograph_core::node! {
     -> image: Arc<Image>
 }
 
-/// Resolves one axis of a crop: `(start, length)` within `size`, or an error naming the ports.
-fn crop_span(start: u32, len: u32, size: u32, ports: (&str, &str), img: &Image) -> Result<(u32, u32), NodeError> {
+/// Why a crop failed, by the setting it concerns (`Crop`'s cook names the matching port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CropError {
+    /// The left edge lies outside the image.
+    #[error("{0}")]
+    X(String),
+    /// The top edge lies outside the image.
+    #[error("{0}")]
+    Y(String),
+    /// The width reaches past the right edge.
+    #[error("{0}")]
+    Width(String),
+    /// The height reaches past the bottom edge.
+    #[error("{0}")]
+    Height(String),
+    /// The image's data does not match its size.
+    #[error("{0}")]
+    Image(String),
+}
+
+/// Resolves one axis of a crop: `(start, length)` within `size`, or the message for the start
+/// (`Err(Ok(..))`) or for the length (`Err(Err(..))`).
+fn crop_span(start: u32, len: u32, size: u32, img: &Image) -> Result<(u32, u32), Result<String, String>> {
     if start >= size {
-        return Err(NodeError::port(ports.0, format!("{start} is outside the {} image", image_size_text(img))));
+        return Err(Ok(format!("{start} is outside the {} image", image_size_text(img))));
     }
     let len = if len == 0 { size - start } else { len };
     if u64::from(start) + u64::from(len) > u64::from(size) {
-        return Err(NodeError::port(
-            ports.1,
-            format!("{} + {len} reaches past the edge of the {} image", start, image_size_text(img)),
-        ));
+        return Err(Err(format!("{} + {len} reaches past the edge of the {} image", start, image_size_text(img))));
     }
     Ok((start, len))
 }
 
 /// The `width × height` rectangle at `(x, y)`; 0 sizes reach the right / bottom edge.
-pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Image, NodeError> {
-    let (x, w) = crop_span(x, width, img.width(), (port!(Crop, x), port!(Crop, width)), img)?;
-    let (y, h) = crop_span(y, height, img.height(), (port!(Crop, y), port!(Crop, height)), img)?;
+pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Image, CropError> {
+    let (x, w) = crop_span(x, width, img.width(), img).map_err(|e| e.map_or_else(CropError::Width, CropError::X))?;
+    let (y, h) = crop_span(y, height, img.height(), img).map_err(|e| e.map_or_else(CropError::Height, CropError::Y))?;
     let n = img.channels().count();
     let row_len = img.width() as usize * n;
     let data: Vec<f32> = img
@@ -60,8 +78,20 @@ pub fn crop(img: &Image, x: u32, y: u32, width: u32, height: u32) -> Result<Imag
         .take(h as usize)
         .flat_map(|row| row.iter().skip(x as usize * n).take(w as usize * n).copied())
         .collect();
-    Image::from_vec(w, h, img.channels(), data)
-        .ok_or_else(|| NodeError::port(port!(Crop, image), "image data does not match its size"))
+    Image::from_vec(w, h, img.channels(), data).ok_or_else(|| CropError::Image("image data does not match its size".into()))
+}
+
+/// A crop's error on the port of `imaging.crop` it concerns.
+impl From<CropError> for NodeError {
+    fn from(e: CropError) -> NodeError {
+        match e {
+            CropError::X(m) => NodeError::port(port!(Crop, x), m),
+            CropError::Y(m) => NodeError::port(port!(Crop, y), m),
+            CropError::Width(m) => NodeError::port(port!(Crop, width), m),
+            CropError::Height(m) => NodeError::port(port!(Crop, height), m),
+            CropError::Image(m) => NodeError::port(port!(Crop, image), m),
+        }
+    }
 }
 
 impl Cook for Crop {
@@ -90,11 +120,11 @@ mod tests {
     #[test]
     fn crop_outside_the_image_names_port_and_size() {
         let img = Image::gray_from_fn(4, 3, |_, _| 0.0);
-        let err = crop(&img, 4, 0, 0, 0).unwrap_err();
+        let err = NodeError::from(crop(&img, 4, 0, 0, 0).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, message } if port == "x" && message.contains("4x3")), "{err}");
-        let err = crop(&img, 1, 0, 4, 0).unwrap_err();
+        let err = NodeError::from(crop(&img, 1, 0, 4, 0).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, message } if port == "width" && message.contains("4x3")), "{err}");
-        let err = crop(&img, 0, 1, 0, 3).unwrap_err();
+        let err = NodeError::from(crop(&img, 0, 1, 0, 3).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "height"), "{err}");
     }
 

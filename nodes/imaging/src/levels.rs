@@ -46,12 +46,29 @@ impl Cook for Levels {
         if self.white <= self.black {
             return Err(NodeError::port(port!(Levels, white), format!("{} must be above black {}", self.white, self.black)));
         }
-        Ok(Arc::new(levels(&self.image, &self)))
+        Ok(Arc::new(levels(&self.image, &self.settings())))
     }
 }
 
-impl Levels {
-    /// The remap of one colour sample; `white > black`.
+/// The mapping of `imaging.levels` as plain numbers: input black and white points, gamma, output
+/// range and whether to clamp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelMap {
+    /// Input value mapped to `out_black`.
+    pub black: f32,
+    /// Input value mapped to `out_white`; above `black`.
+    pub white: f32,
+    /// Gamma applied between the points (above 1 brightens the mid-tones).
+    pub gamma: f32,
+    /// Output value of `black`.
+    pub out_black: f32,
+    /// Output value of `white`.
+    pub out_white: f32,
+    /// Clamp to the points before the gamma.
+    pub clamp: bool,
+}
+
+impl LevelMap {
     fn apply(&self, x: f32) -> f32 {
         let t = (x - self.black) / (self.white - self.black);
         let t = if self.clamp { t.clamp(0.0, 1.0) } else { t };
@@ -61,8 +78,16 @@ impl Levels {
     }
 }
 
+impl Levels {
+    /// The node's mapping.
+    pub fn settings(&self) -> LevelMap {
+        let Levels { black, white, gamma, out_black, out_white, clamp, .. } = *self;
+        LevelMap { black, white, gamma, out_black, out_white, clamp }
+    }
+}
+
 /// `img` with its colour samples remapped by `p` (alpha untouched); `p.white > p.black`.
-pub fn levels(img: &Image, p: &Levels) -> Image {
+pub fn levels(img: &Image, p: &LevelMap) -> Image {
     let mut out = img.clone();
     let colour = match img.channels() {
         Channels::Gray => 1,
@@ -103,18 +128,18 @@ mod tests {
 
     #[test]
     fn known_values() {
-        let out = levels(&rgba([0.1, 0.4, 0.8, 0.3]), &params(0.2, 0.6, 1.0));
+        let out = levels(&rgba([0.1, 0.4, 0.8, 0.3]), &params(0.2, 0.6, 1.0).settings());
         assert_near(out.data(), &[0.0, 0.5, 1.0, 0.3], "black clips, mid maps linearly, white clips, alpha kept");
-        let out = levels(&rgba([0.25, 0.0, 1.0, 1.0]), &params(0.0, 1.0, 2.0));
+        let out = levels(&rgba([0.25, 0.0, 1.0, 1.0]), &params(0.0, 1.0, 2.0).settings());
         assert_near(out.data(), &[0.5, 0.0, 1.0, 1.0], "gamma 2 is a square root");
         let mut p = params(0.0, 0.5, 1.0);
         p.clamp = false;
         p.out_black = 0.1;
         p.out_white = 0.2;
-        let out = levels(&rgba([1.0, -0.5, 0.25, 1.0]), &p);
+        let out = levels(&rgba([1.0, -0.5, 0.25, 1.0]), &p.settings());
         assert_near(out.data(), &[0.3, 0.0, 0.15, 1.0], "unclamped, output range 0.1..0.2");
         let gray = Image::from_vec(2, 1, Channels::Gray, vec![0.2, 0.6]).unwrap();
-        assert_near(levels(&gray, &params(0.2, 0.6, 1.0)).data(), &[0.0, 1.0], "a gray image's one channel");
+        assert_near(levels(&gray, &params(0.2, 0.6, 1.0).settings()).data(), &[0.0, 1.0], "a gray image's one channel");
     }
 
     #[test]
@@ -142,7 +167,7 @@ mod tests {
         ) {
             let p = params(black, black + span, gamma);
             let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-            let (l, h) = (p.apply(lo), p.apply(hi));
+            let (l, h) = (p.settings().apply(lo), p.settings().apply(hi));
             prop_assert!(l <= h, "{lo} -> {l}, {hi} -> {h}");
             prop_assert!((0.0..=1.0).contains(&l) && (0.0..=1.0).contains(&h));
         }

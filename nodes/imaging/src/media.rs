@@ -31,10 +31,37 @@ pub enum IoError {
     /// The clip to write has no frames.
     #[error("the clip has no frames")]
     EmptyClip,
-    /// Anything else (decoding, encoding, a frame that failed, a cancelled cook): already a node
-    /// error, passed on as it is.
+    /// Decoding or encoding a file failed, or anything else no port is for; the message names the
+    /// file where there is one.
+    #[error("{0}")]
+    Message(String),
+    /// Writing frame `frame` of a clip failed.
+    #[error("frame {frame}: {source}")]
+    Frame {
+        /// Frame index within the clip.
+        frame: usize,
+        /// Why it failed.
+        source: Box<IoError>,
+    },
+    /// A node error met on the way (a clip's frame that failed upstream, a cancelled cook),
+    /// passed on as it is.
     #[error(transparent)]
     Other(#[from] NodeError),
+}
+
+/// The error of an [`IoError`] that names no port: its message, a failed frame as the node error
+/// of that frame (once, however often it was wrapped), and a node error as it was.
+impl From<IoError> for NodeError {
+    fn from(e: IoError) -> NodeError {
+        match e {
+            IoError::Other(e) => e,
+            IoError::Frame { frame, source } => match NodeError::from(*source) {
+                e @ NodeError::Frame { .. } => e,
+                e => NodeError::Frame { frame, source: Box::new(e) },
+            },
+            e => NodeError::msg(e.to_string()),
+        }
+    }
 }
 
 /// How a node turns an [`IoError`] into its own error, naming its ports. A video clip keeps its

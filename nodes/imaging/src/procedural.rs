@@ -67,43 +67,48 @@ pub fn flame_ramp(t: f32) -> [f32; 3] {
     [c0[0] + (c1[0] - c0[0]) * f, c0[1] + (c1[1] - c0[1]) * f, c0[2] + (c1[2] - c0[2]) * f]
 }
 
-/// Frame `frame` of the flame as straight-alpha RGBA (alpha = intensity).
-pub fn turbulence_flame_frame(p: &TurbulenceFlame, frame: usize) -> Image {
-    let fbm: Fbm<Perlin> = Fbm::new(p.seed).set_octaves(p.octaves.clamp(1, 8)).set_frequency(1.0);
-    let t = frame as f64 / p.timeline.fps.max(1e-6);
-    let (w, h) = (p.width as usize, p.height as usize);
-    let mut data = vec![0.0f32; w * h * 4];
-    data.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
-        // v: 0 at the flame's base (near the bottom), 1 at its nominal tip.
-        let v = ((h - 1 - y) as f64 / h as f64 - 0.16) / p.height_fraction;
-        for (x, px) in row.chunks_exact_mut(4).enumerate() {
-            let u = (x as f64 / w as f64 - 0.5) / p.base_width;
-            let i = flame_intensity(&fbm, p, u, v, t) as f32;
-            let c = flame_ramp(i);
-            px.copy_from_slice(&[c[0], c[1], c[2], i.min(1.0)]);
-        }
-    });
-    Image::from_vec(p.width, p.height, Channels::Rgba, data).unwrap_or_else(|| Image::new(p.width, p.height, Channels::Rgba))
-}
+impl TurbulenceFlame {
+    /// Frame `frame` of the flame as straight-alpha RGBA (alpha = intensity).
+    pub fn frame_image(&self, frame: usize) -> Image {
+        let p = self;
+        let fbm: Fbm<Perlin> = Fbm::new(p.seed).set_octaves(p.octaves.clamp(1, 8)).set_frequency(1.0);
+        let t = frame as f64 / p.timeline.fps.max(1e-6);
+        let (w, h) = (p.width as usize, p.height as usize);
+        let mut data = vec![0.0f32; w * h * 4];
+        data.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
+            // v: 0 at the flame's base (near the bottom), 1 at its nominal tip.
+            let v = ((h - 1 - y) as f64 / h as f64 - 0.16) / p.height_fraction;
+            for (x, px) in row.chunks_exact_mut(4).enumerate() {
+                let u = (x as f64 / w as f64 - 0.5) / p.base_width;
+                let i = p.intensity(&fbm, u, v, t) as f32;
+                let c = flame_ramp(i);
+                px.copy_from_slice(&[c[0], c[1], c[2], i.min(1.0)]);
+            }
+        });
+        Image::from_vec(p.width, p.height, Channels::Rgba, data).unwrap_or_else(|| Image::new(p.width, p.height, Channels::Rgba))
+    }
 
-fn flame_intensity(fbm: &Fbm<Perlin>, p: &TurbulenceFlame, u: f64, v: f64, t: f64) -> f64 {
-    if !(-0.3..=1.8).contains(&v) {
-        return 0.0;
+    /// The flame's intensity (0..1) at `(u, v)` (across the base, up the height) at time `t`.
+    fn intensity(&self, fbm: &Fbm<Perlin>, u: f64, v: f64, t: f64) -> f64 {
+        let p = self;
+        if !(-0.3..=1.8).contains(&v) {
+            return 0.0;
+        }
+        // Noise sampled in a frame that scrolls upward, so features rise through the flame; it grows
+        // with height, as real flames are laminar at the base and torn at the tip.
+        let n = fbm.get([u * 2.0, (v - t * p.speed) * 2.4, t * 0.35]);
+        let sway = 0.22 * v * v * fbm.get([0.0, t * 0.45, 7.3]);
+        // A teardrop: round base, widest a quarter of the way up, pointed tip.
+        let s = ((v + 0.2) / 1.2).clamp(0.0, 1.0);
+        let half_width = 0.5 * (std::f64::consts::PI * s).sin().max(0.0).powf(0.6) * (1.0 - 0.45 * s);
+        if half_width < 1e-3 {
+            return 0.0;
+        }
+        let d = (u - sway).abs() / half_width;
+        let edge = 1.0 - d * d;
+        let body = edge + p.turbulence * n * (0.25 + v) - 0.45 * v.max(0.0);
+        (body * 1.3).clamp(0.0, 1.0)
     }
-    // Noise sampled in a frame that scrolls upward, so features rise through the flame; it grows
-    // with height, as real flames are laminar at the base and torn at the tip.
-    let n = fbm.get([u * 2.0, (v - t * p.speed) * 2.4, t * 0.35]);
-    let sway = 0.22 * v * v * fbm.get([0.0, t * 0.45, 7.3]);
-    // A teardrop: round base, widest a quarter of the way up, pointed tip.
-    let s = ((v + 0.2) / 1.2).clamp(0.0, 1.0);
-    let half_width = 0.5 * (std::f64::consts::PI * s).sin().max(0.0).powf(0.6) * (1.0 - 0.45 * s);
-    if half_width < 1e-3 {
-        return 0.0;
-    }
-    let d = (u - sway).abs() / half_width;
-    let edge = 1.0 - d * d;
-    let body = edge + p.turbulence * n * (0.25 + v) - 0.45 * v.max(0.0);
-    (body * 1.3).clamp(0.0, 1.0)
 }
 
 /// The flame's frames, made on request.
@@ -114,7 +119,7 @@ impl FrameSource for FlameSource {
         self.0.timeline.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::Image(Arc::new(turbulence_flame_frame(&self.0, index))))
+        Ok(Value::Image(Arc::new(self.0.frame_image(index))))
     }
 }
 
@@ -157,7 +162,7 @@ mod tests {
 
     #[test]
     fn flame_is_bright_at_the_base_centre_and_dark_in_the_corners() {
-        let img = turbulence_flame_frame(&small(), 0);
+        let img = small().frame_image(0);
         let alpha = |x, y| img.pixel(x, y)[3];
         assert!(alpha(16, 40) > 0.5, "base centre alpha {}", alpha(16, 40));
         assert_eq!(alpha(0, 0), 0.0);
@@ -167,7 +172,7 @@ mod tests {
     #[test]
     fn frames_are_deterministic_and_animated() {
         let p = small();
-        assert_eq!(turbulence_flame_frame(&p, 5), turbulence_flame_frame(&p, 5));
-        assert_ne!(turbulence_flame_frame(&p, 5), turbulence_flame_frame(&p, 6));
+        assert_eq!(p.frame_image(5), p.frame_image(5));
+        assert_ne!(p.frame_image(5), p.frame_image(6));
     }
 }

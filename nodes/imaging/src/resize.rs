@@ -56,15 +56,36 @@ pyrograph_core::node! {
     -> image: Arc<Image>
 }
 
+/// Why an image cannot be resized, by the setting it concerns (`Resize`'s cook names the port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ResizeError {
+    /// The image is empty.
+    #[error("{0}")]
+    Image(String),
+    /// No size was asked for (width and height both 0).
+    #[error("{0}")]
+    Size(String),
+}
+
+/// A resize's error on the port of `imaging.resize` it concerns.
+impl From<ResizeError> for NodeError {
+    fn from(e: ResizeError) -> NodeError {
+        match e {
+            ResizeError::Image(m) => NodeError::port(port!(Resize, image), m),
+            ResizeError::Size(m) => NodeError::port(port!(Resize, width), m),
+        }
+    }
+}
+
 /// The output size, filling a 0 side from the other one to keep the aspect ratio.
-pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32), NodeError> {
+pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32), ResizeError> {
     let (w0, h0) = (f64::from(img.width()), f64::from(img.height()));
     if img.width() == 0 || img.height() == 0 {
-        return Err(NodeError::port(port!(Resize, image), format!("cannot resize an empty {} image", image_size_text(img))));
+        return Err(ResizeError::Image(format!("cannot resize an empty {} image", image_size_text(img))));
     }
     let scaled = |v: f64| (v.round() as u32).max(1);
     match (width, height) {
-        (0, 0) => Err(NodeError::port(port!(Resize, width), "width and height are both 0; set at least one of them")),
+        (0, 0) => Err(ResizeError::Size("width and height are both 0; set at least one of them".into())),
         (0, h) => Ok((scaled(w0 * f64::from(h) / h0), h)),
         (w, 0) => Ok((w, scaled(h0 * f64::from(w) / w0))),
         (w, h) => Ok((w, h)),
@@ -72,7 +93,7 @@ pub fn resize_target(img: &Image, width: u32, height: u32) -> Result<(u32, u32),
 }
 
 /// `img` scaled to `width × height` (0 keeps the aspect ratio) with `filter`.
-pub fn resize(img: &Image, width: u32, height: u32, filter: FilterType) -> Result<Image, NodeError> {
+pub fn resize(img: &Image, width: u32, height: u32, filter: FilterType) -> Result<Image, ResizeError> {
     let (w, h) = resize_target(img, width, height)?;
     // imageops clamps float samples to 0..1; scaling into that range first keeps HDR values.
     let peak = img.data().iter().fold(1.0_f32, |m, &v| m.max(v));

@@ -45,12 +45,41 @@ pub fn partner_frame(index: usize, len: usize) -> usize {
     if index + 1 < len { index + 1 } else { index.saturating_sub(1) }
 }
 
+/// Why smoke cannot be made, by the setting it concerns (`Smoke`'s cook names the port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SmokeError {
+    /// Two frames of the clip differ in size.
+    #[error("a frame {0}")]
+    Clip(String),
+    /// The threshold is outside 0–255.
+    #[error("{0}")]
+    Threshold(String),
+    /// The blur is not a finite number.
+    #[error("{0}")]
+    Blur(String),
+    /// Anything no setting is to blame for.
+    #[error("{0}")]
+    Message(String),
+}
+
+/// A smoke error on the port of `imaging.smoke` it concerns.
+impl From<SmokeError> for NodeError {
+    fn from(e: SmokeError) -> NodeError {
+        match e {
+            SmokeError::Clip(m) => NodeError::port(port!(Smoke, clip), format!("'{}' {m}", port!(Smoke, clip))),
+            SmokeError::Threshold(m) => NodeError::port(port!(SmokeParams, threshold), m),
+            SmokeError::Blur(m) => NodeError::port(port!(SmokeParams, blur), m),
+            SmokeError::Message(m) => NodeError::msg(m),
+        }
+    }
+}
+
 /// Smoke of one frame from the `current` and `next` original frames (§6.3 steps 1–5):
 /// gray difference (signed, clamped to 0..1, or absolute), threshold, blur, colour multiply.
 /// The result is opaque RGBA.
-pub fn smoke_frame(current: &Image, next: &Image, params: &SmokeParams) -> Result<Image, NodeError> {
-    check_size(current, next, port!(Smoke, clip))?;
-    let t = check_threshold(params.threshold, port!(SmokeParams, threshold))? / 255.0;
+pub fn smoke_frame(current: &Image, next: &Image, params: &SmokeParams) -> Result<Image, SmokeError> {
+    check_size(current, next).map_err(SmokeError::Clip)?;
+    let t = check_threshold(params.threshold).map_err(SmokeError::Threshold)? / 255.0;
     let (a, b) = (to_gray(current, GrayMode::Rec601), to_gray(next, GrayMode::Rec601));
     let diff: Vec<f32> = a
         .data()
@@ -63,11 +92,12 @@ pub fn smoke_frame(current: &Image, next: &Image, params: &SmokeParams) -> Resul
         })
         .collect();
     let (w, h) = current.size();
-    let diff = Image::from_vec(w, h, Channels::Gray, diff).ok_or_else(|| NodeError::msg("image data does not match its size"))?;
+    let mismatch = || SmokeError::Message("image data does not match its size".into());
+    let diff = Image::from_vec(w, h, Channels::Gray, diff).ok_or_else(mismatch)?;
     let blurred = gaussian_blur(&diff, params.blur);
     let c = params.color;
     let data = blurred.data().iter().flat_map(|&v| [v * c[0], v * c[1], v * c[2], 1.0]).collect();
-    Image::from_vec(w, h, Channels::Rgba, data).ok_or_else(|| NodeError::msg("image data does not match its size"))
+    Image::from_vec(w, h, Channels::Rgba, data).ok_or_else(mismatch)
 }
 
 /// The frames of the smoke clip, computed on demand from the original clip.
@@ -88,10 +118,10 @@ impl FrameSource for SmokeSource {
 }
 
 /// The smoke clip of an original clip, lazily per frame.
-pub fn smoke_clip(clip: &Clip, params: SmokeParams) -> Result<Clip, NodeError> {
-    check_threshold(params.threshold, port!(SmokeParams, threshold))?;
+pub fn smoke_clip(clip: &Clip, params: SmokeParams) -> Result<Clip, SmokeError> {
+    check_threshold(params.threshold).map_err(SmokeError::Threshold)?;
     if !params.blur.is_finite() {
-        return Err(NodeError::port(port!(SmokeParams, blur), "must be a finite number"));
+        return Err(SmokeError::Blur("must be a finite number".into()));
     }
     let mut h = Fingerprinter::new();
     let absolute = params.difference == Difference::Absolute;

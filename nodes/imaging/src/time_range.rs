@@ -41,37 +41,51 @@ impl FrameSource for RangeSource {
     }
 }
 
+/// Why a range does not fit a clip, by the end it concerns (`TimeRange`'s cook names the port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RangeError {
+    /// The first frame lies outside the clip.
+    #[error("{0}")]
+    First(String),
+    /// The last frame lies outside the clip, or before the first.
+    #[error("{0}")]
+    Last(String),
+}
+
+/// A range's error on the port of `imaging.time_range` it concerns.
+impl From<RangeError> for NodeError {
+    fn from(e: RangeError) -> NodeError {
+        match e {
+            RangeError::First(m) => NodeError::port(port!(TimeRange, first), m),
+            RangeError::Last(m) => NodeError::port(port!(TimeRange, last), m),
+        }
+    }
+}
+
 /// Resolves `first..=last` (negative `last` counts from the end) against a clip of `len` frames.
-pub fn resolve_range(len: usize, first: i64, last: i64) -> Result<(usize, usize), NodeError> {
+pub fn resolve_range(len: usize, first: i64, last: i64) -> Result<(usize, usize), RangeError> {
     let frames = |len: usize| {
         if len == 0 { "it has no frames".to_string() } else { format!("frames 0-{}", len - 1) }
     };
     let len_i = i64::try_from(len).unwrap_or(i64::MAX);
     if first < 0 || first >= len_i {
-        return Err(NodeError::port(
-            port!(TimeRange, first),
-            format!("frame {first} is outside the {len}-frame clip ({})", frames(len)),
-        ));
+        return Err(RangeError::First(format!("frame {first} is outside the {len}-frame clip ({})", frames(len))));
     }
     let last_abs = if last < 0 { len_i + last } else { last };
     if last_abs < 0 || last_abs >= len_i {
-        return Err(NodeError::port(
-            port!(TimeRange, last),
-            format!("frame {last} is outside the {len}-frame clip ({})", frames(len)),
-        ));
+        return Err(RangeError::Last(format!("frame {last} is outside the {len}-frame clip ({})", frames(len))));
     }
     if last_abs < first {
-        return Err(NodeError::port(
-            port!(TimeRange, last),
-            format!("the range {first}-{last_abs} is empty: last must not be before first (the clip has {len} frames)"),
-        ));
+        return Err(RangeError::Last(format!(
+            "the range {first}-{last_abs} is empty: last must not be before first (the clip has {len} frames)"
+        )));
     }
     // Both are within 0..len, so they fit usize.
     Ok((first as usize, last_abs as usize))
 }
 
 /// The frames `first..=last` of `clip`, computed lazily from it.
-pub fn time_range(clip: &Clip, first: i64, last: i64) -> Result<Clip, NodeError> {
+pub fn time_range(clip: &Clip, first: i64, last: i64) -> Result<Clip, RangeError> {
     let (first, last) = resolve_range(clip.len(), first, last)?;
     let mut h = Fingerprinter::new();
     ("imaging.time_range", clip.fingerprint(), first, last).hash(&mut h);
@@ -113,11 +127,11 @@ mod tests {
     #[test]
     fn time_range_errors_name_port_and_length() {
         let clip = int_clip(5);
-        let err = time_range(&clip, 5, -1).unwrap_err();
+        let err = NodeError::from(time_range(&clip, 5, -1).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, message } if port == "first" && message.contains("5-frame")), "{err}");
-        let err = time_range(&clip, 0, 5).unwrap_err();
+        let err = NodeError::from(time_range(&clip, 0, 5).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("0-4")), "{err}");
-        let err = time_range(&clip, 3, 2).unwrap_err();
+        let err = NodeError::from(time_range(&clip, 3, 2).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, message } if port == "last" && message.contains("empty")), "{err}");
         assert!(time_range(&int_clip(0), 0, -1).is_err());
     }

@@ -7,9 +7,9 @@ use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::declare::{Anim, Cook};
+use pyrograph_core::declare::{Anim, AnimError, Cook};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
+use pyrograph_core::{AtPort, Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 
 use crate::flame::{Ramp, unit_random};
 use crate::types::WindField;
@@ -88,7 +88,7 @@ fn spark_path(root: Vec3, dir: Vec3, birth: f64, until: f64, fps: f64, wind: &Wi
 /// is frame 0's, so the first frame is already steady. A constant rate gives births at j / rate; an
 /// animated one is integrated at the sub-steps (the rate held over each), from frame 0 on every
 /// call, so a frame cooked alone sees the same births as in a full cook.
-fn births(rate: &Anim<f32>, fps: f64, now: f64, longest: f64) -> Result<Vec<(i64, f64)>, NodeError> {
+fn births(rate: &Anim<f32>, fps: f64, now: f64, longest: f64) -> Result<Vec<(i64, f64)>, AnimError> {
     let from = now - longest;
     if !rate.is_animated() {
         let r = *rate.value() as f64;
@@ -126,6 +126,17 @@ fn births(rate: &Anim<f32>, fps: f64, now: f64, longest: f64) -> Result<Vec<(i64
     Ok(out)
 }
 
+/// Why a frame of sparks could not be simulated.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EmberError {
+    /// An animated parameter could not be sampled.
+    #[error(transparent)]
+    Param(#[from] AnimError),
+    /// The wind field drove a spark to a non-finite position.
+    #[error("spark {0}: the wind field drives it to a non-finite position")]
+    Wind(i64),
+}
+
 /// Frame `frame` of sparks from `roots`: every spark alive at the frame, as a streak of
 /// `samples` particles along its last `shutter` frames (group = spark, `trails`).
 pub fn simulate_embers(
@@ -134,7 +145,7 @@ pub fn simulate_embers(
     p: &EmberParams,
     fps: f64,
     frame: usize,
-) -> Result<Particles, NodeError> {
+) -> Result<Particles, EmberError> {
     let mut particles = Vec::new();
     if roots.is_empty() || (!p.rate.is_animated() && *p.rate.value() <= 0.0) {
         return Ok(Particles { particles, sides: 8, time: frame as f32, trails: true });
@@ -156,10 +167,7 @@ pub fn simulate_embers(
         let dir = (root_dir.normalize_or(Vec3::Y) + tilt * (2.0 * p.spread)).normalize_or(Vec3::Y);
         let path = spark_path(root, dir, birth, now, fps, &sampler, p);
         if path.iter().any(|q| !q.is_finite()) {
-            return Err(NodeError::port(
-                port!(Embers, wind),
-                format!("spark {j}: the wind field drives it to a non-finite position"),
-            ));
+            return Err(EmberError::Wind(j));
         }
         let color = p.color_ramp.eval((age / life) as f32);
         let edge = [color[0], color[1], color[2], 0.0];
@@ -221,7 +229,11 @@ impl FrameSource for EmberSource {
         self.frames
     }
     fn frame(&self, index: usize, _ctx: &CookCtx) -> Result<Value, NodeError> {
-        Ok(Value::custom(Arc::new(simulate_embers(&self.roots, &self.wind, &self.params, self.fps, index)?)))
+        let sparks = simulate_embers(&self.roots, &self.wind, &self.params, self.fps, index).map_err(|e| match e {
+            EmberError::Param(e) => e.into(),
+            wind @ EmberError::Wind(_) => NodeError::port(port!(Embers, wind), wind.to_string()),
+        })?;
+        Ok(Value::custom(Arc::new(sparks)))
     }
 }
 
@@ -232,7 +244,7 @@ impl Cook for Embers {
         if let Some(k) = roots.iter().position(|(p, d)| !p.is_finite() || !d.is_finite()) {
             return Err(NodeError::port(port!(Embers, roots), format!("root {k} has a non-finite position or direction")));
         }
-        validate_wind(&self.wind, port!(Embers, wind))?;
+        validate_wind(&self.wind).at_port(port!(Embers, wind))?;
         let mut h = Fingerprinter::new();
         "particles.embers".hash(&mut h);
         Value::custom(self.roots.clone()).hash_into(&mut h);

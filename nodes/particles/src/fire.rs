@@ -11,7 +11,7 @@ use pyrograph_render::ports::CameraPorts;
 use pyrograph_render::{Blend, DrawList, View, render_image};
 use rayon::prelude::*;
 
-use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace, validate_params};
+use crate::flame::{FlameColors, FlameParams, Ramp, Root, Shape, trace};
 use crate::lit_mesh::{MeshShading, draw_mesh, holdout_mesh};
 use crate::passes::{RenderPass, depth_image, emission_image};
 use crate::render::{LightParams, flame_lights, no_particles, particle_lists};
@@ -185,6 +185,20 @@ fn draw_char(view: &View, chars: &Particles) -> DrawList {
     list
 }
 
+/// Why a frame of a burning mesh could not be drawn.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum FireError {
+    /// A flame parameter no flame can be made with: its field (port) and why.
+    #[error("port '{0}': {1}")]
+    Param(&'static str, String),
+    /// The wind field is not finite.
+    #[error("{0}")]
+    Wind(String),
+    /// The mesh cannot be drawn.
+    #[error("{0}")]
+    Mesh(&'static str),
+}
+
 /// One frame of a burning mesh (Perry §3.4): the mesh shaded by a key light and the flame lights,
 /// char discs laid on the surface (blended "over"), and the root flames added to saturation; or
 /// one of its compositing passes (the flames alone behind the mesh as a holdout, the mesh's depth).
@@ -196,11 +210,13 @@ pub fn render_fire(
     chars: &Particles,
     look: &FireLook,
     pass: RenderPass,
-) -> Result<Image, NodeError> {
-    validate_params(&look.flame())?;
-    validate_wind(wind, port!(RenderFire, wind))?;
+) -> Result<Image, FireError> {
+    if let Some((field, why)) = look.flame().problem() {
+        return Err(FireError::Param(field, why));
+    }
+    validate_wind(wind).map_err(FireError::Wind)?;
     if mesh.normals.len() != mesh.triangles.len() {
-        return Err(NodeError::port(port!(RenderFire, mesh), "the mesh has no face normals: load it with particles.mesh_load"));
+        return Err(FireError::Mesh("the mesh has no face normals: load it with particles.mesh_load"));
     }
     let sampler = WindSampler::new(wind);
     let flames = root_flames(state, &sampler, look);
@@ -268,7 +284,12 @@ impl Cook for RenderFire {
     fn cook(self, ctx: &CookCtx) -> Result<Arc<Image>, NodeError> {
         let view = self.camera.view()?;
         ctx.check_cancel()?;
-        let image = render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look, self.pass)?;
+        let image =
+            render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look, self.pass).map_err(|e| match e {
+                FireError::Param(port, why) => NodeError::port(port, why),
+                FireError::Wind(why) => NodeError::port(port!(RenderFire, wind), why),
+                FireError::Mesh(why) => NodeError::port(port!(RenderFire, mesh), why),
+            })?;
         Ok(Arc::new(image))
     }
 }

@@ -10,7 +10,7 @@ use noise::{NoiseFn, Perlin};
 use pyrograph_core::declare::{Anim, Cook, Port};
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::value::RampKeys;
-use pyrograph_core::{Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
+use pyrograph_core::{AtPort, Clip, ClipOf, CookCtx, FrameSource, NodeError, PortType, Value, port};
 use rayon::prelude::*;
 
 use crate::types::WindField;
@@ -192,6 +192,41 @@ pyrograph_core::ports! {
 }
 
 impl FlameParams {
+    /// What is wrong with the parameters, as (the port, why), or `None` when a flame can be
+    /// simulated with them.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        let p = self;
+        if p.steps == 0 {
+            return Some((
+                port!(FlameParams, steps),
+                "must be at least 1: a flame is the trajectory of at least one particle step".into(),
+            ));
+        }
+        if p.triangles < 3 {
+            return Some((port!(FlameParams, triangles), format!("a particle needs at least 3 triangles, got {}", p.triangles)));
+        }
+        for (name, v) in [
+            (port!(FlameParams, dt), p.dt),
+            (port!(FlameParams, speed), p.speed),
+            (port!(FlameParams, size), *p.size.value()),
+            (port!(FlameParams, size_jitter), p.size_jitter),
+            (port!(FlameParams, lifetime_jitter), p.lifetime_jitter),
+        ] {
+            if !v.is_finite() {
+                return Some((name, format!("must be finite, got {v}")));
+            }
+        }
+        if p.lifetime == 0 {
+            return Some((port!(FlameParams, lifetime), "must be at least 1 frame".into()));
+        }
+        None
+    }
+
+    /// Checks the parameters a flame is made with; errors name the port.
+    pub fn validate(&self) -> Result<(), NodeError> {
+        self.problem().map_or(Ok(()), |(port, why)| Err(NodeError::port(port, why)))
+    }
+
     /// The parameters as they are at `frame` of a clip at `fps`: animated ones sampled (a flame is a
     /// long exposure at its frame, so one sample serves the frame). Errors name the port and frame.
     pub fn at_frame(&self, frame: f64, fps: f64) -> Result<FlameParams, NodeError> {
@@ -245,35 +280,15 @@ pub fn unit_random(seed: u32, flame: usize, salt: u64) -> f32 {
     (z >> 40) as f32 / (1u64 << 24) as f32
 }
 
-/// Checks parameters that no port range can: errors name the port.
-pub fn validate_params(p: &FlameParams) -> Result<(), NodeError> {
-    if p.steps == 0 {
-        return Err(NodeError::port(
-            port!(FlameParams, steps),
-            "must be at least 1: a flame is the trajectory of at least one particle step",
-        ));
-    }
-    if p.triangles < 3 {
-        return Err(NodeError::port(
-            port!(FlameParams, triangles),
-            format!("a particle needs at least 3 triangles, got {}", p.triangles),
-        ));
-    }
-    for (name, v) in [
-        (port!(FlameParams, dt), p.dt),
-        (port!(FlameParams, speed), p.speed),
-        (port!(FlameParams, size), *p.size.value()),
-        (port!(FlameParams, size_jitter), p.size_jitter),
-        (port!(FlameParams, lifetime_jitter), p.lifetime_jitter),
-    ] {
-        if !v.is_finite() {
-            return Err(NodeError::port(name, format!("must be finite, got {v}")));
-        }
-    }
-    if p.lifetime == 0 {
-        return Err(NodeError::port(port!(FlameParams, lifetime), "must be at least 1 frame"));
-    }
-    Ok(())
+/// Why a frame of flames could not be simulated.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum FlameError {
+    /// A parameter no flame can be made with: its field (port) and why.
+    #[error("port '{0}': {1}")]
+    Param(&'static str, String),
+    /// The wind field is not finite, or drives a particle to a non-finite position.
+    #[error("{0}")]
+    Wind(String),
 }
 
 /// The positions and velocities of one flame's particle over its `steps` steps at time `t`
@@ -298,9 +313,11 @@ pub fn trace(root: &Root, wind: &WindSampler, p: &FlameParams, t: f32) -> Vec<(V
 
 /// Frame `frame` of flames rooted at `roots`: every live flame's trajectory as fuzzy particles
 /// (group = flame index, weight = age in steps), in root order. Deterministic for given inputs.
-pub fn simulate_frame(roots: &[Root], wind: &WindField, p: &FlameParams, frame: usize) -> Result<Particles, NodeError> {
-    validate_params(p)?;
-    validate_wind(wind, port!(ParticleFlame, wind))?;
+pub fn simulate_frame(roots: &[Root], wind: &WindField, p: &FlameParams, frame: usize) -> Result<Particles, FlameError> {
+    if let Some((field, why)) = p.problem() {
+        return Err(FlameError::Param(field, why));
+    }
+    validate_wind(wind).map_err(FlameError::Wind)?;
     let sampler = WindSampler::new(wind);
     let t = frame as f32;
     let per_flame: Vec<Vec<Particle>> = roots
@@ -341,7 +358,7 @@ fn flame_particles(
     p: &FlameParams,
     frame: usize,
     t: f32,
-) -> Result<Vec<Particle>, NodeError> {
+) -> Result<Vec<Particle>, FlameError> {
     let Some((life, age)) = flame_age(i, p, frame) else { return Ok(Vec::new()) };
     let fade =
         if p.fade == 0 { 1.0 } else { ((age + 1) as f32 / p.fade as f32).min((life - age) as f32 / p.fade as f32).min(1.0) };
@@ -352,10 +369,7 @@ fn flame_particles(
         path.iter_mut().for_each(|(q, _)| *q = root.position + (*q - root.position) * stretch);
     }
     if path.iter().any(|(q, v)| !q.is_finite() || !v.is_finite()) {
-        return Err(NodeError::port(
-            port!(ParticleFlame, wind),
-            format!("flame {i}: the wind field drives the particle to a non-finite position"),
-        ));
+        return Err(FlameError::Wind(format!("flame {i}: the wind field drives the particle to a non-finite position")));
     }
     let n = path.len();
     Ok(path
@@ -472,10 +486,10 @@ impl Cook for Roots {
         let roots = layout_roots(
             self.layout,
             self.count,
-            Vec3::from_array(finite3(self.center, port!(Roots, center))?),
+            Vec3::from_array(finite3(self.center).at_port(port!(Roots, center))?),
             self.spacing,
             self.radius,
-            Vec3::from_array(finite3(self.direction, port!(Roots, direction))?),
+            Vec3::from_array(finite3(self.direction).at_port(port!(Roots, direction))?),
             self.spread,
             self.seed,
         );
@@ -525,6 +539,17 @@ struct FlameSource {
     fps: f64,
 }
 
+impl ParticleFlame {
+    /// A flame simulation's error as the node's: a parameter's names its port, the wind's the wind
+    /// port.
+    fn error(e: FlameError) -> NodeError {
+        match e {
+            FlameError::Param(port, why) => NodeError::port(port, why),
+            FlameError::Wind(why) => NodeError::port(port!(ParticleFlame, wind), why),
+        }
+    }
+}
+
 impl FrameSource for FlameSource {
     fn len(&self) -> usize {
         self.frames
@@ -533,7 +558,7 @@ impl FrameSource for FlameSource {
         // Frame T is a long exposure at time T, so an animated wind or size is sampled once, at T.
         let wind = self.wind.at_frame(index as f64, self.fps)?;
         let params = self.params.at_frame(index as f64, self.fps)?;
-        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &wind, &params, index)?)))
+        Ok(Value::custom(Arc::new(simulate_frame(&self.roots, &wind, &params, index).map_err(ParticleFlame::error)?)))
     }
 }
 
@@ -543,8 +568,8 @@ impl Cook for ParticleFlame {
         if let Some(k) = roots.iter().position(|r| !r.position.is_finite() || !r.direction.is_finite()) {
             return Err(NodeError::port(port!(ParticleFlame, roots), format!("root {k} has a non-finite position or direction")));
         }
-        validate_wind(&self.wind, port!(ParticleFlame, wind))?;
-        validate_params(&self.params)?;
+        validate_wind(&self.wind).at_port(port!(ParticleFlame, wind))?;
+        self.params.validate()?;
         let mut h = Fingerprinter::new();
         "particles.particle_flame".hash(&mut h);
         Value::custom(self.roots.clone()).hash_into(&mut h);

@@ -7,7 +7,7 @@ use crate::types::{LargeWind, WindAnimation, WindField};
 use glam::{DVec3, Vec3};
 use noise::permutationtable::{NoiseHasher, PermutationTable};
 use pyrograph_core::declare::{Anim, Cook};
-use pyrograph_core::{CookCtx, NodeError, port};
+use pyrograph_core::{AtPort, CookCtx, NodeError, port};
 
 /// The world's up axis `ĵ`, along which eq. 3.1 measures height and time scrolls the noise.
 pub const UP: Vec3 = Vec3::Y;
@@ -118,8 +118,8 @@ fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
-/// Checks every number of `wind` is finite; the error names `port` and the field.
-pub fn validate_wind(wind: &WindField, port: &str) -> Result<(), NodeError> {
+/// Checks every number of `wind` is finite; the error names the field (the node names its port).
+pub fn validate_wind(wind: &WindField) -> Result<(), String> {
     let mut fields: Vec<(&str, f32)> =
         vec![("k_g", wind.k_g), ("C", wind.noise_c), ("k_p", wind.k_p), ("k_s", wind.k_s), ("height_unit", wind.height_unit)];
     fields.extend(wind.gravity.iter().map(|g| ("gravity", *g)));
@@ -133,8 +133,8 @@ pub fn validate_wind(wind: &WindField, port: &str) -> Result<(), NodeError> {
         }
     }
     match fields.iter().find(|(_, v)| !v.is_finite()) {
-        Some((name, v)) => Err(NodeError::port(port, format!("wind {name} must be finite, got {v}"))),
-        None if wind.height_unit <= 0.0 => Err(NodeError::port(port, "wind height_unit must be positive")),
+        Some((name, v)) => Err(format!("wind {name} must be finite, got {v}")),
+        None if wind.height_unit <= 0.0 => Err("wind height_unit must be positive".to_string()),
         None => Ok(()),
     }
 }
@@ -274,17 +274,13 @@ pyrograph_core::node! {
     -> wind: Arc<WindField>
 }
 
-/// `v` when every component is finite, else an error naming `port`.
-pub(crate) fn finite3(v: [f32; 3], port: &str) -> Result<[f32; 3], NodeError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(v)
-    } else {
-        Err(NodeError::port(port, format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2])))
-    }
+/// `v` when every component is finite, else why not (the node names the port).
+pub(crate) fn finite3(v: [f32; 3]) -> Result<[f32; 3], String> {
+    if v.iter().all(|x| x.is_finite()) { Ok(v) } else { Err(format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2])) }
 }
 
-fn finite(v: f32, port: &str) -> Result<f32, NodeError> {
-    if v.is_finite() { Ok(v) } else { Err(NodeError::port(port, format!("must be finite, got {v}"))) }
+fn finite(v: f32) -> Result<f32, String> {
+    if v.is_finite() { Ok(v) } else { Err(format!("must be finite, got {v}")) }
 }
 
 impl WindFieldNode {
@@ -292,25 +288,25 @@ impl WindFieldNode {
     pub fn field(&self) -> Result<WindField, NodeError> {
         let large = match self.large_scale {
             LargeScale::None => LargeWind::None,
-            LargeScale::Constant => LargeWind::Constant(finite3(*self.wind.value(), port!(WindFieldNode, wind))?),
+            LargeScale::Constant => LargeWind::Constant(finite3(*self.wind.value()).at_port(port!(WindFieldNode, wind))?),
             LargeScale::MovingObject => {
-                LargeWind::MovingObject(finite3(self.object_velocity, port!(WindFieldNode, object_velocity))?)
+                LargeWind::MovingObject(finite3(self.object_velocity).at_port(port!(WindFieldNode, object_velocity))?)
             }
             LargeScale::Vortex => LargeWind::Vortex {
-                center: finite3(self.vortex_center, port!(WindFieldNode, vortex_center))?,
-                strength: finite(self.vortex_strength, port!(WindFieldNode, vortex_strength))?,
-                radius: finite(self.vortex_radius, port!(WindFieldNode, vortex_radius))?,
+                center: finite3(self.vortex_center).at_port(port!(WindFieldNode, vortex_center))?,
+                strength: finite(self.vortex_strength).at_port(port!(WindFieldNode, vortex_strength))?,
+                radius: finite(self.vortex_radius).at_port(port!(WindFieldNode, vortex_radius))?,
             },
         };
         Ok(WindField {
-            gravity: finite3(self.gravity, port!(WindFieldNode, gravity))?,
-            k_g: finite(*self.k_g.value(), port!(WindFieldNode, k_g))?,
+            gravity: finite3(self.gravity).at_port(port!(WindFieldNode, gravity))?,
+            k_g: finite(*self.k_g.value()).at_port(port!(WindFieldNode, k_g))?,
             large,
-            noise_c: finite(*self.noise_c.value(), port!(WindFieldNode, noise_c))?,
-            k_p: finite(self.k_p, port!(WindFieldNode, k_p))?,
-            k_s: finite(self.k_s, port!(WindFieldNode, k_s))?,
+            noise_c: finite(*self.noise_c.value()).at_port(port!(WindFieldNode, noise_c))?,
+            k_p: finite(self.k_p).at_port(port!(WindFieldNode, k_p))?,
+            k_s: finite(self.k_s).at_port(port!(WindFieldNode, k_s))?,
             seed: self.seed,
-            height_unit: match finite(self.height_unit, port!(WindFieldNode, height_unit))? {
+            height_unit: match finite(self.height_unit).at_port(port!(WindFieldNode, height_unit))? {
                 h if h > 0.0 => h,
                 h => return Err(NodeError::port(port!(WindFieldNode, height_unit), format!("must be positive, got {h}"))),
             },
@@ -395,8 +391,7 @@ mod tests {
     #[test]
     fn nan_wind_is_an_error_naming_the_port() {
         let w = WindField { large: LargeWind::Constant([f32::NAN, 0.0, 0.0]), ..WindField::default() };
-        let e = validate_wind(&w, "wind").unwrap_err();
-        assert!(matches!(&e, NodeError::Port { port, .. } if port == "wind"), "{e}");
+        assert_eq!(validate_wind(&w).unwrap_err(), "wind w_L must be finite, got NaN");
         let desc = WindFieldNode::desc();
         let mut values: Vec<Value> = desc.inputs.iter().map(|p| p.default.clone().unwrap()).collect();
         values[desc.input_index("large_scale").unwrap()] = Value::Enum("constant".into());

@@ -17,6 +17,24 @@ pub struct Anim<T> {
     animated: Option<Sampled>,
 }
 
+/// An animated parameter that could not be sampled (an expression failing at a frame, a value
+/// outside the port's range): the port it was set on and why. Algorithms that sample parameters
+/// pass it on in their own errors; a node's error names the port.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("port '{port}': {message}")]
+pub struct AnimError {
+    /// The port the animation was set on.
+    pub port: String,
+    /// What went wrong, at which frame.
+    pub message: String,
+}
+
+impl From<AnimError> for NodeError {
+    fn from(e: AnimError) -> Self {
+        NodeError::Port { port: e.port, message: e.message }
+    }
+}
+
 /// An animation with the port it was set on: its name and range, for the checks and errors of
 /// every sample.
 type Sampled = (Arc<crate::anim::Animated>, String, Option<(f64, f64)>);
@@ -28,10 +46,11 @@ impl<T: Port + Clone> Anim<T> {
     }
 
     /// The value at `frame` of a clip at `fps`.
-    pub fn at(&self, frame: f64, fps: f64) -> Result<T, NodeError> {
+    pub fn at(&self, frame: f64, fps: f64) -> Result<T, AnimError> {
         let Some((animated, port, range)) = &self.animated else { return Ok(self.constant.clone()) };
-        let v = animated.sample_in(frame, fps, *range).map_err(|e| NodeError::port(port, e))?;
-        T::from_value(&v).map_err(|e| NodeError::port(port, e))
+        let error = |message| AnimError { port: port.clone(), message };
+        let v = animated.sample_in(frame, fps, *range).map_err(error)?;
+        T::from_value(&v).map_err(error)
     }
 
     /// The value at frame 0 (the value, when it does not change).

@@ -5,6 +5,8 @@ use glam::Vec3;
 use pyrograph_core::declare::Anim;
 use pyrograph_core::{NodeError, port};
 
+use super::error::ClothError;
+
 pyrograph_core::ports! {
     /// Every parameter of a mass-spring flame simulation: the ports of `cloth.mass_spring_flame`
     /// after its roots and frames.
@@ -70,71 +72,85 @@ pyrograph_core::ports! {
     }
 }
 
-/// Checks what no port range can; errors name the port.
-pub fn validate(p: &ClothParams) -> Result<(), NodeError> {
-    if p.grid_width < 2 {
-        return Err(NodeError::port(
-            port!(ClothParams, grid_width),
-            format!("a cloth needs at least 2×2 masses, got width {}", p.grid_width),
-        ));
+impl ClothParams {
+    /// The port of the sub-step length, which the stability check and a diverged step blame.
+    pub(crate) fn dt_port() -> &'static str {
+        port!(ClothParams, dt)
     }
-    if p.grid_height < 2 {
-        return Err(NodeError::port(
-            port!(ClothParams, grid_height),
-            format!("a cloth needs at least 2×2 masses, got height {}", p.grid_height),
-        ));
-    }
-    let scalars = [
-        (port!(ClothParams, flame_width), p.flame_width),
-        (port!(ClothParams, flame_height), p.flame_height),
-        (port!(ClothParams, mass), p.mass),
-        (port!(ClothParams, stiffness), p.stiffness),
-        (port!(ClothParams, damping), p.damping),
-        (port!(ClothParams, shear_stiffness), p.shear_stiffness),
-        (port!(ClothParams, bend_stiffness), p.bend_stiffness),
-        (port!(ClothParams, drag), p.drag),
-        (port!(ClothParams, buoyancy), *p.buoyancy.value()),
-        (port!(ClothParams, wind_on), p.wind_on),
-        (port!(ClothParams, wind_off), p.wind_off),
-        (port!(ClothParams, wind_jitter), p.wind_jitter),
-        (port!(ClothParams, dt), p.dt),
-        (port!(ClothParams, fps), p.fps),
-    ];
-    for (name, v) in scalars {
-        if !v.is_finite() {
-            return Err(NodeError::port(name, format!("must be finite, got {v}")));
+
+    /// Checks what no port range can; errors name the port.
+    pub fn validate(&self) -> Result<(), ClothError> {
+        let p = self;
+        if p.grid_width < 2 {
+            return Err(ClothError::new(
+                port!(ClothParams, grid_width),
+                format!("a cloth needs at least 2×2 masses, got width {}", p.grid_width),
+            ));
         }
-    }
-    let wind = Vec3::from_array(*p.wind.value());
-    if !wind.is_finite() {
-        return Err(NodeError::port(port!(ClothParams, wind), format!("must be finite, got {wind}")));
-    }
-    if p.mass <= 0.0 {
-        return Err(NodeError::port(port!(ClothParams, mass), format!("must be positive, got {}", p.mass)));
-    }
-    for (name, v) in [
-        (port!(ClothParams, flame_width), p.flame_width),
-        (port!(ClothParams, flame_height), p.flame_height),
-        (port!(ClothParams, dt), p.dt),
-        (port!(ClothParams, fps), p.fps),
-    ] {
-        if v <= 0.0 {
-            return Err(NodeError::port(name, format!("must be positive, got {v}")));
+        if p.grid_height < 2 {
+            return Err(ClothError::new(
+                port!(ClothParams, grid_height),
+                format!("a cloth needs at least 2×2 masses, got height {}", p.grid_height),
+            ));
         }
-    }
-    for (name, v) in [
-        (port!(ClothParams, stiffness), p.stiffness),
-        (port!(ClothParams, damping), p.damping),
-        (port!(ClothParams, shear_stiffness), p.shear_stiffness),
-        (port!(ClothParams, bend_stiffness), p.bend_stiffness),
-        (port!(ClothParams, drag), p.drag),
-        (port!(ClothParams, wind_on), p.wind_on),
-        (port!(ClothParams, wind_off), p.wind_off),
-        (port!(ClothParams, wind_jitter), p.wind_jitter),
-    ] {
-        if v < 0.0 {
-            return Err(NodeError::port(name, format!("must not be negative, got {v}")));
+        let scalars = [
+            (port!(ClothParams, flame_width), p.flame_width),
+            (port!(ClothParams, flame_height), p.flame_height),
+            (port!(ClothParams, mass), p.mass),
+            (port!(ClothParams, stiffness), p.stiffness),
+            (port!(ClothParams, damping), p.damping),
+            (port!(ClothParams, shear_stiffness), p.shear_stiffness),
+            (port!(ClothParams, bend_stiffness), p.bend_stiffness),
+            (port!(ClothParams, drag), p.drag),
+            (port!(ClothParams, buoyancy), *p.buoyancy.value()),
+            (port!(ClothParams, wind_on), p.wind_on),
+            (port!(ClothParams, wind_off), p.wind_off),
+            (port!(ClothParams, wind_jitter), p.wind_jitter),
+            (port!(ClothParams, dt), p.dt),
+            (port!(ClothParams, fps), p.fps),
+        ];
+        for (name, v) in scalars {
+            if !v.is_finite() {
+                return Err(ClothError::new(name, format!("must be finite, got {v}")));
+            }
         }
+        let wind = Vec3::from_array(*p.wind.value());
+        if !wind.is_finite() {
+            return Err(ClothError::new(port!(ClothParams, wind), format!("must be finite, got {wind}")));
+        }
+        if p.mass <= 0.0 {
+            return Err(ClothError::new(port!(ClothParams, mass), format!("must be positive, got {}", p.mass)));
+        }
+        for (name, v) in [
+            (port!(ClothParams, flame_width), p.flame_width),
+            (port!(ClothParams, flame_height), p.flame_height),
+            (port!(ClothParams, dt), p.dt),
+            (port!(ClothParams, fps), p.fps),
+        ] {
+            if v <= 0.0 {
+                return Err(ClothError::new(name, format!("must be positive, got {v}")));
+            }
+        }
+        for (name, v) in [
+            (port!(ClothParams, stiffness), p.stiffness),
+            (port!(ClothParams, damping), p.damping),
+            (port!(ClothParams, shear_stiffness), p.shear_stiffness),
+            (port!(ClothParams, bend_stiffness), p.bend_stiffness),
+            (port!(ClothParams, drag), p.drag),
+            (port!(ClothParams, wind_on), p.wind_on),
+            (port!(ClothParams, wind_off), p.wind_off),
+            (port!(ClothParams, wind_jitter), p.wind_jitter),
+        ] {
+            if v < 0.0 {
+                return Err(ClothError::new(name, format!("must not be negative, got {v}")));
+            }
+        }
+        Ok(())
     }
-    Ok(())
+}
+
+impl From<ClothError> for NodeError {
+    fn from(e: ClothError) -> Self {
+        NodeError::port(e.param, e.message)
+    }
 }

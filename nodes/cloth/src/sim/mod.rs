@@ -7,12 +7,14 @@
 
 pub mod cache;
 pub mod cloth_params;
+pub mod error;
 pub mod model;
 pub mod node;
 pub mod simulation;
 
 pub use cache::{CHECKPOINT_BUDGET, CHECKPOINT_EVERY, ClothSource, SNAPSHOT_BUDGET};
-pub use cloth_params::{ClothParams, validate};
+pub use cloth_params::ClothParams;
+pub use error::ClothError;
 pub use model::{FlameState, Topology, unit_random, wind_active};
 pub use node::MassSpringFlame;
 pub use simulation::{Simulation, check_step, grid_roots};

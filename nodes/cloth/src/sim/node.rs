@@ -10,7 +10,7 @@ use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::ClothSource;
-use super::cloth_params::{ClothParams, validate};
+use super::cloth_params::ClothParams;
 use super::simulation::{Simulation, grid_roots};
 use crate::state::ClothState;
 use pyrograph_render::Particles;
@@ -50,7 +50,7 @@ pyrograph_core::node! {
 impl Cook for MassSpringFlame {
     fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<ClothState>>, NodeError> {
         let params = self.params;
-        validate(&params)?;
+        params.validate()?;
         let roots: Vec<Vec3> = if self.roots.particles.is_empty() {
             if !self.spacing.is_finite() {
                 return Err(NodeError::port(port!(MassSpringFlame, spacing), "must be finite"));

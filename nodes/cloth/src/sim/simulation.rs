@@ -4,10 +4,11 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::{NodeError, port};
+use pyrograph_core::declare::AnimError;
 use rayon::prelude::*;
 
-use super::cloth_params::{ClothParams, validate};
+use super::cloth_params::ClothParams;
+use super::error::ClothError;
 use super::model::{FlameState, Topology, mix, unit_random, wind_active};
 use crate::state::ClothState;
 
@@ -24,8 +25,8 @@ pub struct Simulation {
 impl Simulation {
     /// Flames at rest at `roots`, each with its own phase, wind strength and seed drawn from
     /// `params.seed`. Validates the parameters and the step.
-    pub fn new(params: &ClothParams, roots: &[Vec3]) -> Result<Self, NodeError> {
-        validate(params)?;
+    pub fn new(params: &ClothParams, roots: &[Vec3]) -> Result<Self, ClothError> {
+        params.validate()?;
         let topo = Topology::grid(params);
         check_step(&topo, params)?;
         let period = params.wind_on + params.wind_off;
@@ -69,7 +70,7 @@ impl Simulation {
 
     /// The buoyancy and wind at each of the next `steps` sub-steps of length `h`, sampled at the
     /// sub-step's start, when either is animated (`None` when both are constant).
-    fn sampled_forces(&self, h: f32, steps: usize) -> Result<Option<Vec<(f32, Vec3)>>, NodeError> {
+    fn sampled_forces(&self, h: f32, steps: usize) -> Result<Option<Vec<(f32, Vec3)>>, AnimError> {
         let p = &self.params;
         if !p.buoyancy.is_animated() && !p.wind.is_animated() {
             return Ok(None);
@@ -80,7 +81,7 @@ impl Simulation {
                 let frame = self.frame as f64 + k as f64 * f64::from(h) * fps;
                 Ok((p.buoyancy.at(frame, fps)?, Vec3::from_array(p.wind.at(frame, fps)?)))
             })
-            .collect::<Result<Vec<_>, NodeError>>()
+            .collect::<Result<Vec<_>, AnimError>>()
             .map(Some)
     }
 
@@ -106,14 +107,14 @@ impl Simulation {
 
     /// Advances one frame (all its sub-steps, flames in parallel). A diverged simulation is an
     /// error naming `dt`, never a NaN frame.
-    pub fn step_frame(&mut self) -> Result<(), NodeError> {
+    pub fn step_frame(&mut self) -> Result<(), ClothError> {
         let (n, h) = self.substeps();
         let forces = self.sampled_forces(h, n)?;
         let bad = self.advance_flames(h, n, forces.as_deref());
         self.frame += 1;
         if let Some(i) = bad {
-            return Err(NodeError::port(
-                port!(ClothParams, dt),
+            return Err(ClothError::new(
+                ClothParams::dt_port(),
                 format!("flame {i} diverged at frame {} (positions not finite); lower dt or the stiffness", self.frame),
             ));
         }
@@ -143,11 +144,11 @@ impl Simulation {
 }
 
 /// Checks `p.dt` against the stability limit of [`Topology::stable_step`].
-pub fn check_step(topo: &Topology, p: &ClothParams) -> Result<(), NodeError> {
+pub fn check_step(topo: &Topology, p: &ClothParams) -> Result<(), ClothError> {
     let limit = topo.stable_step(p.mass, p.drag);
     if p.dt.is_nan() || p.dt >= limit {
-        return Err(NodeError::port(
-            port!(ClothParams, dt),
+        return Err(ClothError::new(
+            ClothParams::dt_port(),
             format!(
                 "a sub-step of {} s would blow up: semi-implicit Euler is stable only below {limit:.6} s for mass {} \
                  and springs up to k = {} (≈ 2·√(m/k_eff)); lower dt, raise mass or lower the stiffness",

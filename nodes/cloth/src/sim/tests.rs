@@ -103,7 +103,7 @@ fn a_diverging_step_is_reported_not_returned_as_nan() {
     let mut sim = Simulation::new(&p, &grid_roots(2, 1.5)).unwrap();
     sim.params.dt = 0.05;
     let err = (0..50).find_map(|_| sim.step_frame().err());
-    assert!(matches!(err, Some(NodeError::Port { ref port, .. }) if port == "dt"), "{err:?}");
+    assert!(matches!(err, Some(ClothError { ref param, .. }) if param == "dt"), "{err:?}");
 }
 
 #[test]
@@ -175,7 +175,7 @@ fn the_same_seed_gives_the_same_frames_and_random_access_matches_stepping() {
 #[test]
 fn bad_inputs_are_errors_naming_the_port() {
     let port = |p: ClothParams| match Simulation::new(&p, &[Vec3::ZERO]) {
-        Err(NodeError::Port { port, .. }) => port,
+        Err(ClothError { param, .. }) => param,
         other => panic!("expected a port error, got {other:?}"),
     };
     assert_eq!(port(ClothParams { grid_width: 1, ..ClothParams::default() }), "grid_width");

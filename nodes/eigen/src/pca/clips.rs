@@ -1,12 +1,15 @@
 //! What the Eigenfires nodes share: frames between clips and sample buffers, checked for size
-//! and channels, and the number of components a node uses; errors name the node's port.
+//! and channels, and the number of components a node uses. These are algorithms: their errors
+//! are messages, and the node that calls them names the port they concern.
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Clip, CookCtx, Image, NodeError, PortType, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
 use rayon::prelude::*;
 
-use crate::values::Basis;
+use super::blocks::{BlockSource, train_blocks};
+use super::training::Database;
+use crate::values::{Basis, FrameRef};
 
 /// An empty `Clip<Image>`: the default of optional clip inputs.
 pub fn empty_clip() -> Clip {
@@ -14,39 +17,37 @@ pub fn empty_clip() -> Clip {
 }
 
 /// Pulls every frame of `clip` (in parallel) into `out` (one `N`-sample gray frame after
-/// another), checking size and channels; errors name `port`.
-pub fn gather_frames(clip: &Clip, size: (u32, u32), out: &mut [f32], port: &str, ctx: &CookCtx) -> Result<(), NodeError> {
+/// another), checking size and channels; the error says what is wrong with which frame.
+pub fn gather_frames(clip: &Clip, size: (u32, u32), out: &mut [f32], ctx: &CookCtx) -> Result<(), String> {
     let n = size.0 as usize * size.1 as usize;
     out.par_chunks_mut(n).enumerate().try_for_each(|(i, dst)| {
-        let img = clip.image(i, ctx).map_err(|e| NodeError::port(port, e.to_string()))?;
-        check_frame(&img, size, i, port)?;
+        let img = clip.image(i, ctx).map_err(|e| e.to_string())?;
+        check_frame(&img, size, i)?;
         dst.copy_from_slice(img.data());
         ctx.frame_progress(i + 1, clip.len());
         Ok(())
     })
 }
 
-pub(super) fn check_frame(img: &Image, size: (u32, u32), i: usize, port: &str) -> Result<(), NodeError> {
+/// Checks that frame `i` of a training or query clip is gray and of the database's `size`.
+pub(super) fn check_frame(img: &Image, size: (u32, u32), i: usize) -> Result<(), String> {
     if img.channels() != Channels::Gray {
-        return Err(NodeError::port(port, format!("frame {i} is RGBA; Eigenfires train on gray frames (add imaging.to_gray)")));
+        return Err(format!("frame {i} is RGBA; Eigenfires train on gray frames (add imaging.to_gray)"));
     }
     if img.size() != size {
-        return Err(NodeError::port(
-            port,
-            format!(
-                "frame {i} is {}x{} but the database frames are {}x{}; every frame must be the same size",
-                img.width(),
-                img.height(),
-                size.0,
-                size.1
-            ),
+        return Err(format!(
+            "frame {i} is {}x{} but the database frames are {}x{}; every frame must be the same size",
+            img.width(),
+            img.height(),
+            size.0,
+            size.1
         ));
     }
     Ok(())
 }
 
 /// Wraps `rows × N` samples as a clip of gray images.
-pub fn samples_to_clip(basis: &Basis, samples: Vec<f32>, clamp: bool, fps: f64) -> Result<Clip, NodeError> {
+pub fn samples_to_clip(basis: &Basis, samples: Vec<f32>, clamp: bool, fps: f64) -> Result<Clip, String> {
     let n = basis.pixels();
     let frames = samples
         .par_chunks(n.max(1))
@@ -54,21 +55,55 @@ pub fn samples_to_clip(basis: &Basis, samples: Vec<f32>, clamp: bool, fps: f64) 
             let data = if clamp { s.iter().map(|v| v.clamp(0.0, 1.0)).collect() } else { s.to_vec() };
             Image::from_vec(basis.width, basis.height, Channels::Gray, data)
                 .map(|img| Value::Image(Arc::new(img)))
-                .ok_or_else(|| NodeError::msg("reconstructed frame has the wrong size"))
+                .ok_or_else(|| "reconstructed frame has the wrong size".to_string())
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Clip::from_frames(PortType::Image, fps, frames))
 }
 
 /// The number of components to use: `requested`, or all `available` when 0; more than available
-/// is an error naming `port`.
-pub fn components_to_use(requested: usize, available: usize, port: &str) -> Result<usize, NodeError> {
+/// is an error (the caller names the port that asked).
+pub fn components_to_use(requested: usize, available: usize) -> Result<usize, String> {
     match requested {
         0 => Ok(available),
-        r if r > available => Err(NodeError::port(
-            port,
-            format!("asks for {r} components but only {available} are available; use at most {available} (0 = all)"),
-        )),
+        r if r > available => {
+            Err(format!("asks for {r} components but only {available} are available; use at most {available} (0 = all)"))
+        }
         r => Ok(r),
     }
+}
+
+/// [`train_blocks`] over the frames of the training clips, read block by block. Each clip comes
+/// with the name its errors carry (the node passes its port's name).
+pub fn train_from_clips(
+    clips: &[(&str, &Clip)],
+    size: (u32, u32),
+    max_components: usize,
+    block: usize,
+    ctx: &CookCtx,
+) -> Result<Database, String> {
+    let n = size.0 as usize * size.1 as usize;
+    let mut starts = Vec::with_capacity(clips.len());
+    let mut sources = Vec::new();
+    for (k, (_, clip)) in clips.iter().enumerate() {
+        starts.push(sources.len());
+        sources.extend((0..clip.len()).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
+    }
+    let read = |r: std::ops::Range<usize>, out: &mut [f32]| -> Result<(), String> {
+        ctx.check_cancel().map_err(|e| e.to_string())?;
+        out.par_chunks_mut(n).enumerate().try_for_each(|(j, dst)| {
+            let g = r.start + j;
+            let k = starts.partition_point(|&s| s <= g) - 1;
+            let (name, clip) = clips[k];
+            let img = clip.image(g - starts[k], ctx).map_err(|e| format!("{name}: {e}"))?;
+            // The node blames its first clip port for any failure; this names the clip at fault.
+            check_frame(&img, size, g - starts[k]).map_err(|m| format!("port '{name}': {m}"))?;
+            dst.copy_from_slice(img.data());
+            Ok(())
+        })
+    };
+    let scratch = ctx.settings().cache_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let progress = |done: usize, total: usize| ctx.frame_progress(done, total);
+    let source = BlockSource { read: &read, scratch: Some(&scratch), progress: &progress };
+    train_blocks(size.0, size.1, sources, max_components, block, &source)
 }

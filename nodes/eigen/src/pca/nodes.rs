@@ -7,8 +7,7 @@ use pyrograph_core::declare::{ClipOf, Cook};
 use pyrograph_core::{Clip, CookCtx, Image, NodeError, port};
 use rayon::prelude::*;
 
-use super::blocks::{BlockSource, train_blocks};
-use super::clips::{check_frame, components_to_use, empty_clip, gather_frames, samples_to_clip};
+use super::clips::{check_frame, components_to_use, empty_clip, gather_frames, samples_to_clip, train_from_clips};
 use super::projection::{project, reconstruct};
 use super::training::{Database, train};
 use crate::values::{Basis, FrameRef, Weights};
@@ -81,14 +80,15 @@ impl Cook for Eigenfires {
         if total.saturating_mul(4) > memory {
             // Two blocks in memory: at most half the budget each, and no more than BLOCK_BYTES.
             let block = (BLOCK_BYTES.min(memory / 2) / (n * 4)).max(1);
-            return train_from_clips(&clips, size, max_components, block, ctx).map(EigenfiresOut::from);
+            let db = train_from_clips(&clips, size, max_components, block, ctx).map_err(|m| NodeError::port(clip1, m))?;
+            return Ok(db.into());
         }
         let mut data = vec![0.0_f32; total];
         let mut sources = Vec::with_capacity(m);
         let mut offset = 0;
         for (k, (port, clip)) in clips.iter().enumerate() {
             let len = clip.len();
-            gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], port, ctx)?;
+            gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], ctx).map_err(|m| NodeError::port(*port, m))?;
             sources.extend((0..len).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
             offset += len;
         }
@@ -103,41 +103,6 @@ const DEFAULT_MEMORY_MB: usize = 4096;
 
 /// Bytes of frames per block of the out-of-core training.
 const BLOCK_BYTES: usize = 512 << 20;
-
-/// [`train_blocks`] over the frames of the training clips (named by their
-/// ports), read block by block.
-pub(super) fn train_from_clips(
-    clips: &[(&str, &Clip)],
-    size: (u32, u32),
-    max_components: usize,
-    block: usize,
-    ctx: &CookCtx,
-) -> Result<Database, NodeError> {
-    let n = size.0 as usize * size.1 as usize;
-    let mut starts = Vec::with_capacity(clips.len());
-    let mut sources = Vec::new();
-    for (k, (_, clip)) in clips.iter().enumerate() {
-        starts.push(sources.len());
-        sources.extend((0..clip.len()).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
-    }
-    let read = |r: std::ops::Range<usize>, out: &mut [f32]| -> Result<(), String> {
-        ctx.check_cancel().map_err(|e| e.to_string())?;
-        out.par_chunks_mut(n).enumerate().try_for_each(|(j, dst)| {
-            let g = r.start + j;
-            let k = starts.partition_point(|&s| s <= g) - 1;
-            let (port, clip) = clips[k];
-            let img = clip.image(g - starts[k], ctx).map_err(|e| format!("{port}: {e}"))?;
-            check_frame(&img, size, g - starts[k], port).map_err(|e| e.to_string())?;
-            dst.copy_from_slice(img.data());
-            Ok(())
-        })
-    };
-    let scratch = ctx.settings().cache_dir.clone().unwrap_or_else(std::env::temp_dir);
-    let progress = |done: usize, total: usize| ctx.frame_progress(done, total);
-    let source = BlockSource { read: &read, scratch: Some(&scratch), progress: &progress };
-    train_blocks(size.0, size.1, sources, max_components, block, &source)
-        .map_err(|m| NodeError::port(port!(Eigenfires, clip1), m))
-}
 
 // ---------------------------------------------------------------------------------------------
 // eigen.project
@@ -169,7 +134,8 @@ impl Cook for Project {
     fn cook(self, ctx: &CookCtx) -> Result<Arc<Weights>, NodeError> {
         let (basis, clip) = (&*self.basis, &*self.clip);
         let port = port!(Project, clip);
-        let e = components_to_use(self.components, basis.components(), port!(Project, components))?;
+        let e =
+            components_to_use(self.components, basis.components()).map_err(|m| NodeError::port(port!(Project, components), m))?;
         if clip.is_empty() {
             return Err(NodeError::port(port, "the clip has no frames"));
         }
@@ -181,7 +147,7 @@ impl Cook for Project {
             let mut frames = vec![0.0_f32; (end - start) * n];
             frames.par_chunks_mut(n).enumerate().try_for_each(|(k, dst)| {
                 let img = clip.image(start + k, ctx).map_err(|e| NodeError::port(port, e.to_string()))?;
-                check_frame(&img, (basis.width, basis.height), start + k, port)?;
+                check_frame(&img, (basis.width, basis.height), start + k).map_err(|m| NodeError::port(port, m))?;
                 dst.copy_from_slice(img.data());
                 Ok::<_, NodeError>(())
             })?;
@@ -230,9 +196,10 @@ impl Cook for Reconstruct {
             return Err(NodeError::port(port!(Reconstruct, weights), "there are no rows of weights to reconstruct"));
         }
         let components = port!(Reconstruct, components);
-        let e = components_to_use(self.components, basis.components().min(weights.components), components)?;
+        let e = components_to_use(self.components, basis.components().min(weights.components))
+            .map_err(|m| NodeError::port(components, m))?;
         let samples = reconstruct(basis, weights, e).map_err(|m| NodeError::port(components, m))?;
-        let clip = samples_to_clip(basis, samples, self.clamp, self.fps)?;
+        let clip = samples_to_clip(basis, samples, self.clamp, self.fps).map_err(NodeError::msg)?;
         Ok(ClipOf::new(clip))
     }
 }

@@ -7,7 +7,7 @@ use faer::{Accum, MatMut, MatRef, Par};
 use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
 use pyrograph_testing::lcg;
 
-use super::nodes::train_from_clips;
+use super::clips::train_from_clips;
 use super::projection::{LIFT_BAND_ROWS, lift_onto, reconstruct_with};
 use super::projection::{project, reconstruct};
 use super::training::{gram_matrix, lift_in_place, train};

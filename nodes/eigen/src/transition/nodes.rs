@@ -90,7 +90,8 @@ pyrograph_core::node! {
 impl Cook for Recognize {
     fn cook(self, _: &CookCtx) -> Result<RecognizeOut, NodeError> {
         let db = &*self.weights;
-        let e = components_to_use(self.components, db.components, port!(Recognize, components))?;
+        let e =
+            components_to_use(self.components, db.components).map_err(|m| NodeError::port(port!(Recognize, components), m))?;
         let theta_min = self.theta_min;
         let mut excluded = vec![false; db.frames];
         // A negative frame (-1) means: use the query.
@@ -174,7 +175,8 @@ impl Cook for LowpassTransition {
     fn cook(self, _: &CookCtx) -> Result<Arc<FrameList>, NodeError> {
         let db = &*self.motions.weights;
         let (t1, t2) = self.motions.ranges()?;
-        let e = components_to_use(self.components, db.components, port!(LowpassTransition, components))?;
+        let e = components_to_use(self.components, db.components)
+            .map_err(|m| NodeError::port(port!(LowpassTransition, components), m))?;
         let out = lowpass_transition(db, t1, t2, e, &self.kernel.weights(), self.span, self.detail, self.seed)
             .map_err(|m| NodeError::port(port!(LowpassTransition, span), m))?;
         Ok(Arc::new(FrameList { items: out.into_iter().map(FrameItem::Weights).collect() }))
@@ -192,7 +194,7 @@ pyrograph_core::node! {
     /// the `steps` points the nearest database frame is taken, outside T1 and T2, not taken before, and at least
     /// theta_min from the previous frame.
     #[node("eigen.direct_bridging", "Eigenfires", WholeClip)]
-    pub struct DirectBridging {
+    pub struct DirectBridgingTransition {
         /// The database and the two motions.
         motions: MotionPair,
         /// Number of frames N to insert.
@@ -209,14 +211,15 @@ pyrograph_core::node! {
     -> frames: Arc<FrameList>
 }
 
-impl Cook for DirectBridging {
+impl Cook for DirectBridgingTransition {
     fn cook(self, _: &CookCtx) -> Result<Arc<FrameList>, NodeError> {
         let db = &*self.motions.weights;
         let (t1, t2) = self.motions.ranges()?;
-        let e = components_to_use(self.components, db.components, port!(DirectBridging, components))?;
+        let e = components_to_use(self.components, db.components)
+            .map_err(|m| NodeError::port(port!(DirectBridgingTransition, components), m))?;
         let excluded = exclusion_mask(db.frames, &[t1.clone(), t2.clone()]);
         let path = direct_bridging(db, *t1.end(), *t2.start(), self.steps, e, self.theta_min, &excluded)
-            .map_err(|m| NodeError::port(port!(DirectBridging, theta_min), m))?;
+            .map_err(|m| NodeError::port(port!(DirectBridgingTransition, theta_min), m))?;
         Ok(frames_value(path))
     }
 }
@@ -292,7 +295,8 @@ impl Cook for EndGrowingConnection {
     fn cook(self, _: &CookCtx) -> Result<EndGrowingConnectionOut, NodeError> {
         let db = &*self.motions.weights;
         let (t1, t2) = self.motions.ranges()?;
-        let e = components_to_use(self.components, db.components, port!(EndGrowingConnection, components))?;
+        let e = components_to_use(self.components, db.components)
+            .map_err(|m| NodeError::port(port!(EndGrowingConnection, components), m))?;
         let excluded = end_exclusion(db.frames, &t1, &t2, self.exclude);
         let (theta_min, per_clip) = self.adaptive_theta(db, e)?;
         let r = end_growing_adaptive(db, *t1.end(), *t2.start(), self.steps, e, &theta_min, &excluded, self.optimize)

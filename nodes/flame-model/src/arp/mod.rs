@@ -14,7 +14,7 @@ use faer::Mat;
 use pyrograph_core::declare::Cook;
 use pyrograph_core::{CookCtx, NodeError, port};
 
-pub use sampler::{ArSampler, ArpSample, BendShape, ControlPorts, Controls, Ramp, sample};
+pub use sampler::{ArSampler, ArpSample, BendShape, ControlPorts, Controls, Ramp, SampleError, sample};
 
 use crate::values::{ArModel, ParamSeries};
 use em::Lambda;
@@ -86,6 +86,69 @@ impl Default for LearnOptions {
     }
 }
 
+/// Why [`learn`] could not learn a process: each variant blames one input (the series, the
+/// order) or says where EM failed, so `flame_model.arp_learn` can name the right port.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LearnError {
+    /// The training series is unusable (empty, too short, not finite, a constant column).
+    #[error("{0}")]
+    Series(String),
+    /// The order K is 0.
+    #[error("the order K must be at least 1")]
+    Order,
+    /// The least-squares start ([`Init::LeastSquares`]) failed.
+    #[error("least-squares start: {0}")]
+    LeastSquares(String),
+    /// An E- or M-step failed (1-based iteration).
+    #[error("EM iteration {iteration}: {message}")]
+    Iteration {
+        /// The iteration, counted from 1.
+        iteration: usize,
+        /// What failed.
+        message: String,
+    },
+    /// EM ran no iteration, so there is no model.
+    #[error("EM ran no iteration")]
+    NoIteration,
+    /// The learned noise covariance has no Cholesky factor, even with jitter.
+    #[error("the learned noise covariance B Bᵀ is not positive semi-definite")]
+    NoiseCovariance,
+    /// The learned process is unstable: the spectral radius of its companion matrix.
+    #[error(
+        "the learned process is unstable: the spectral radius of its companion matrix is {0:.4} ≥ 1, so samples would \
+         diverge; use more frames, fewer parameters or a lower order K"
+    )]
+    Unstable(f64),
+    /// The learned model failed its own checks.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The cook was cancelled.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// What is wrong with an [`ArModel`] for sampling: malformed, unstable, or a bad history.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// Shapes or numbers of the model are wrong (which ones).
+    #[error("malformed ARP: {0}")]
+    Malformed(&'static str),
+    /// The eigenvalues of the companion matrix could not be computed.
+    #[error("eigenvalues of the companion matrix: {0}")]
+    Eigenvalues(String),
+    /// The companion matrix has spectral radius ≥ 1 (its value).
+    #[error("the process is unstable (companion spectral radius {0:.4} ≥ 1); its samples would diverge")]
+    Unstable(f64),
+    /// A history that is not `order` finite rows of `dim` parameters.
+    #[error("the initial state must be {order} finite rows of {dim} parameters")]
+    History {
+        /// K rows expected.
+        order: usize,
+        /// D parameters per row.
+        dim: usize,
+    },
+}
+
 /// Minimum number of frames to learn an order-`order` process over `dim` parameters: each row of
 /// [A_1 … A_K d] has K·D + 1 unknowns and needs as many transitions.
 pub fn min_frames(dim: usize, order: usize) -> usize {
@@ -93,49 +156,46 @@ pub fn min_frames(dim: usize, order: usize) -> usize {
 }
 
 /// Checks a training series: at least [`min_frames`] rows, every value finite, no parameter of
-/// zero variance. Errors name the port `params` and the parameter (and frame).
-pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), NodeError> {
+/// zero variance. Errors name the parameter (and frame).
+pub fn validate_series(series: &ParamSeries, order: usize) -> Result<(), LearnError> {
     let dim = series.dim();
     if dim == 0 {
-        return Err(NodeError::port(port!(ArpLearn, params), "the parameter series has no columns"));
+        return Err(LearnError::Series("the parameter series has no columns".into()));
     }
     if series.data.len() != series.frames * dim {
-        return Err(NodeError::port(
-            port!(ArpLearn, params),
-            format!("the series holds {} values, not frames × parameters = {} × {dim}", series.data.len(), series.frames),
-        ));
+        return Err(LearnError::Series(format!(
+            "the series holds {} values, not frames × parameters = {} × {dim}",
+            series.data.len(),
+            series.frames
+        )));
     }
     if order == 0 {
-        return Err(NodeError::port(port!(ArpLearn, order), "the order K must be at least 1"));
+        return Err(LearnError::Order);
     }
     let need = min_frames(dim, order);
     if series.frames < need {
-        return Err(NodeError::port(
-            port!(ArpLearn, params),
-            format!(
-                "too few frames for K = {order}: {} frames of {dim} parameters, an order-{order} process needs at least \
-                 K·D + K + 1 = {need}",
-                series.frames
-            ),
-        ));
+        return Err(LearnError::Series(format!(
+            "too few frames for K = {order}: {} frames of {dim} parameters, an order-{order} process needs at least \
+             K·D + K + 1 = {need}",
+            series.frames
+        )));
     }
     if let Some(k) = series.data.iter().position(|v| !v.is_finite()) {
-        return Err(NodeError::port(
-            port!(ArpLearn, params),
-            format!("parameter '{}' is {} at frame {}", series.names[k % dim], series.data[k], k / dim),
-        ));
+        return Err(LearnError::Series(format!(
+            "parameter '{}' is {} at frame {}",
+            series.names[k % dim],
+            series.data[k],
+            k / dim
+        )));
     }
     let (mean, sd) = column_moments(series);
     for i in 0..dim {
         if sd[i] <= 1e-12 * mean[i].abs().max(1e-300) || sd[i] == 0.0 {
-            return Err(NodeError::port(
-                port!(ArpLearn, params),
-                format!(
-                    "parameter '{}' does not vary (constant {}); a zero-variance parameter cannot be scaled to unit variance \
-                     (§4.2) — drop it from the series",
-                    series.names[i], mean[i]
-                ),
-            ));
+            return Err(LearnError::Series(format!(
+                "parameter '{}' does not vary (constant {}); a zero-variance parameter cannot be scaled to unit variance \
+                 (§4.2) — drop it from the series",
+                series.names[i], mean[i]
+            )));
         }
     }
     Ok(())
@@ -165,7 +225,7 @@ pub fn column_moments(series: &ParamSeries) -> (Vec<f64>, Vec<f64>) {
 /// E-step that is the last one: EM never decreases it); its `log_likelihood` lists the
 /// likelihood of the original (unscaled) data at every iteration. A fit whose companion matrix
 /// has spectral radius ≥ 1 is an error: its samples would diverge.
-pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result<ArModel, NodeError> {
+pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result<ArModel, LearnError> {
     validate_series(series, opts.order)?;
     let (dim, frames, k) = (series.dim(), series.frames, opts.order);
     let (offset, scale) = column_moments(series);
@@ -180,20 +240,20 @@ pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result
     let mut lam = match opts.init {
         Init::Diagonal => em::initial_lambda(&y, frames, dim, k, opts.initial_observation_noise),
         Init::LeastSquares => em::least_squares_lambda(&y, frames, dim, k, opts.initial_observation_noise, opts.learn_constant)
-            .map_err(|m| NodeError::msg(format!("least-squares start: {m}")))?,
+            .map_err(LearnError::LeastSquares)?,
     };
     let mut history = Vec::new();
     let mut best: Option<(f64, Lambda)> = None;
     let mut stall = 0;
     for it in 0..opts.max_iterations.max(1) {
-        ctx.check_cancel()?;
+        ctx.check_cancel().map_err(|_| LearnError::Cancelled)?;
         let stats = match opts.e_step {
             EStep::Kalman => kalman::kalman_estep(&y, frames, &lam),
             EStep::Condensation { particles, seed } => {
                 condensation::condensation_estep(&y, frames, &lam, particles, seed.wrapping_add(it as u64))
             }
         }
-        .map_err(|m| NodeError::msg(format!("EM iteration {}: {m}", it + 1)))?;
+        .map_err(|message| LearnError::Iteration { iteration: it + 1, message })?;
         let ll = stats.log_likelihood + jacobian;
         history.push(ll);
         ctx.frame_progress(it + 1, opts.max_iterations);
@@ -213,18 +273,15 @@ pub fn learn(series: &ParamSeries, opts: &LearnOptions, ctx: &CookCtx) -> Result
             break;
         }
         lam = em::m_step(&stats, &lam, opts.min_observation_noise, opts.learn_constant)
-            .map_err(|m| NodeError::msg(format!("EM iteration {}: {m}", it + 1)))?;
+            .map_err(|message| LearnError::Iteration { iteration: it + 1, message })?;
     }
     let Some((_, lam)) = best else {
-        return Err(NodeError::msg("EM ran no iteration"));
+        return Err(LearnError::NoIteration);
     };
     let model = to_model(series, &lam, offset, scale, history)?;
     let rho = spectral_radius(&model)?;
     if rho >= 1.0 {
-        return Err(NodeError::msg(format!(
-            "the learned process is unstable: the spectral radius of its companion matrix is {rho:.4} ≥ 1, so samples would \
-             diverge; use more frames, fewer parameters or a lower order K"
-        )));
+        return Err(LearnError::Unstable(rho));
     }
     Ok(model)
 }
@@ -235,7 +292,7 @@ fn to_model(
     offset: Vec<f64>,
     scale: Vec<f64>,
     history: Vec<f64>,
-) -> Result<ArModel, NodeError> {
+) -> Result<ArModel, LearnError> {
     let (dim, k) = (lam.dim, lam.order);
     let mut a = Vec::with_capacity(k * dim * dim);
     for blk in 0..k {
@@ -264,7 +321,7 @@ fn to_model(
 
 /// B with B Bᵀ = Q (lower Cholesky factor, row-major); a tiny jitter is added if Q is only
 /// semi-definite.
-fn cholesky_lower(q: &Mat<f64>) -> Result<Vec<f64>, NodeError> {
+fn cholesky_lower(q: &Mat<f64>) -> Result<Vec<f64>, LearnError> {
     let dim = q.nrows();
     let mut jitter = 0.0;
     for _ in 0..8 {
@@ -278,13 +335,13 @@ fn cholesky_lower(q: &Mat<f64>) -> Result<Vec<f64>, NodeError> {
         }
         jitter = if jitter == 0.0 { 1e-12 } else { jitter * 100.0 };
     }
-    Err(NodeError::msg("the learned noise covariance B Bᵀ is not positive semi-definite"))
+    Err(LearnError::NoiseCovariance)
 }
 
-/// Checks the shapes and numbers of an [`ArModel`]; errors name the port `model`.
-pub fn validate_model(m: &ArModel) -> Result<(), NodeError> {
+/// Checks the shapes and numbers of an [`ArModel`].
+pub fn validate_model(m: &ArModel) -> Result<(), ModelError> {
     let (dim, k) = (m.dim(), m.order);
-    let bad = |what: &str| Err(NodeError::port(port!(ArpSample, model), format!("malformed ARP: {what}")));
+    let bad = |what: &'static str| Err(ModelError::Malformed(what));
     if dim == 0 || k == 0 {
         return bad("no parameters or order 0");
     }
@@ -306,7 +363,7 @@ pub fn validate_model(m: &ArModel) -> Result<(), NodeError> {
 
 /// Spectral radius of the companion matrix [[A_1 … A_K], [I 0]]: the process is stable (its
 /// samples stay bounded in distribution) iff this is < 1.
-pub fn spectral_radius(m: &ArModel) -> Result<f64, NodeError> {
+pub fn spectral_radius(m: &ArModel) -> Result<f64, ModelError> {
     validate_model(m)?;
     let (dim, k) = (m.dim(), m.order);
     let n = dim * k;
@@ -320,7 +377,7 @@ pub fn spectral_radius(m: &ArModel) -> Result<f64, NodeError> {
             0.0
         }
     });
-    let ev = f.eigenvalues().map_err(|e| NodeError::msg(format!("eigenvalues of the companion matrix: {e:?}")))?;
+    let ev = f.eigenvalues().map_err(|e| ModelError::Eigenvalues(format!("{e:?}")))?;
     Ok(ev.iter().map(|c| c.re.hypot(c.im)).fold(0.0, f64::max))
 }
 
@@ -402,8 +459,8 @@ impl Cook for ArpLearn {
             learn_constant: self.learn_constant,
             ..LearnOptions::default()
         };
-        let model = learn(&self.params, &opts, ctx)?;
-        let rho = spectral_radius(&model)?;
+        let model = learn(&self.params, &opts, ctx).map_err(ArpLearn::learn_error)?;
+        let rho = spectral_radius(&model).map_err(ArpSample::model_error)?;
         let ll = ParamSeries {
             names: vec!["log_likelihood".into()],
             frames: model.log_likelihood.len(),
@@ -411,6 +468,24 @@ impl Cook for ArpLearn {
             fps: 1.0,
         };
         Ok(ArpLearnOut { model: Arc::new(model), log_likelihood: Arc::new(ll), spectral_radius: rho })
+    }
+}
+
+impl ArpLearn {
+    /// The node's error for a failed [`learn`]: a bad series names `params`, a zero order names
+    /// `order`; a malformed model reads as it does for `flame_model.arp_sample`.
+    pub(crate) fn learn_error(e: LearnError) -> NodeError {
+        match e {
+            LearnError::Series(m) => NodeError::port(port!(ArpLearn, params), m),
+            LearnError::Order => NodeError::port(port!(ArpLearn, order), e.to_string()),
+            LearnError::Model(e) => ArpSample::model_error(e),
+            LearnError::Cancelled => NodeError::Cancelled,
+            LearnError::LeastSquares(_)
+            | LearnError::Iteration { .. }
+            | LearnError::NoIteration
+            | LearnError::NoiseCovariance
+            | LearnError::Unstable(_) => NodeError::msg(e.to_string()),
+        }
     }
 }
 

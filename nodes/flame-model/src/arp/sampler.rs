@@ -4,11 +4,11 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::declare::{Anim, Cook};
+use pyrograph_core::declare::{Anim, AnimError, Cook};
 use pyrograph_core::{CookCtx, NodeError, port};
 
 use super::rng::Rng;
-use super::spectral_radius;
+use super::{ModelError, spectral_radius};
 use crate::values::{ArModel, ParamSeries};
 
 /// Steps eq. 2 with flat, preallocated arrays: one step is a `D × K·D` mat-vec, a triangular
@@ -35,14 +35,11 @@ pub struct ArSampler {
 
 impl ArSampler {
     /// A sampler starting from the model's initial state (the last K training rows), seeded by
-    /// `seed`. Unstable or malformed models are errors naming the port `model`.
-    pub fn new(model: &ArModel, seed: u64) -> Result<Self, NodeError> {
+    /// `seed`. Unstable or malformed models are errors.
+    pub fn new(model: &ArModel, seed: u64) -> Result<Self, ModelError> {
         let rho = spectral_radius(model)?;
         if rho >= 1.0 {
-            return Err(NodeError::port(
-                port!(ArpSample, model),
-                format!("the process is unstable (companion spectral radius {rho:.4} ≥ 1); its samples would diverge"),
-            ));
+            return Err(ModelError::Unstable(rho));
         }
         let (dim, k) = (model.dim(), model.order);
         let n = dim * k;
@@ -75,13 +72,10 @@ impl ArSampler {
     }
 
     /// Restarts from K unscaled rows (oldest first, `K × D` values).
-    pub fn set_history(&mut self, rows: &[f64]) -> Result<(), NodeError> {
+    pub fn set_history(&mut self, rows: &[f64]) -> Result<(), ModelError> {
         let (dim, k) = (self.dim, self.n / self.dim);
         if rows.len() != self.n || rows.iter().any(|v| !v.is_finite()) {
-            return Err(NodeError::port(
-                port!(ArpSample, model),
-                format!("the initial state must be {k} finite rows of {dim} parameters"),
-            ));
+            return Err(ModelError::History { order: k, dim });
         }
         for lag in 0..k {
             let row = &rows[(k - 1 - lag) * dim..(k - lag) * dim];
@@ -180,7 +174,7 @@ impl Ramp {
     }
 
     /// The value at frame `f` of `frames`; a keyed control's errors name its port and the frame.
-    pub fn at(&self, f: usize, frames: usize) -> Result<f64, NodeError> {
+    pub fn at(&self, f: usize, frames: usize) -> Result<f64, AnimError> {
         if let Some((anim, fps)) = &self.keyed {
             return anim.at(f as f64, *fps);
         }
@@ -265,9 +259,20 @@ fn roles(names: &[String]) -> Roles {
     Roles { path: index("path_"), width: index("width_"), height: names.iter().position(|n| n == "height") }
 }
 
+/// Why [`sample`] failed: the model cannot be sampled, or a keyed control could not be evaluated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SampleError {
+    /// The model is malformed or unstable.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A keyed control failed at a frame (it names the port it was set on).
+    #[error(transparent)]
+    Control(#[from] AnimError),
+}
+
 /// Samples `frames` rows from `model` (§4.3) after discarding `warmup` steps, starting from the
 /// model's initial state, with the §5.1 `controls`. The output has the training series' columns.
-pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls: &Controls) -> Result<ParamSeries, NodeError> {
+pub fn sample(model: &ArModel, frames: usize, warmup: usize, seed: u64, controls: &Controls) -> Result<ParamSeries, SampleError> {
     let mut s = ArSampler::new(model, seed)?;
     let dim = s.dim();
     let mut data = vec![0.0; frames * dim];
@@ -403,7 +408,28 @@ impl Cook for ArpSample {
     fn cook(self, ctx: &CookCtx) -> Result<Arc<ParamSeries>, NodeError> {
         let controls = self.controls.controls(self.model.fps)?;
         ctx.check_cancel()?;
-        let out = sample(&self.model, self.frames, self.warmup, self.seed, &controls)?;
+        let out = sample(&self.model, self.frames, self.warmup, self.seed, &controls).map_err(ArpSample::sample_error)?;
         Ok(Arc::new(out))
+    }
+}
+
+impl ArpSample {
+    /// The node's error for a model that cannot be sampled: it names the `model` port, except
+    /// when the eigenvalue solver fails, which is no fault of the model.
+    pub(crate) fn model_error(e: ModelError) -> NodeError {
+        match e {
+            ModelError::Eigenvalues(_) => NodeError::msg(e.to_string()),
+            ModelError::Malformed(_) | ModelError::Unstable(_) | ModelError::History { .. } => {
+                NodeError::port(port!(ArpSample, model), e.to_string())
+            }
+        }
+    }
+
+    /// The node's error for a failed [`sample`]: a keyed control's error names its own port.
+    pub(crate) fn sample_error(e: SampleError) -> NodeError {
+        match e {
+            SampleError::Model(e) => ArpSample::model_error(e),
+            SampleError::Control(e) => e.into(),
+        }
     }
 }

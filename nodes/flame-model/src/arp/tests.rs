@@ -144,7 +144,7 @@ fn diagonal_model(coef: &[f64]) -> ArModel {
 fn an_unstable_model_is_an_error_not_a_diverging_sampler() {
     let m = diagonal_model(&[0.5, 1.01]);
     assert!((spectral_radius(&m).unwrap() - 1.01).abs() < 1e-12);
-    let e = sample(&m, 10, 0, 0, &Controls::default()).unwrap_err();
+    let e = sample(&m, 10, 0, 0, &Controls::default()).map_err(ArpSample::sample_error).unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, message } if port == "model" && message.contains("unstable")), "{e}");
     // An explosive series learns an unstable process: learn says so.
     let mut data = Vec::new();
@@ -163,7 +163,7 @@ fn an_unstable_model_is_an_error_not_a_diverging_sampler() {
 #[test]
 fn bad_series_are_clear_errors_naming_the_port_and_parameter() {
     let s = ar2_series(&A1, &A2, &D, &B, 8, 0.0, 1);
-    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).unwrap_err();
+    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).map_err(ArpLearn::learn_error).unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, message } if port == "params" && message.contains("too few frames")), "{e}");
     assert_eq!(min_frames(3, 2), 9);
 
@@ -171,7 +171,7 @@ fn bad_series_are_clear_errors_naming_the_port_and_parameter() {
     for t in 0..100 {
         s.data[t * 3 + 1] = 4.25;
     }
-    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).unwrap_err();
+    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).map_err(ArpLearn::learn_error).unwrap_err();
     assert!(
         matches!(&e, NodeError::Port { port, message } if port == "params" && message.contains("'p1'") && message.contains("does not vary")),
         "{e}"
@@ -179,11 +179,13 @@ fn bad_series_are_clear_errors_naming_the_port_and_parameter() {
 
     let mut s = ar2_series(&A1, &A2, &D, &B, 100, 0.0, 1);
     s.data[37 * 3 + 2] = f64::NAN;
-    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).unwrap_err();
+    let e = learn(&s, &LearnOptions::default(), &CookCtx::new()).map_err(ArpLearn::learn_error).unwrap_err();
     assert!(matches!(&e, NodeError::Port { message, .. } if message.contains("'p2'") && message.contains("frame 37")), "{e}");
 
     let s = ar2_series(&A1, &A2, &D, &B, 100, 0.0, 1);
-    let e = learn(&s, &LearnOptions { order: 0, ..LearnOptions::default() }, &CookCtx::new()).unwrap_err();
+    let e = learn(&s, &LearnOptions { order: 0, ..LearnOptions::default() }, &CookCtx::new())
+        .map_err(ArpLearn::learn_error)
+        .unwrap_err();
     assert!(matches!(&e, NodeError::Port { port, .. } if port == "order"), "{e}");
 }
 

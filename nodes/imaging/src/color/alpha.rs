@@ -2,9 +2,9 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, port};
+use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError};
 
-use super::{check_size, intensity};
+use super::{ColoringError, check_size, intensity};
 
 pyrograph_core::choice! {
     /// How colour relates to alpha in an output file.
@@ -88,8 +88,8 @@ impl Cook for Premultiply {
 }
 
 /// `image` as RGBA with its alpha replaced by the intensity of `matte` (clamped to 0..1).
-pub fn set_alpha(image: &Image, matte: &Image) -> Result<Image, NodeError> {
-    check_size(image, matte, port!(SetAlpha, matte))?;
+pub fn set_alpha(image: &Image, matte: &Image) -> Result<Image, ColoringError> {
+    check_size(image, matte).map_err(ColoringError::Matte)?;
     let mut out = image.to_rgba();
     let n = out.data().len() / 4;
     for i in 0..n {

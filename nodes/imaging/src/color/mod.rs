@@ -15,7 +15,7 @@
 //! One file per topic (original colouring, synthetic colouring with HLS and ramps, alpha), their
 //! items re-exported here.
 
-use pyrograph_core::{Channels, Image, NodeError};
+use pyrograph_core::{Channels, Image, NodeError, port};
 
 mod alpha;
 mod original;
@@ -29,13 +29,58 @@ fn size_text(img: &Image) -> String {
     format!("{}x{}", img.width(), img.height())
 }
 
-/// Checks that `other` (on port `port`) has the size of `source`.
-pub fn check_size(source: &Image, other: &Image, port: &str) -> Result<(), NodeError> {
+/// Why colouring failed, by the input it concerns: each colouring node names the matching port.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ColoringError {
+    /// The threshold is outside 0–255.
+    #[error("{0}")]
+    Threshold(String),
+    /// The original frame's size is not the source's.
+    #[error("the original frame {0}")]
+    Original(String),
+    /// The destination layer's size is not the source's.
+    #[error("the destination layer {0}")]
+    Destination(String),
+    /// The smoke layer's size is not the source's.
+    #[error("the smoke layer {0}")]
+    SmokeLayer(String),
+    /// The custom mask's size is not the source's.
+    #[error("the custom mask {0}")]
+    CustomMask(String),
+    /// The blend texture's size is not the source's.
+    #[error("the texture {0}")]
+    Texture(String),
+    /// The matte's size is not the image's.
+    #[error("the matte {0}")]
+    Matte(String),
+    /// Anything no input is to blame for.
+    #[error("{0}")]
+    Message(String),
+}
+
+/// A colouring error on the port of the colouring nodes it concerns.
+impl From<ColoringError> for NodeError {
+    fn from(e: ColoringError) -> NodeError {
+        // A size error names its input in front of what is wrong with it.
+        let sized = |port: &str, m: String| NodeError::port(port, format!("'{port}' {m}"));
+        match e {
+            ColoringError::Threshold(m) => NodeError::port(port!(ColoringThreshold, threshold), m),
+            ColoringError::Original(m) => sized(port!(ColoringFrames, original), m),
+            ColoringError::Destination(m) => sized(port!(ColoringLayerInputs, destination), m),
+            ColoringError::SmokeLayer(m) => sized(port!(ColoringLayerInputs, smoke), m),
+            ColoringError::CustomMask(m) => sized(port!(OriginalColoringMasked, custom_mask), m),
+            ColoringError::Texture(m) => sized(port!(SyntheticColoringTexture, texture), m),
+            ColoringError::Matte(m) => sized(port!(SetAlpha, matte), m),
+            ColoringError::Message(m) => NodeError::msg(m),
+        }
+    }
+}
+
+/// Checks that `other` has the size of `source`; the error says so, for the node to put the
+/// input's name in front (`'matte' is 4x4 but the source is 8x8; ...`).
+pub fn check_size(source: &Image, other: &Image) -> Result<(), String> {
     if source.size() != other.size() {
-        return Err(NodeError::port(
-            port,
-            format!("'{port}' is {} but the source is {}; both must have the same size", size_text(other), size_text(source)),
-        ));
+        return Err(format!("is {} but the source is {}; both must have the same size", size_text(other), size_text(source)));
     }
     Ok(())
 }

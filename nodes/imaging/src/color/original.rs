@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
-use pyrograph_core::{Channels, Cook, CookCtx, Image, Mask, NodeError, port};
+use pyrograph_core::{Channels, Cook, CookCtx, Image, Mask, NodeError};
 
-use super::{check_size, intensity, rgb, size_text};
+use super::{ColoringError, check_size, intensity, rgb, size_text};
 
 /// The optional inputs of Algorithm 2.
 #[derive(Clone, Copy, Debug, Default)]
@@ -18,10 +18,10 @@ pub struct ColoringLayers<'a> {
     pub custom_mask: Option<&'a Mask>,
 }
 
-/// Checks a threshold given on the thesis's 0–255 scale (on port `port`).
-pub fn check_threshold(threshold: f64, port: &str) -> Result<f32, NodeError> {
+/// Checks a threshold given on the thesis's 0–255 scale.
+pub fn check_threshold(threshold: f64) -> Result<f32, String> {
     if !(0.0..=255.0).contains(&threshold) {
-        return Err(NodeError::port(port, format!("{threshold} is outside 0–255 (the thesis uses about 30)")));
+        return Err(format!("{threshold} is outside 0–255 (the thesis uses about 30)"));
     }
     Ok(threshold as f32)
 }
@@ -38,28 +38,24 @@ pub fn original_coloring(
     original: &Image,
     threshold: f64,
     layers: ColoringLayers<'_>,
-) -> Result<Image, NodeError> {
-    let t = check_threshold(threshold, port!(ColoringThreshold, threshold))? / 255.0;
-    check_size(source, original, port!(ColoringFrames, original))?;
+) -> Result<Image, ColoringError> {
+    let t = check_threshold(threshold).map_err(ColoringError::Threshold)? / 255.0;
+    check_size(source, original).map_err(ColoringError::Original)?;
     if let Some(d) = layers.destination {
-        check_size(source, d, port!(ColoringLayerInputs, destination))?;
+        check_size(source, d).map_err(ColoringError::Destination)?;
     }
     if let Some(s) = layers.smoke {
-        check_size(source, s, port!(ColoringLayerInputs, smoke))?;
+        check_size(source, s).map_err(ColoringError::SmokeLayer)?;
     }
     if let Some(m) = layers.custom_mask
         && (m.width(), m.height()) != source.size()
     {
-        let port = port!(OriginalColoringMasked, custom_mask);
-        return Err(NodeError::port(
-            port,
-            format!(
-                "'{port}' is {}x{} but the source is {}; both must have the same size",
-                m.width(),
-                m.height(),
-                size_text(source)
-            ),
-        ));
+        return Err(ColoringError::CustomMask(format!(
+            "is {}x{} but the source is {}; both must have the same size",
+            m.width(),
+            m.height(),
+            size_text(source)
+        )));
     }
     let (w, h) = source.size();
     let n = w as usize * h as usize;
@@ -80,7 +76,7 @@ pub fn original_coloring(
         };
         out.extend_from_slice(&[px[0], px[1], px[2], 1.0]);
     }
-    Image::from_vec(w, h, Channels::Rgba, out).ok_or_else(|| NodeError::msg("image data does not match its size"))
+    Image::from_vec(w, h, Channels::Rgba, out).ok_or_else(|| ColoringError::Message("image data does not match its size".into()))
 }
 
 pyrograph_core::ports! {

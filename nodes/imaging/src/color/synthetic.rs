@@ -5,9 +5,9 @@ use std::sync::Arc;
 
 use pyrograph_core::declare::Port;
 use pyrograph_core::value::RampKeys;
-use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, PortType, Value, port};
+use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, PortType, Value};
 
-use super::{check_size, rgb};
+use super::{ColoringError, check_size, rgb};
 
 /// RGB (0..1) to HLS: hue in degrees 0..360, lightness and saturation in 0..1 (the usual
 /// double-hexcone model, as Python's `colorsys` and OpenCV's `COLOR_RGB2HLS`).
@@ -158,9 +158,9 @@ pub enum Blend<'a> {
 
 /// Synthetic colouring (§6.1.2): each pixel gets the lightness of `source` and the hue and
 /// saturation of the blend colour (HLS transfer). Alpha is the source's (1 for gray).
-pub fn synthetic_coloring(source: &Image, blend: &Blend<'_>) -> Result<Image, NodeError> {
+pub fn synthetic_coloring(source: &Image, blend: &Blend<'_>) -> Result<Image, ColoringError> {
     if let Blend::Texture(t) = blend {
-        check_size(source, t, port!(SyntheticColoringTexture, texture))?;
+        check_size(source, t).map_err(ColoringError::Texture)?;
     }
     let (w, h) = source.size();
     let n = w as usize * h as usize;
@@ -178,7 +178,7 @@ pub fn synthetic_coloring(source: &Image, blend: &Blend<'_>) -> Result<Image, No
         };
         out.extend_from_slice(&[px[0], px[1], px[2], alpha]);
     }
-    Image::from_vec(w, h, Channels::Rgba, out).ok_or_else(|| NodeError::msg("image data does not match its size"))
+    Image::from_vec(w, h, Channels::Rgba, out).ok_or_else(|| ColoringError::Message("image data does not match its size".into()))
 }
 
 pyrograph_core::choice! {

@@ -80,16 +80,16 @@ fn custom_mask_admits_extra_original_pixels() {
 fn bad_sizes_and_thresholds_are_clear_errors() {
     let src = gray(2, 1, &[0.0, 0.0]);
     let orig = solid(3, 1, [0.3; 3]);
-    let e = original_coloring(&src, &orig, 30.0, ColoringLayers::default()).unwrap_err().to_string();
+    let e = original_coloring(&src, &orig, 30.0, ColoringLayers::default()).map_err(NodeError::from).unwrap_err().to_string();
     assert!(e.contains("'original' is 3x1 but the source is 2x1"), "{e}");
     let orig = solid(2, 1, [0.3; 3]);
     for bad in [-1.0, 256.0, f64::NAN] {
-        let e = original_coloring(&src, &orig, bad, ColoringLayers::default()).unwrap_err().to_string();
+        let e = original_coloring(&src, &orig, bad, ColoringLayers::default()).map_err(NodeError::from).unwrap_err().to_string();
         assert!(e.contains("threshold") && e.contains("outside 0–255"), "{e}");
     }
     let smoke = solid(1, 1, [0.0; 3]);
     let layers = ColoringLayers { smoke: Some(&smoke), ..Default::default() };
-    assert!(original_coloring(&src, &orig, 30.0, layers).unwrap_err().to_string().contains("'smoke'"));
+    assert!(original_coloring(&src, &orig, 30.0, layers).map_err(NodeError::from).unwrap_err().to_string().contains("'smoke'"));
 }
 
 #[test]
@@ -144,7 +144,13 @@ proptest! {
 fn set_alpha_takes_the_matte() {
     let out = set_alpha(&solid(2, 1, [0.5; 3]), &gray(2, 1, &[0.25, 2.0])).unwrap();
     assert_eq!(out.data(), &[0.5, 0.5, 0.5, 0.25, 0.5, 0.5, 0.5, 1.0]);
-    assert!(set_alpha(&solid(2, 1, [0.5; 3]), &gray(1, 1, &[0.0])).unwrap_err().to_string().contains("'matte'"));
+    assert!(
+        set_alpha(&solid(2, 1, [0.5; 3]), &gray(1, 1, &[0.0]))
+            .map_err(NodeError::from)
+            .unwrap_err()
+            .to_string()
+            .contains("'matte'")
+    );
 }
 
 #[test]
@@ -187,7 +193,13 @@ fn synthetic_keeps_lightness_and_takes_the_blend_hue() {
     assert_eq!(&out.pixel(0, 0)[..3], &[0.0, 0.0, 0.0]);
     assert_eq!(&out.pixel(2, 0)[..3], &[1.0, 1.0, 1.0]);
     let tex = solid(2, 1, [0.0, 0.0, 1.0]);
-    assert!(synthetic_coloring(&src, &Blend::Texture(&tex)).unwrap_err().to_string().contains("'texture' is 2x1"));
+    assert!(
+        synthetic_coloring(&src, &Blend::Texture(&tex))
+            .map_err(NodeError::from)
+            .unwrap_err()
+            .to_string()
+            .contains("'texture' is 2x1")
+    );
 }
 
 #[test]

@@ -1,37 +1,31 @@
 //! Where frames go in a flipbook sheet: cell count, cell and frame sizes, padding, the alignment
 //! that keeps mip levels from mixing cells, and pasting frames with their edges dilated.
 
-use pyrograph_core::{Channels, Image, NodeError, port};
+use pyrograph_core::{Channels, Image};
 
-use super::FlipbookOptions;
 use super::engine::Convention;
+use super::{FlipbookError, FlipbookOptions};
 
 /// Largest number of mip levels a sheet can be laid out for (cells aligned to 256 pixels).
 pub const MAX_MIP_LEVELS: i64 = 8;
 
 /// Checks that `rows × cols` cells hold exactly `frames` frames.
-pub fn check_cells(frames: usize, rows: usize, cols: usize) -> Result<(), NodeError> {
+pub fn check_cells(frames: usize, rows: usize, cols: usize) -> Result<(), FlipbookError> {
     if rows == 0 || cols == 0 {
-        let port = if rows == 0 { port!(FlipbookOptions, rows) } else { port!(FlipbookOptions, cols) };
-        return Err(NodeError::port(port, "a flipbook needs at least one row and one column"));
+        let message = "a flipbook needs at least one row and one column".to_string();
+        return Err(if rows == 0 { FlipbookError::Rows(message) } else { FlipbookError::Cols(message) });
     }
     let cells = rows * cols;
     match cells.cmp(&frames) {
         std::cmp::Ordering::Equal => Ok(()),
-        std::cmp::Ordering::Greater => Err(NodeError::port(
-            port!(FlipbookOptions, rows),
-            format!(
-                "{rows}x{cols} = {cells} cells but the clip has only {frames} frames; lower rows/cols or give a longer clip \
+        std::cmp::Ordering::Greater => Err(FlipbookError::Rows(format!(
+            "{rows}x{cols} = {cells} cells but the clip has only {frames} frames; lower rows/cols or give a longer clip \
                  (every cell must hold a frame)"
-            ),
-        )),
-        std::cmp::Ordering::Less => Err(NodeError::port(
-            port!(FlipbookOptions, rows),
-            format!(
-                "{rows}x{cols} = {cells} cells cannot hold the clip's {frames} frames; raise rows/cols or trim the clip \
+        ))),
+        std::cmp::Ordering::Less => Err(FlipbookError::Rows(format!(
+            "{rows}x{cols} = {cells} cells cannot hold the clip's {frames} frames; raise rows/cols or trim the clip \
                  with imaging.time_range"
-            ),
-        )),
+        ))),
     }
 }
 
@@ -67,7 +61,7 @@ pub struct Layout {
 /// surround each frame, so a bilinear sample anywhere on the frame at level L reads only its own
 /// cell's texels. The frame stays at `pad` from the cell's top-left corner; rounding up adds room
 /// on the right and at the bottom.
-pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, NodeError> {
+pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, FlipbookError> {
     let levels = opts.mip_levels.min(MAX_MIP_LEVELS as u32);
     let align = 1u32 << levels;
     let pad = if levels > 0 { opts.padding.max(align / 2) } else { opts.padding };
@@ -85,33 +79,26 @@ pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, Node
         sheet_fits((u64::from(target.0), u64::from(target.1)))?;
         if opts.convention != Convention::Generic && (!target.0.is_multiple_of(cols) || !target.1.is_multiple_of(rows)) {
             // The engines' materials read cell i at i/cols of the texture: cells must tile the sheet exactly.
-            return Err(NodeError::port(
-                port!(FlipbookOptions, power_of_two),
-                format!(
-                    "the power-of-two sheet {}x{} does not split into {cols} columns and {rows} rows of whole pixels, \
+            return Err(FlipbookError::PowerOfTwo(format!(
+                "the power-of-two sheet {}x{} does not split into {cols} columns and {rows} rows of whole pixels, \
                      and the engine's material reads cell i at i/cols of the texture, so frames would drift into their \
                      neighbours; use rows and cols that are powers of two, or leave power_of_two off",
-                    target.0, target.1
-                ),
-            ));
+                target.0, target.1
+            )));
         }
         cell = (target.0 / cols, target.1 / rows);
         if cell.0 <= 2 * pad || cell.1 <= 2 * pad {
-            return Err(NodeError::port(
-                port!(FlipbookOptions, power_of_two),
-                "the power-of-two sheet leaves no room for the frames; lower padding",
+            return Err(FlipbookError::PowerOfTwo(
+                "the power-of-two sheet leaves no room for the frames; lower padding".to_string(),
             ));
         }
         if !cell.0.is_multiple_of(align) || !cell.1.is_multiple_of(align) {
-            return Err(NodeError::port(
-                port!(FlipbookOptions, mip_levels),
-                format!(
-                    "the power-of-two sheet {}x{} splits into cells of {}x{} pixels, not multiples of {align} (2^{levels}), \
+            return Err(FlipbookError::MipLevels(format!(
+                "the power-of-two sheet {}x{} splits into cells of {}x{} pixels, not multiples of {align} (2^{levels}), \
                      so mip level {levels} would mix neighbouring cells; use rows and cols that are powers of two or fewer \
                      mip levels",
-                    target.0, target.1, cell.0, cell.1
-                ),
-            ));
+                target.0, target.1, cell.0, cell.1
+            )));
         }
         frame = (cell.0 - 2 * pad, cell.1 - 2 * pad);
         sheet = target;
@@ -120,22 +107,19 @@ pub fn layout(source: (u32, u32), opts: &FlipbookOptions) -> Result<Layout, Node
 }
 
 /// Refuses a sheet of `size` pixels over the pixel budget (`--max-pixels`) or too wide to address.
-fn sheet_fits(size: (u64, u64)) -> Result<(), NodeError> {
+fn sheet_fits(size: (u64, u64)) -> Result<(), FlipbookError> {
     let budget = pyrograph_core::limits::max_pixels();
     let pixels = size.0.saturating_mul(size.1);
     if size.0 <= u64::from(u32::MAX / 2) && size.1 <= u64::from(u32::MAX / 2) && pixels <= budget {
         return Ok(());
     }
-    Err(NodeError::port(
-        port!(FlipbookOptions, cols),
-        format!(
-            "the sheet would be {}x{} pixels, more than the pixel budget of {budget}; use fewer rows and cols, less \
+    Err(FlipbookError::Cols(format!(
+        "the sheet would be {}x{} pixels, more than the pixel budget of {budget}; use fewer rows and cols, less \
              padding or fewer mip_levels, scale the frames down, or {}",
-            size.0,
-            size.1,
-            pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", pixels)
-        ),
-    ))
+        size.0,
+        size.1,
+        pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", pixels)
+    )))
 }
 
 /// What fills a cell's padding.

@@ -15,7 +15,7 @@ use crate::color::AlphaMode;
 use crate::filters::Plane;
 use crate::io::{BitDepth, ExrType, IoError, OutputFormat, output_format, write_image_file};
 use crate::media::no_images;
-use crate::resize::resize;
+use crate::resize::{ResizeError, resize};
 
 mod engine;
 mod flow;
@@ -84,8 +84,58 @@ pub fn sheet_path(path: &Path, rows: usize, cols: usize, extra: &str, ext: &str)
     path.with_file_name(format!("{stem}_{rows}x{cols}{extra}.{ext}"))
 }
 
+/// Why a flipbook cannot be built, by the setting or input it concerns (the flipbook nodes name
+/// the matching port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum FlipbookError {
+    /// The rows do not fit the clip.
+    #[error("{0}")]
+    Rows(String),
+    /// The columns do not fit the clip, or the sheet is too large.
+    #[error("{0}")]
+    Cols(String),
+    /// The power-of-two sheet cannot be laid out.
+    #[error("{0}")]
+    PowerOfTwo(String),
+    /// The cells cannot be aligned for the mip levels.
+    #[error("{0}")]
+    MipLevels(String),
+    /// The motion range is not a non-negative number.
+    #[error("{0}")]
+    MotionRange(String),
+    /// The clip's frames differ in size.
+    #[error("{0}")]
+    Clip(String),
+    /// The motion vectors do not fit the clip.
+    #[error("{0}")]
+    MotionVectors(String),
+    /// A frame could not be scaled to the cell.
+    #[error(transparent)]
+    Resize(#[from] ResizeError),
+    /// Anything no setting is to blame for.
+    #[error("{0}")]
+    Message(String),
+}
+
+/// A flipbook error on the port of the flipbook nodes it concerns.
+impl From<FlipbookError> for NodeError {
+    fn from(e: FlipbookError) -> NodeError {
+        match e {
+            FlipbookError::Rows(m) => NodeError::port(port!(FlipbookOptions, rows), m),
+            FlipbookError::Cols(m) => NodeError::port(port!(FlipbookOptions, cols), m),
+            FlipbookError::PowerOfTwo(m) => NodeError::port(port!(FlipbookOptions, power_of_two), m),
+            FlipbookError::MipLevels(m) => NodeError::port(port!(FlipbookOptions, mip_levels), m),
+            FlipbookError::MotionRange(m) => NodeError::port(port!(FlipbookOptions, motion_range), m),
+            FlipbookError::Clip(m) => NodeError::port(port!(FlipbookInputs, clip), m),
+            FlipbookError::MotionVectors(m) => NodeError::port(port!(FlipbookInputs, motion_vectors), m),
+            FlipbookError::Resize(e) => e.into(),
+            FlipbookError::Message(m) => NodeError::msg(m),
+        }
+    }
+}
+
 /// Builds the colour and motion sheets of `frames` (all the same size; their count must equal rows × cols).
-pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<Flipbook, NodeError> {
+pub fn build_flipbook(frames: &[Arc<Image>], opts: &FlipbookOptions) -> Result<Flipbook, FlipbookError> {
     build_flipbook_with(frames, None, opts)
 }
 
@@ -95,17 +145,18 @@ pub fn build_flipbook_with(
     frames: &[Arc<Image>],
     vectors: Option<&[Arc<Image>]>,
     opts: &FlipbookOptions,
-) -> Result<Flipbook, NodeError> {
+) -> Result<Flipbook, FlipbookError> {
     check_cells(frames.len(), opts.rows, opts.cols)?;
     let (w, h) = frames[0].size();
     if let Some((i, f)) = frames.iter().enumerate().find(|(_, f)| f.size() != (w, h)) {
-        return Err(NodeError::port(
-            port!(FlipbookInputs, clip),
-            format!("frame {i} is {}x{} but frame 0 is {w}x{h}; flipbook frames must share one size", f.width(), f.height()),
-        ));
+        return Err(FlipbookError::Clip(format!(
+            "frame {i} is {}x{} but frame 0 is {w}x{h}; flipbook frames must share one size",
+            f.width(),
+            f.height()
+        )));
     }
     if !opts.motion_range.is_finite() || opts.motion_range < 0.0 {
-        return Err(NodeError::port(port!(FlipbookOptions, motion_range), "must be a non-negative number (0 = automatic)"));
+        return Err(FlipbookError::MotionRange("must be a non-negative number (0 = automatic)".into()));
     }
     let geometry = layout((w, h), opts)?;
     let frame = geometry.frame;
@@ -115,7 +166,7 @@ pub fn build_flipbook_with(
             let f = if f.size() == frame { (**f).clone() } else { resize(f, frame.0, frame.1, FilterType::CatmullRom)? };
             Ok(opts.alpha.apply(&f.to_rgba()))
         })
-        .collect::<Result<_, NodeError>>()?;
+        .collect::<Result<_, FlipbookError>>()?;
     let flows = match vectors {
         Some(v) => given_motion(v, frames.len(), (w, h))?,
         None => motion_of(frames, opts.convention.central_vectors()),
@@ -139,10 +190,11 @@ pub fn build_flipbook_with(
                     [r, g, 0.0, 1.0]
                 })
                 .collect();
-            let img = Image::from_vec(w, h, Channels::Rgba, data).ok_or_else(|| NodeError::msg("motion size mismatch"))?;
-            if img.size() == frame { Ok(img) } else { resize(&img, frame.0, frame.1, FilterType::Triangle) }
+            let img = Image::from_vec(w, h, Channels::Rgba, data)
+                .ok_or_else(|| FlipbookError::Message("motion size mismatch".into()))?;
+            if img.size() == frame { Ok(img) } else { Ok(resize(&img, frame.0, frame.1, FilterType::Triangle)?) }
         })
-        .collect::<Result<_, NodeError>>()?;
+        .collect::<Result<_, FlipbookError>>()?;
     // Straight colour can carry its edge into transparent padding; premultiplied colour there would glow.
     let colour_fill =
         if opts.dilate && opts.alpha == AlphaMode::Straight { Fill::Edge { keep_alpha: false } } else { Fill::Empty };
@@ -218,10 +270,12 @@ fn motion_of(frames: &[Arc<Image>], central: bool) -> Vec<(Plane, Plane)> {
 
 /// The motion of each frame read from `vectors` (R and G, in pixels per frame), checked against
 /// the clip: one per frame, each the frames' size, every vector finite.
-fn given_motion(vectors: &[Arc<Image>], frames: usize, (w, h): (u32, u32)) -> Result<Vec<(Plane, Plane)>, NodeError> {
-    let port = port!(FlipbookInputs, motion_vectors);
+fn given_motion(vectors: &[Arc<Image>], frames: usize, (w, h): (u32, u32)) -> Result<Vec<(Plane, Plane)>, FlipbookError> {
     if vectors.len() != frames {
-        return Err(NodeError::port(port, format!("has {} frames but the clip has {frames}; give one per frame", vectors.len())));
+        return Err(FlipbookError::MotionVectors(format!(
+            "has {} frames but the clip has {frames}; give one per frame",
+            vectors.len()
+        )));
     }
     vectors
         .iter()
@@ -229,18 +283,20 @@ fn given_motion(vectors: &[Arc<Image>], frames: usize, (w, h): (u32, u32)) -> Re
         .map(|(k, img)| {
             if img.size() != (w, h) {
                 let (vw, vh) = img.size();
-                return Err(NodeError::port(port, format!("frame {k} is {vw}x{vh} but the clip's frames are {w}x{h}")));
+                return Err(FlipbookError::MotionVectors(format!("frame {k} is {vw}x{vh} but the clip's frames are {w}x{h}")));
             }
             if img.channels() != Channels::Rgba {
-                return Err(NodeError::port(
-                    port,
-                    format!("frame {k} is gray; motion vectors need R (x) and G (y), as volume.render's motion pass gives them"),
-                ));
+                return Err(FlipbookError::MotionVectors(format!(
+                    "frame {k} is gray; motion vectors need R (x) and G (y), as volume.render's motion pass gives them"
+                )));
             }
             let (mut u, mut v) = (Plane::new(w as usize, h as usize), Plane::new(w as usize, h as usize));
             for ((px, x), y) in img.data().chunks_exact(4).zip(&mut u.data).zip(&mut v.data) {
                 if !(px[0].is_finite() && px[1].is_finite()) {
-                    return Err(NodeError::port(port, format!("frame {k} holds a non-finite vector ({}, {})", px[0], px[1])));
+                    return Err(FlipbookError::MotionVectors(format!(
+                        "frame {k} holds a non-finite vector ({}, {})",
+                        px[0], px[1]
+                    )));
                 }
                 (*x, *y) = (px[0], px[1]);
             }
@@ -282,13 +338,13 @@ impl FlipbookInputs {
     fn build(&self, ctx: &CookCtx) -> Result<Flipbook, NodeError> {
         let frames = self.frames(ctx)?;
         if self.motion_vectors.is_empty() {
-            return build_flipbook(&frames, &self.layout);
+            return Ok(build_flipbook(&frames, &self.layout)?);
         }
         let vectors: Vec<Arc<Image>> = (0..self.motion_vectors.len())
             .into_par_iter()
             .map(|k| self.motion_vectors.image(k, ctx))
             .collect::<Result<_, _>>()?;
-        build_flipbook_with(&frames, Some(&vectors), &self.layout)
+        Ok(build_flipbook_with(&frames, Some(&vectors), &self.layout)?)
     }
 }
 
@@ -456,7 +512,7 @@ impl Cook for WriteFlipbook {
         // A problem with a file written is one with this node's `path` (or `overwrite`).
         let file_error = |e: IoError| match e {
             IoError::Exists(message) => NodeError::port(port!(WriteFlipbook, overwrite), message),
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
             e => NodeError::port(path_port, e.to_string()),
         };
         let format: OutputFormat = output_format(base, BitDepth::Eight, ExrType::Half).map_err(file_error)?;

@@ -254,6 +254,7 @@ fn aligned_cells_keep_every_mip_level_to_themselves() {
     assert!(bleeds(&plain, (30, 21), 3));
     // Power-of-two sheets whose cells cannot be aligned are refused, naming mip_levels.
     let e = layout((30, 30), &FlipbookOptions { rows: 3, cols: 3, power_of_two: true, mip_levels: 4, ..Default::default() })
+        .map_err(NodeError::from)
         .unwrap_err()
         .to_string();
     assert!(e.contains("mip_levels") && e.contains("not multiples of 16"), "{e}");
@@ -363,7 +364,8 @@ fn given_motion_vectors_replace_the_optical_flow() {
 fn motion_vectors_that_do_not_fit_the_clip_are_errors_naming_the_port() {
     let frames = numbered(4, 8, 8);
     let opts = FlipbookOptions { rows: 2, cols: 2, ..Default::default() };
-    let error = |v: Vec<Arc<Image>>| build_flipbook_with(&frames, Some(&v), &opts).unwrap_err().to_string();
+    let error =
+        |v: Vec<Arc<Image>>| build_flipbook_with(&frames, Some(&v), &opts).map_err(NodeError::from).unwrap_err().to_string();
     let e = error(vectors(3, 8, 8));
     assert!(e.contains("motion_vectors") && e.contains("has 3 frames but the clip has 4"), "{e}");
     let mut v = vectors(4, 8, 8);

@@ -10,20 +10,22 @@ use std::io::Read;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use pyrograph_core::{Channels, Image, NodeError};
+use pyrograph_core::{Channels, Image};
+
+use crate::media::IoError;
 
 /// Bytes of the header up to and including the first image element's bit size.
 const HEADER: usize = 804;
 
 /// Width and height from a DPX header: pixels per line at byte 772 and lines per element at 776,
 /// in the byte order its magic number (`SDPX` big-endian, `XPDS` little-endian) states.
-pub fn dpx_dimensions(path: &Path) -> Result<(u32, u32), NodeError> {
+pub fn dpx_dimensions(path: &Path) -> Result<(u32, u32), IoError> {
     dpx_header(path).map(|(w, h, _)| (w, h))
 }
 
 /// Width, height and the first image element's bits per sample (byte 803).
-fn dpx_header(path: &Path) -> Result<(u32, u32, u8), NodeError> {
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+fn dpx_header(path: &Path) -> Result<(u32, u32, u8), IoError> {
+    let named = |e: &dyn std::fmt::Display| IoError::Message(format!("{}: {e}", path.display()));
     let mut head = [0u8; HEADER];
     let mut file = std::fs::File::open(path).map_err(|e| named(&e))?;
     file.read_exact(&mut head).map_err(|_| named(&format!("not a DPX file: shorter than a DPX header ({HEADER} bytes)")))?;
@@ -43,8 +45,8 @@ fn dpx_header(path: &Path) -> Result<(u32, u32, u8), NodeError> {
 /// Decodes a DPX file (whose size, `w` × `h`, was checked against the budget) with `ffmpeg`: 8-bit
 /// files at 8 bits, deeper ones at 16 so 10- and 12-bit scans keep their precision (ffmpeg's
 /// widening of 8-bit samples to 16 is not exact); RGBA, alpha 1 where the file has none.
-pub fn decode_dpx(path: &Path, (w, h): (u32, u32)) -> Result<Image, NodeError> {
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+pub fn decode_dpx(path: &Path, (w, h): (u32, u32)) -> Result<Image, IoError> {
+    let named = |e: &dyn std::fmt::Display| IoError::Message(format!("{}: {e}", path.display()));
     let deep = dpx_header(path)?.2 > 8;
     let out = Command::new("ffmpeg")
         .args(["-v", "error", "-nostdin", "-f", "dpx_pipe", "-i"])

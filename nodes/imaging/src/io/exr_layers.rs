@@ -10,7 +10,9 @@ use std::path::Path;
 
 use exr::meta::MetaData;
 use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, WritableImage as _, f16};
-use pyrograph_core::{Channels, Image, NodeError};
+use pyrograph_core::{Channels, Image};
+
+use crate::media::IoError;
 
 /// The layer and base name of a channel: its name before and after the last dot; without a dot,
 /// the layer is `part`, the part's name in a multi-part file (None in a single-part file, whose
@@ -45,7 +47,7 @@ fn layers(meta: &MetaData) -> Vec<(usize, String)> {
 /// The part holding `layer` and the layer's name there. "" (or `rgba`, as compositors call it)
 /// is the main layer: the channels without a dot; a file without them gives its first part's layer
 /// when it has several parts (as readers of multi-part files do), or its only layer.
-fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, String), NodeError> {
+fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, String), IoError> {
     let all = layers(meta);
     let layer = if layer.eq_ignore_ascii_case("rgba") { "" } else { layer };
     let pick = match layer {
@@ -58,7 +60,7 @@ fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, Strin
     pick.cloned().ok_or_else(|| {
         let names: Vec<&str> = all.iter().map(|(_, l)| if l.is_empty() { "rgba" } else { l.as_str() }).collect();
         let asked = if layer.is_empty() { "no main (unnamed) layer".to_string() } else { format!("no layer '{layer}'") };
-        NodeError::msg(format!(
+        IoError::Message(format!(
             "{}: the file has {asked}; its layers are {}; set layer to one of them",
             path.display(),
             names.join(", ")
@@ -68,31 +70,31 @@ fn find_layer(meta: &MetaData, layer: &str, path: &Path) -> Result<(usize, Strin
 
 /// Width and height of every part of the file: each is decoded when one layer is read, so each is
 /// checked against the pixel budget.
-pub fn exr_part_sizes(path: &Path) -> Result<Vec<(u32, u32)>, NodeError> {
+pub fn exr_part_sizes(path: &Path) -> Result<Vec<(u32, u32)>, IoError> {
     let meta = read_meta(path)?;
     meta.headers.iter().map(|h| Ok((to_u32(h.layer_size.0, path)?, to_u32(h.layer_size.1, path)?))).collect()
 }
 
-fn read_meta(path: &Path) -> Result<MetaData, NodeError> {
-    MetaData::read_from_file(path, false).map_err(|e| NodeError::msg(format!("{}: {e}", path.display())))
+fn read_meta(path: &Path) -> Result<MetaData, IoError> {
+    MetaData::read_from_file(path, false).map_err(|e| IoError::Message(format!("{}: {e}", path.display())))
 }
 
 /// Width and height of `layer`'s part, from the header alone.
-pub fn exr_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
+pub fn exr_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), IoError> {
     let meta = read_meta(path)?;
     let (part, _) = find_layer(&meta, layer, path)?;
     let size = meta.headers[part].layer_size;
     Ok((to_u32(size.0, path)?, to_u32(size.1, path)?))
 }
 
-fn to_u32(v: usize, path: &Path) -> Result<u32, NodeError> {
-    u32::try_from(v).map_err(|_| NodeError::msg(format!("{}: image too large ({v} pixels wide or high)", path.display())))
+fn to_u32(v: usize, path: &Path) -> Result<u32, IoError> {
+    u32::try_from(v).map_err(|_| IoError::Message(format!("{}: image too large ({v} pixels wide or high)", path.display())))
 }
 
 /// Decodes `layer` of an OpenEXR file (its header checked against the budget by the caller): `Y`
 /// only → gray, else R, G, B (and A, default 1).
-pub fn decode_exr_layer(path: &Path, layer: &str) -> Result<Image, NodeError> {
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+pub fn decode_exr_layer(path: &Path, layer: &str) -> Result<Image, IoError> {
+    let named = |e: &dyn std::fmt::Display| IoError::Message(format!("{}: {e}", path.display()));
     let meta = read_meta(path)?;
     let (part, label) = find_layer(&meta, layer, path)?;
     let file = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| named(&e))?;
@@ -146,14 +148,14 @@ pub struct LayerOut<'a> {
 /// Encodes `layers` (all one size) as one single-part OpenEXR file whose channels are named
 /// `layer.channel`, as Nuke, Fusion and Resolve write and read passes. Chunks are compressed one
 /// after another so one frame written twice gives the same bytes (see `encode_exr`).
-pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, NodeError> {
-    let first = layers.first().ok_or_else(|| NodeError::msg("no layer to write"))?;
+pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, IoError> {
+    let first = layers.first().ok_or_else(|| IoError::Message("no layer to write".into()))?;
     let size = first.image.size();
     let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
     for layer in layers {
         if layer.image.size() != size {
             let (w, h) = layer.image.size();
-            return Err(NodeError::msg(format!(
+            return Err(IoError::Message(format!(
                 "layer '{}' is {w}×{h} but the main layer is {}×{}; every layer of a file has one size",
                 layer.name, size.0, size.1
             )));
@@ -173,7 +175,7 @@ pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, NodeError> 
             let name = if layer.name.is_empty() { (*base).to_string() } else { format!("{}.{base}", layer.name) };
             let text = exr::prelude::Text::new_or_none(name.as_str())
                 .filter(|_| name.len() <= MAX_NAME)
-                .ok_or_else(|| NodeError::msg(format!("layer '{}': {}", layer.name, NAME_RULE)))?;
+                .ok_or_else(|| IoError::Message(format!("layer '{}': {}", layer.name, NAME_RULE)))?;
             channels.push(AnyChannel::new(text, samples));
         }
     }
@@ -184,7 +186,7 @@ pub fn encode_exr_layers(layers: &[LayerOut<'_>]) -> Result<Vec<u8>, NodeError> 
         .write()
         .non_parallel()
         .to_buffered(std::io::Cursor::new(&mut bytes))
-        .map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;
+        .map_err(|e| IoError::Message(format!("encoding EXR: {e}")))?;
     Ok(bytes)
 }
 

@@ -7,7 +7,7 @@ use std::path::Path;
 use exr::prelude::{SpecificChannels, Vec2, WritableImage as _, f16};
 use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
 use pyrograph_core::document::write_atomic;
-use pyrograph_core::{Channels, Image, NodeError};
+use pyrograph_core::{Channels, Image};
 
 use super::{IoError, has_extension, no_such};
 use crate::convert;
@@ -42,23 +42,23 @@ fn is_exr(path: &Path) -> bool {
 }
 
 /// Refuses a header that declares more pixels than [`pixel_budget`](crate::media::pixel_budget).
-fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), NodeError> {
+fn check_budget(path: &Path, (w, h): (u32, u32)) -> Result<(u32, u32), IoError> {
     match over_budget(path, w, h) {
-        Some(m) => Err(NodeError::msg(m)),
+        Some(m) => Err(IoError::Message(m)),
         None => Ok((w, h)),
     }
 }
 
 /// Width and height from the file's header (of `layer`, for OpenEXR; "" is the main layer),
 /// without decoding the pixels; a size over the [`pixel_budget`](crate::media::pixel_budget) is an error.
-pub fn image_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
+pub fn image_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), IoError> {
     header_dimensions(path, layer).and_then(|size| check_budget(path, size))
 }
 
-fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> {
+fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), IoError> {
     // Every decode passes here first: a file outside the read roots is not opened.
-    pyrograph_core::limits::may_read(path).map_err(NodeError::msg)?;
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    pyrograph_core::limits::may_read(path).map_err(IoError::Message)?;
+    let named = |e: &dyn std::fmt::Display| IoError::Message(format!("{}: {e}", path.display()));
     if is_exr(path) {
         // The exr crate, not `image`, so gray (`Y`) files and layers other than the first read too.
         // Reading a layer decodes every part of the file: each is held to the budget.
@@ -84,7 +84,7 @@ fn header_dimensions(path: &Path, layer: &str) -> Result<(u32, u32), NodeError> 
 /// Decodes one image file (`layer` of an OpenEXR file; "" is its main layer): colour files become
 /// RGBA, gray files gray. Its header is checked against the [`pixel_budget`](crate::media::pixel_budget) first (decoders
 /// allocate what a header declares).
-pub fn decode_image(path: &Path, layer: &str) -> Result<Image, NodeError> {
+pub fn decode_image(path: &Path, layer: &str) -> Result<Image, IoError> {
     let (w, h) = image_dimensions(path, layer)?;
     if is_exr(path) {
         return super::exr_layers::decode_exr_layer(path, layer);
@@ -92,7 +92,7 @@ pub fn decode_image(path: &Path, layer: &str) -> Result<Image, NodeError> {
     if has_extension(path, &["dpx"]) {
         return super::dpx::decode_dpx(path, (w, h));
     }
-    let named = |e: &dyn std::fmt::Display| NodeError::msg(format!("{}: {e}", path.display()));
+    let named = |e: &dyn std::fmt::Display| IoError::Message(format!("{}: {e}", path.display()));
     let mut reader = image::ImageReader::open(path).map_err(|e| named(&e))?.with_guessed_format().map_err(|e| named(&e))?;
     // The image crate's own allocation limit (512 MiB by default) would refuse a plate within
     // the budget (16-bit RGBA at 8192 × 8192 is 512 MiB): allow what the budget allows.
@@ -136,7 +136,7 @@ pub enum OutputFormat {
 }
 
 /// Encodes an image into the bytes of a file: gray images stay one-channel (PNG L8/L16, EXR `Y`).
-pub fn encode_image(img: &Image, format: OutputFormat) -> Result<Vec<u8>, NodeError> {
+pub fn encode_image(img: &Image, format: OutputFormat) -> Result<Vec<u8>, IoError> {
     match format {
         OutputFormat::Png { sixteen_bit } => encode_png(img, sixteen_bit),
         OutputFormat::Exr { half } => encode_exr(img, half),
@@ -145,21 +145,23 @@ pub fn encode_image(img: &Image, format: OutputFormat) -> Result<Vec<u8>, NodeEr
 
 // `write_to` encodes with image's default PNG settings, the png crate's `Compression::Fast` with
 // adaptive filters: a writer's cost stays near the decoder's (benches/stream/run.sh, BENCHMARKS.md).
-fn encode_png(img: &Image, sixteen_bit: bool) -> Result<Vec<u8>, NodeError> {
+fn encode_png(img: &Image, sixteen_bit: bool) -> Result<Vec<u8>, IoError> {
     let (w, h) = img.size();
     let dynamic = match (img.channels(), sixteen_bit) {
         (Channels::Gray, false) => DynamicImage::ImageLuma8(convert::to_gray8(img)),
         (Channels::Gray, true) => {
             let data = img.data().iter().map(|&v| unit_to_u16(v)).collect();
             let buf: ImageBuffer<Luma<u16>, Vec<u16>> =
-                ImageBuffer::from_raw(w, h, data).ok_or_else(|| NodeError::msg("image data does not match its size"))?;
+                ImageBuffer::from_raw(w, h, data).ok_or_else(|| IoError::Message("image data does not match its size".into()))?;
             DynamicImage::ImageLuma16(buf)
         }
         (Channels::Rgba, false) => DynamicImage::ImageRgba8(convert::to_rgba8(img)),
         (Channels::Rgba, true) => DynamicImage::ImageRgba16(convert::to_rgba16(img)),
     };
     let mut bytes = Vec::new();
-    dynamic.write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png).map_err(|e| NodeError::msg(format!("encoding PNG: {e}")))?;
+    dynamic
+        .write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png)
+        .map_err(|e| IoError::Message(format!("encoding PNG: {e}")))?;
     Ok(bytes)
 }
 
@@ -172,7 +174,7 @@ fn unit_to_u16(v: f32) -> u16 {
 /// in the order they finish, so one frame rendered twice gave two different files with the same
 /// pixels, and a farm could not check outputs by their hash. Writers already encode several frames
 /// at once, which keeps the cores busy.
-fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
+fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, IoError> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let n = img.channels().count();
     let data = img.data();
@@ -201,7 +203,7 @@ fn encode_exr(img: &Image, half: bool) -> Result<Vec<u8>, NodeError> {
             exr::image::Image::from_channels((w, h), SpecificChannels::rgba(px)).write().non_parallel().to_buffered(cursor)
         }
     };
-    result.map_err(|e| NodeError::msg(format!("encoding EXR: {e}")))?;
+    result.map_err(|e| IoError::Message(format!("encoding EXR: {e}")))?;
     Ok(bytes)
 }
 

@@ -5,8 +5,9 @@
 //! [`sequence`] finds a sequence's files by folder or frame-number pattern, serves them as a lazy
 //! clip and writes clips as numbered files, and [`nodes`] declares the node types on top of both.
 //! The functions of `files` and `sequence` report an [`IoError`] that says what a problem concerns;
-//! the nodes name the port. [`load_image`], [`load_sequence`] and [`write_image`] are the nodes'
-//! cooks as plain functions, for callers outside a graph.
+//! the nodes name the port. [`load_image`] and [`write_image`] are the nodes' work as plain
+//! functions for callers outside a graph; [`LoadSequence::load`] loads a sequence as the node does
+//! (its video frames decode later, so their errors need the node's ports).
 
 pub mod dpx;
 pub mod exr_layers;

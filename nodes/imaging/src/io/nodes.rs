@@ -53,18 +53,18 @@ impl LoadSequence {
     /// The node error for `e`: loading fails only over the file, folder or pattern, its `path`.
     pub fn node_error(e: IoError) -> NodeError {
         match e {
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
             e => NodeError::port(port!(LoadSequence, path), e.to_string()),
         }
     }
-}
 
-/// Loads `path` (folder, pattern, image or video) as `imaging.load_sequence` does with its default
-/// `gaps` (a numbered sequence with missing numbers is an error), `fps` 0 meaning automatic;
-/// errors name its ports.
-pub fn load_sequence(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
-    let options = SequenceOptions { fps, ..SequenceOptions::default() };
-    open_sequence(path, &options, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
+    /// Loads `path` (folder, pattern, image or video) as the node does with its default `gaps`
+    /// (a numbered sequence with missing numbers is an error), `fps` 0 meaning automatic; errors
+    /// name its ports, those of a video's frames decoded later too.
+    pub fn load(path: &Path, fps: f64, ctx: &CookCtx) -> Result<Clip, NodeError> {
+        let options = SequenceOptions { fps, ..SequenceOptions::default() };
+        open_sequence(path, &options, ctx, LoadSequence::node_error).map_err(LoadSequence::node_error)
+    }
 }
 
 pyrograph_core::node! {
@@ -92,16 +92,16 @@ impl LoadImage {
     /// The node error for `e`: loading fails only over the file, its `path`.
     pub fn node_error(e: IoError) -> NodeError {
         match e {
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
             e => NodeError::port(port!(LoadImage, path), e.to_string()),
         }
     }
 }
 
-/// Loads one image file (its main layer, for OpenEXR) as `imaging.load_image` does; errors name
-/// its ports.
-pub fn load_image(path: &Path) -> Result<Image, NodeError> {
-    read_image_file(path, "").map_err(LoadImage::node_error)
+/// Loads one image file (its main layer, for OpenEXR) as `imaging.load_image` does, for callers
+/// outside a graph (which have no port to name); every error names the file.
+pub fn load_image(path: &Path) -> Result<Image, IoError> {
+    read_image_file(path, "")
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -171,7 +171,7 @@ impl WriteSequence {
             IoError::Path(message) => NodeError::port(port!(WriteSequence, pattern), message),
             IoError::Exists(message) => NodeError::port(port!(WriteSequence, overwrite), message),
             e @ IoError::EmptyClip => NodeError::port(port!(WriteSequence, clip), e.to_string()),
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
         }
     }
 }
@@ -198,7 +198,8 @@ pyrograph_core::node! {
 impl Cook for WriteImage {
     fn cook(self, ctx: &CookCtx) -> Result<OutputPath, NodeError> {
         let format = output_format(&self.path, self.bit_depth, self.exr_type).map_err(WriteImage::node_error)?;
-        write_image(&self.image, &self.path, format, self.overwrite || ctx.settings().overwrite)?;
+        write_image_file(&self.image, &self.path, format, self.overwrite || ctx.settings().overwrite)
+            .map_err(WriteImage::node_error)?;
         ctx.record_written(&self.path);
         Ok(self.path)
     }
@@ -210,14 +211,14 @@ impl WriteImage {
     pub fn node_error(e: IoError) -> NodeError {
         match e {
             IoError::Exists(message) => NodeError::port(port!(WriteImage, overwrite), message),
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
             e => NodeError::port(port!(WriteImage, path), e.to_string()),
         }
     }
 }
 
-/// Writes one image atomically as `imaging.write_image` does (an existing file is an error unless
-/// `overwrite`); errors name its ports.
-pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), NodeError> {
-    write_image_file(img, path, format, overwrite).map_err(WriteImage::node_error)
+/// Writes one image atomically as `imaging.write_image` does (an existing file is an
+/// [`IoError::Exists`] unless `overwrite`), for callers outside a graph.
+pub fn write_image(img: &Image, path: &Path, format: OutputFormat, overwrite: bool) -> Result<(), IoError> {
+    write_image_file(img, path, format, overwrite)
 }

@@ -288,7 +288,7 @@ fn missing_ranges(numbers: &[u64]) -> Vec<(u64, u64)> {
 /// Reads every file's header (in parallel; `layer` of OpenEXR files) and checks that all frames
 /// share one size.
 pub fn check_same_size(files: &[PathBuf], layer: &str) -> Result<(u32, u32), IoError> {
-    let sizes: Vec<Result<(u32, u32), NodeError>> = files.par_iter().map(|f| image_dimensions(f, layer)).collect();
+    let sizes: Vec<Result<(u32, u32), IoError>> = files.par_iter().map(|f| image_dimensions(f, layer)).collect();
     let mut first: Option<((u32, u32), &PathBuf)> = None;
     for (size, file) in sizes.into_iter().zip(files) {
         let size = size.map_err(|e| IoError::Path(e.to_string()))?;
@@ -432,7 +432,7 @@ pub fn frames_to_write(len: usize, frames: Option<&FrameSet>) -> Result<Vec<usiz
     match frames {
         None => Ok((0..len).collect()),
         Some(set) if set.last() < len => Ok(set.frames()),
-        Some(set) => Err(NodeError::msg(format!("frames {set} reach past the clip's frames 0-{}", len - 1)).into()),
+        Some(set) => Err(IoError::Message(format!("frames {set} reach past the clip's frames 0-{}", len - 1))),
     }
 }
 
@@ -457,7 +457,7 @@ pub fn write_frames(
     len: usize,
     options: &WriteOptions,
     ctx: &CookCtx,
-    encode: impl Fn(usize) -> Result<Vec<u8>, NodeError> + Sync,
+    encode: impl Fn(usize) -> Result<Vec<u8>, IoError> + Sync,
 ) -> Result<Vec<PathBuf>, IoError> {
     let (dir, pattern) = output_pattern(&options.pattern)?;
     let frames = frames_to_write(len, options.frames.as_ref())?;
@@ -486,12 +486,10 @@ pub fn write_frames(
     for chunk in targets.chunks(window) {
         chunk.par_iter().try_for_each(|(i, path)| {
             ctx.check_cancel()?;
-            let bytes = encode(*i).map_err(|e| match e {
-                e @ NodeError::Frame { .. } => e,
-                e => NodeError::Frame { frame: *i, source: Box::new(e) },
-            })?;
+            // The frame is named once, when the error becomes the node's (see `From<IoError>`).
+            let bytes = encode(*i).map_err(|e| IoError::Frame { frame: *i, source: Box::new(e) })?;
             write_atomic(path, &bytes, options.overwrite)
-                .map_err(|e| NodeError::msg(format!("writing {}: {e}", path.display())))?;
+                .map_err(|e| IoError::Message(format!("writing {}: {e}", path.display())))?;
             ctx.record_written(path);
             ctx.frame_progress(done.fetch_add(1, AtomicOrdering::Relaxed) + 1, targets.len());
             Ok::<(), IoError>(())

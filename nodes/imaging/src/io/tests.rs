@@ -260,16 +260,16 @@ fn loads_a_folder_a_pattern_and_a_single_file() {
     write_sequence(&clip, &options(dir.path().join("s_####.png"), OutputFormat::Png { sixteen_bit: false }), &ctx).unwrap();
     std::fs::write(dir.path().join("notes.txt"), b"ignored").unwrap();
 
-    let from_dir = load_sequence(dir.path(), 0.0, &ctx).unwrap();
+    let from_dir = LoadSequence::load(dir.path(), 0.0, &ctx).unwrap();
     assert_eq!((from_dir.len(), from_dir.fps()), (3, DEFAULT_FPS));
     assert_close(from_dir.image(2, &ctx).unwrap().data(), &[1.0; 4], 1e-6);
 
-    let from_pattern = load_sequence(&dir.path().join("s_%04d.png"), 30.0, &ctx).unwrap();
+    let from_pattern = LoadSequence::load(&dir.path().join("s_%04d.png"), 30.0, &ctx).unwrap();
     assert_eq!((from_pattern.len(), from_pattern.fps()), (3, 30.0));
     assert_eq!(from_pattern.fingerprint(), from_dir.fingerprint());
     assert_close(from_pattern.image(1, &ctx).unwrap().data(), &[0.5; 4], 0.5 / 255.0 + 1e-6);
 
-    let single = load_sequence(&dir.path().join("s_0001.png"), 0.0, &ctx).unwrap();
+    let single = LoadSequence::load(&dir.path().join("s_0001.png"), 0.0, &ctx).unwrap();
     assert_eq!(single.len(), 1);
 }
 
@@ -289,7 +289,7 @@ fn a_sequence_with_missing_numbers_is_refused_naming_them_or_held() {
     sequence_with_gaps(dir.path(), &[3, 6, 7]);
     let ctx = CookCtx::new();
     for path in [dir.path().join("s_####.png"), dir.path().to_path_buf()] {
-        let err = load_sequence(&path, 0.0, &ctx).unwrap_err().to_string();
+        let err = LoadSequence::load(&path, 0.0, &ctx).unwrap_err().to_string();
         assert!(err.contains("frames 3, 6-7 are missing (3 of the numbers 0-9)") && err.contains("hold"), "{err}");
         let held = open_sequence(
             &path,
@@ -306,28 +306,28 @@ fn a_sequence_with_missing_numbers_is_refused_naming_them_or_held() {
     }
     let one = tempfile::tempdir().unwrap();
     sequence_with_gaps(one.path(), &[4]);
-    let err = load_sequence(one.path(), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(one.path(), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("frame 4 is missing (1 of the numbers 0-9)"), "{err}");
     // A folder of unrelated names is no numbered sequence: nothing is missing from it.
     let loose = tempfile::tempdir().unwrap();
     for name in ["a1.png", "b7.png"] {
         std::fs::copy(dir.path().join("s_0000.png"), loose.path().join(name)).unwrap();
     }
-    assert_eq!(load_sequence(loose.path(), 0.0, &ctx).unwrap().len(), 2);
+    assert_eq!(LoadSequence::load(loose.path(), 0.0, &ctx).unwrap().len(), 2);
     // A reference still of another type beside the frames is not a frame.
     std::fs::write(loose.path().join("reference.tif"), b"not read").unwrap();
-    assert_eq!(load_sequence(loose.path(), 0.0, &ctx).unwrap().len(), 2);
+    assert_eq!(LoadSequence::load(loose.path(), 0.0, &ctx).unwrap().len(), 2);
 }
 
 #[test]
 fn missing_paths_and_unmatched_patterns_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let ctx = CookCtx::new();
-    let err = load_sequence(&dir.path().join("nope.png"), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(&dir.path().join("nope.png"), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("nope.png") && err.contains("no such file or directory"), "{err}");
-    let err = load_sequence(&dir.path().join("f_####.png"), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(&dir.path().join("f_####.png"), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("no files match"), "{err}");
-    let err = load_sequence(dir.path(), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(dir.path(), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("no image files"), "{err}");
     assert!(load_image(&dir.path().join("x.png")).unwrap_err().to_string().contains("no such file"));
 }
@@ -337,13 +337,13 @@ fn empty_and_corrupt_files_are_reported_by_name_at_cook_time() {
     let dir = tempfile::tempdir().unwrap();
     let ctx = CookCtx::new();
     std::fs::write(dir.path().join("empty.png"), b"").unwrap();
-    let err = load_sequence(&dir.path().join("empty.png"), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(&dir.path().join("empty.png"), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("empty.png"), "{err}");
     // A PNG signature followed by garbage instead of an IHDR chunk.
     let mut corrupt = b"\x89PNG\r\n\x1a\n".to_vec();
     corrupt.extend_from_slice(&[0xde, 0xad, 0xbe, 0xef, 1, 2, 3, 4, 5, 6]);
     std::fs::write(dir.path().join("bad.png"), &corrupt).unwrap();
-    let err = load_sequence(&dir.path().join("bad.png"), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(&dir.path().join("bad.png"), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("bad.png"), "{err}");
     let err = load_image(&dir.path().join("bad.png")).unwrap_err().to_string();
     assert!(err.contains("bad.png"), "{err}");
@@ -357,7 +357,7 @@ fn mismatched_sizes_name_the_odd_file() {
     write_sequence(&clip_of(vec![gray(2, 2, &[0.0; 4]); 2]), &options(dir.path().join("m_####.png"), fmt), &ctx).unwrap();
     let odd = WriteOptions { start: 2, ..options(dir.path().join("m_####.png"), fmt) };
     write_sequence(&clip_of(vec![gray(3, 1, &[0.0; 3])]), &odd, &ctx).unwrap();
-    let err = load_sequence(dir.path(), 0.0, &ctx).unwrap_err().to_string();
+    let err = LoadSequence::load(dir.path(), 0.0, &ctx).unwrap_err().to_string();
     assert!(err.contains("m_0002.png") && err.contains("3x1") && err.contains("2x2"), "{err}");
 }
 
@@ -378,7 +378,7 @@ fn cook_reads_ports_and_reports_frames_written() {
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn loads_the_candle_black_frames() {
     let ctx = CookCtx::new();
-    let clip = load_sequence(&footage().join("candle-black/frames"), 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&footage().join("candle-black/frames"), 0.0, &ctx).unwrap();
     assert_eq!(clip.len(), 150);
     let img = clip.image(149, &ctx).unwrap();
     assert_eq!(img.size(), (854, 480));
@@ -388,7 +388,7 @@ fn loads_the_candle_black_frames() {
 #[ignore = "needs footage: set PYROGRAPH_FOOTAGE or run from CI"]
 fn loads_the_tealight_video() {
     let ctx = CookCtx::new();
-    let clip = load_sequence(&footage().join("tealight-candle/candle.mp4"), 0.0, &ctx).unwrap();
+    let clip = LoadSequence::load(&footage().join("tealight-candle/candle.mp4"), 0.0, &ctx).unwrap();
     assert_eq!(clip.len(), 796);
     assert!(clip.fps() > 0.0);
     let img = clip.image(795, &ctx).unwrap();

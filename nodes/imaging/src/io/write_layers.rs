@@ -118,7 +118,7 @@ impl WriteExrLayers {
             IoError::Path(message) => NodeError::port(port!(WriteExrLayers, pattern), message),
             IoError::Exists(message) => NodeError::port(port!(WriteExrLayers, overwrite), message),
             e @ IoError::EmptyClip => NodeError::port(port!(WriteExrLayers, main), e.to_string()),
-            IoError::Other(e) => e,
+            e @ (IoError::Other(_) | IoError::Message(_) | IoError::Frame { .. }) => e.into(),
         }
     }
 }

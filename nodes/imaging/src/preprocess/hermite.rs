@@ -36,22 +36,22 @@ pub fn hermite_pixel(p: f32, i_min: f32, i_max: f32) -> f32 {
 ///
 /// Pixels inside `protect` keep their gray value (thesis Fig. 20d). `i_min >= i_max` is an error
 /// naming `i_min`; a protect mask of another size is an error naming `protect`.
-pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option<&Mask>) -> Result<Image, NodeError> {
+pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option<&Mask>) -> Result<Image, HermiteError> {
     if i_min.is_nan() || i_max.is_nan() || i_min >= i_max {
-        return Err(NodeError::port(
-            port!(HermiteInputs, i_min),
-            format!("must be below i_max, got i_min {i_min} and i_max {i_max}"),
-        ));
+        return Err(HermiteError::IMin(format!("must be below i_max, got i_min {i_min} and i_max {i_max}")));
     }
     let mut gray = to_gray32f(image);
     let w = gray.width().max(1) as usize;
     if let Some(m) = protect
         && (m.width(), m.height()) != gray.dimensions()
     {
-        return Err(NodeError::port(
-            port!(HermiteBackgroundMasked, protect),
-            format!("mask is {}×{} but the image is {}×{}", m.width(), m.height(), gray.width(), gray.height()),
-        ));
+        return Err(HermiteError::Protect(format!(
+            "mask is {}×{} but the image is {}×{}",
+            m.width(),
+            m.height(),
+            gray.width(),
+            gray.height()
+        )));
     }
     // A per-pixel curve: one rayon task per row is all the parallelism it needs.
     let rows = gray.par_chunks_mut(w);
@@ -66,6 +66,28 @@ pub fn hermite_background(image: &Image, i_min: f32, i_max: f32, protect: Option
         None => rows.for_each(|row| row.iter_mut().for_each(|p| *p = hermite_pixel(*p, i_min, i_max))),
     }
     Ok(from_gray32f(gray))
+}
+
+/// Why the background cannot be removed, by the setting it concerns (the Hermite nodes name the
+/// port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum HermiteError {
+    /// `i_min` is not below `i_max`.
+    #[error("{0}")]
+    IMin(String),
+    /// The protect mask's size is not the image's.
+    #[error("{0}")]
+    Protect(String),
+}
+
+/// A Hermite error on the port of the Hermite nodes it concerns.
+impl From<HermiteError> for NodeError {
+    fn from(e: HermiteError) -> NodeError {
+        match e {
+            HermiteError::IMin(m) => NodeError::port(port!(HermiteInputs, i_min), m),
+            HermiteError::Protect(m) => NodeError::port(port!(HermiteBackgroundMasked, protect), m),
+        }
+    }
 }
 
 pyrograph_core::ports! {
@@ -170,9 +192,9 @@ mod tests {
     #[test]
     fn bad_thresholds_and_mask_size_name_their_ports() {
         let img = Image::new(2, 2, Channels::Gray);
-        let err = hermite_background(&img, 200.0, 200.0, None).unwrap_err();
+        let err = NodeError::from(hermite_background(&img, 200.0, 200.0, None).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "i_min"), "{err}");
-        let err = hermite_background(&img, 1.0, 2.0, Some(&Mask::new(3, 2))).unwrap_err();
+        let err = NodeError::from(hermite_background(&img, 1.0, 2.0, Some(&Mask::new(3, 2))).unwrap_err());
         assert!(matches!(&err, NodeError::Port { port, .. } if port == "protect"), "{err}");
     }
 }

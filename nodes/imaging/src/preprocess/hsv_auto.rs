@@ -50,7 +50,7 @@ pub fn auto_levels<'a>(
     hues: (f32, f32),
     s_floor: f32,
 ) -> Option<(f32, f32, Box<[u64; 256]>)> {
-    let mut levels = Levels::new(hues);
+    let mut levels = BandHistograms::new(hues);
     frames.for_each(|img| levels.add(img));
     levels.thresholds(s_floor)
 }
@@ -60,7 +60,7 @@ pub fn auto_levels<'a>(
 /// histogram per value level (so the second Otsu pass needs no second read), and for gray frames
 /// the value histogram of every pixel.
 #[derive(Clone)]
-pub struct Levels {
+pub struct BandHistograms {
     band: HsvRange,
     v_hist: [u64; 256],
     s_by_v: Vec<[u64; 256]>,
@@ -70,10 +70,10 @@ pub struct Levels {
     gray: usize,
 }
 
-impl Levels {
+impl BandHistograms {
     /// Empty histograms for the flame's hue band `hues` (wrapping when min > max).
-    pub fn new(hues: (f32, f32)) -> Levels {
-        Levels {
+    pub fn new(hues: (f32, f32)) -> BandHistograms {
+        BandHistograms {
             band: HsvRange { h_min: hues.0, h_max: hues.1, s_min: 0.0, s_max: 255.0, v_min: 0.0, v_max: 255.0 },
             v_hist: [0; 256],
             s_by_v: vec![[0; 256]; 256],
@@ -103,7 +103,7 @@ impl Levels {
     }
 
     /// The counts of both, as if every frame of each had been added to one.
-    pub fn merge(mut self, other: &Levels) -> Levels {
+    pub fn merge(mut self, other: &BandHistograms) -> BandHistograms {
         let add = |a: &mut [u64; 256], b: &[u64; 256]| a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
         add(&mut self.v_hist, &other.v_hist);
         add(&mut self.gray_hist, &other.gray_hist);
@@ -272,7 +272,7 @@ impl Cook for HsvAutoMask {
         let levels = picks
             .par_iter()
             .try_fold(
-                || Levels::new((self.hue_min, self.hue_max)),
+                || BandHistograms::new((self.hue_min, self.hue_max)),
                 |mut acc, &i| {
                     ctx.check_cancel()?;
                     let Value::Image(img) = clip.get(i, ctx)? else {
@@ -282,7 +282,7 @@ impl Cook for HsvAutoMask {
                     Ok(acc)
                 },
             )
-            .try_reduce(|| Levels::new((self.hue_min, self.hue_max)), |a, b| Ok(a.merge(&b)))?;
+            .try_reduce(|| BandHistograms::new((self.hue_min, self.hue_max)), |a, b| Ok(a.merge(&b)))?;
         if levels.gray > 0 && levels.rgba > 0 {
             return Err(NodeError::port(
                 port!(HsvAutoMask, clip),
@@ -290,7 +290,7 @@ impl Cook for HsvAutoMask {
             ));
         }
         if levels.gray > 0 {
-            return gray_masks(clip, &levels.gray_hist);
+            return HsvAutoMask::gray_masks(clip, &levels.gray_hist);
         }
         let sampled = picks.len();
         let (v_min, s_min, v_hist) = levels.thresholds(self.s_min_floor).ok_or_else(|| {
@@ -333,17 +333,22 @@ impl Cook for HsvAutoMask {
     }
 }
 
-/// The masks of a gray clip (no hue to select by: a pre-processed or monochrome plate): Otsu's
-/// threshold on `hist`, the value of every sampled pixel.
-fn gray_masks(clip: &Clip, hist: &[u64; 256]) -> Result<HsvAutoMaskOut, NodeError> {
-    let t = f32::from(otsu(hist).ok_or_else(|| {
-        NodeError::port(port!(HsvAutoMask, clip), "every sampled gray frame has one value: no flame to tell from the background")
-    })?);
-    let mut h = Fingerprinter::new();
-    ("imaging.hsv_auto_mask gray", clip.fingerprint(), t.to_bits()).hash(&mut h);
-    let source = MaskSource { clip: clip.clone(), layers: Vec::new(), core: Vec::new(), gray: Some(t) };
-    let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(source));
-    Ok(HsvAutoMaskOut { mask: ClipOf::new(masks), value_threshold: t, saturation_threshold: 0.0, core_threshold: 255.0 })
+impl HsvAutoMask {
+    /// The masks of a gray clip (no hue to select by: a pre-processed or monochrome plate): Otsu's
+    /// threshold on `hist`, the value of every sampled pixel.
+    fn gray_masks(clip: &Clip, hist: &[u64; 256]) -> Result<HsvAutoMaskOut, NodeError> {
+        let t = f32::from(otsu(hist).ok_or_else(|| {
+            NodeError::port(
+                port!(HsvAutoMask, clip),
+                "every sampled gray frame has one value: no flame to tell from the background",
+            )
+        })?);
+        let mut h = Fingerprinter::new();
+        ("imaging.hsv_auto_mask gray", clip.fingerprint(), t.to_bits()).hash(&mut h);
+        let source = MaskSource { clip: clip.clone(), layers: Vec::new(), core: Vec::new(), gray: Some(t) };
+        let masks = Clip::new(PortType::Mask, clip.fps(), h.finish(), Arc::new(source));
+        Ok(HsvAutoMaskOut { mask: ClipOf::new(masks), value_threshold: t, saturation_threshold: 0.0, core_threshold: 255.0 })
+    }
 }
 
 #[cfg(test)]
@@ -486,16 +491,16 @@ mod tests {
         let clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(img))]);
         let ctx = CookCtx::new();
         let hist_of = |c: &Clip| {
-            let mut levels = Levels::new((20.0, 70.0));
+            let mut levels = BandHistograms::new((20.0, 70.0));
             levels.add(&c.image(0, &ctx).unwrap());
             levels.gray_hist
         };
-        let out = gray_masks(&clip, &hist_of(&clip)).unwrap();
+        let out = HsvAutoMask::gray_masks(&clip, &hist_of(&clip)).unwrap();
         let Value::Mask(mask) = out.mask.get(0, &ctx).unwrap() else { panic!("a mask") };
         assert!(mask.get(20, 15) && !mask.get(2, 2), "flame in, background out (threshold {})", out.value_threshold);
         let flat = Image::from_vec(4, 4, Channels::Gray, vec![0.5; 16]).unwrap();
         let flat_clip = Clip::from_frames(PortType::Image, 24.0, vec![Value::Image(Arc::new(flat))]);
-        assert!(gray_masks(&flat_clip, &hist_of(&flat_clip)).is_err());
+        assert!(HsvAutoMask::gray_masks(&flat_clip, &hist_of(&flat_clip)).is_err());
     }
 
     #[test]
@@ -508,8 +513,8 @@ mod tests {
             })
             .collect();
         let whole = auto_levels(frames.iter(), (20.0, 70.0), 40.0).unwrap();
-        let mut a = Levels::new((20.0, 70.0));
-        let mut b = Levels::new((20.0, 70.0));
+        let mut a = BandHistograms::new((20.0, 70.0));
+        let mut b = BandHistograms::new((20.0, 70.0));
         frames[..2].iter().for_each(|f| a.add(f));
         frames[2..].iter().for_each(|f| b.add(f));
         assert_eq!(a.merge(&b).thresholds(40.0).unwrap(), whole);

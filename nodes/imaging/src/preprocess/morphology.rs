@@ -89,10 +89,23 @@ impl Element {
     }
 }
 
+/// A structuring element size that is even or outside 1..=99 (`Morphology`'s cook names its
+/// `size` port).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ElementSizeError(pub String);
+
+/// A size error on the `size` port of `imaging.morphology`.
+impl From<ElementSizeError> for NodeError {
+    fn from(e: ElementSizeError) -> NodeError {
+        NodeError::port(port!(Morphology, size), e.0)
+    }
+}
+
 /// The structuring element of `shape` and odd `size` (1..=99).
-pub fn structuring_element(shape: KernelShape, size: u32) -> Result<Element, NodeError> {
+pub fn structuring_element(shape: KernelShape, size: u32) -> Result<Element, ElementSizeError> {
     if size.is_multiple_of(2) || !(1..=99).contains(&size) {
-        return Err(NodeError::port(port!(Morphology, size), format!("must be odd and in 1..=99, got {size}")));
+        return Err(ElementSizeError(format!("must be odd and in 1..=99, got {size}")));
     }
     let r = size / 2;
     // Every shape is symmetric about the centre column and each row is one contiguous span
@@ -447,7 +460,7 @@ mod tests {
     #[test]
     fn even_or_out_of_range_sizes_are_errors() {
         for size in [0, 4, 101] {
-            let err = structuring_element(KernelShape::Rect, size).unwrap_err();
+            let err = NodeError::from(structuring_element(KernelShape::Rect, size).unwrap_err());
             assert!(matches!(&err, NodeError::Port { port, .. } if port == "size"), "{err}");
         }
     }

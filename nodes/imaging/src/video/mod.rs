@@ -92,7 +92,7 @@ impl Cursor {
         let Some(stdout) = child.stdout.take() else {
             let _ = child.kill();
             let _ = child.wait();
-            return Err(NodeError::msg("ffmpeg's output pipe is missing").into());
+            return Err(IoError::Message("ffmpeg's output pipe is missing".to_string()));
         };
         Ok(Cursor { child, stdout, stderr, next: start, last: info.variable.as_ref().map(|_| Vec::new()) })
     }
@@ -247,13 +247,14 @@ impl FrameSource for VideoFrames {
         if cursor.next > index {
             self.give_back(cursor);
         }
-        let image = if sample_bytes == 2 { rgb48_to_image(w, h, &buf)? } else { rgb24_to_image(w, h, &buf)? };
+        let image = if sample_bytes == 2 { rgb48_to_image(w, h, &buf) } else { rgb24_to_image(w, h, &buf) };
+        let image = image.map_err(NodeError::msg)?;
         Ok(Value::Image(Arc::new(image)))
     }
 }
 
 /// Packed 8-bit RGB to an opaque f32 RGBA image.
-pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, NodeError> {
+pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, String> {
     // A table of v / 255 and a plain loop over pre-sized output: the iterator chain this
     // replaced was most of a 1080p streaming cook's CPU time (callgrind: 56 %).
     let unit: [f32; 256] = std::array::from_fn(|v| v as f32 / 255.0);
@@ -264,20 +265,16 @@ pub fn rgb24_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, Node
         o[2] = unit[usize::from(p[2])];
     }
     Image::from_vec(width, height, Channels::Rgba, data).ok_or_else(|| {
-        NodeError::msg(format!(
-            "a {width}x{height} frame needs {} bytes, got {}",
-            width as usize * height as usize * 3,
-            rgb.len()
-        ))
+        format!("a {width}x{height} frame needs {} bytes, got {}", width as usize * height as usize * 3, rgb.len())
     })
 }
 
 /// Packed 16-bit little-endian RGB (ffmpeg's `rgb48le`) to an opaque f32 RGBA image: 10-, 12- and
 /// 16-bit sources keep their precision.
-pub fn rgb48_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, NodeError> {
+pub fn rgb48_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, String> {
     let pixels = width as usize * height as usize;
     if rgb.len() != pixels * 6 {
-        return Err(NodeError::msg(format!("a {width}x{height} frame needs {} bytes, got {}", pixels * 6, rgb.len())));
+        return Err(format!("a {width}x{height} frame needs {} bytes, got {}", pixels * 6, rgb.len()));
     }
     let mut data = vec![1.0_f32; pixels * 4];
     for (o, p) in data.chunks_exact_mut(4).zip(rgb.chunks_exact(6)) {
@@ -285,7 +282,7 @@ pub fn rgb48_to_image(width: u32, height: u32, rgb: &[u8]) -> Result<Image, Node
             o[c] = f32::from(u16::from_le_bytes([p[2 * c], p[2 * c + 1]])) / 65535.0;
         }
     }
-    Image::from_vec(width, height, Channels::Rgba, data).ok_or_else(|| NodeError::msg("frame size mismatch"))
+    Image::from_vec(width, height, Channels::Rgba, data).ok_or_else(|| "frame size mismatch".to_string())
 }
 
 /// A video as a clip whose frames decode on demand; `fps` of 0 takes the video's own rate. A

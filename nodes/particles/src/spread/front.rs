@@ -5,7 +5,8 @@
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
-use pyrograph_core::{NodeError, port};
+use pyrograph_core::declare::AnimError;
+use pyrograph_core::port;
 use rayon::prelude::*;
 
 use super::spread_params::SpreadParams;
@@ -93,49 +94,52 @@ fn param_error(param: &'static str, message: impl Into<String>) -> SpreadError {
     SpreadError::Param { param, message: message.into() }
 }
 
-/// Checks spread parameters no port range can (`fps` converts the lifetime from frames to
-/// seconds); errors name the parameter. Gives the curvature distance in use (0 with `curvature`
-/// off) and the lifetime in seconds.
-pub(crate) fn validate(p: &SpreadParams, fps: f32) -> Result<(f32, f32), SpreadError> {
-    let d_t = if p.curvature { p.d_t } else { 0.0 };
-    let lifetime = p.lifetime as f32 / fps;
-    let port_k = port!(SpreadParams, K);
-    let (port_s, port_d) = (port!(SpreadParams, d_s), port!(SpreadParams, d_d));
-    for (name, v) in [
-        (port!(SpreadParams, q_o), p.q_o),
-        (port!(SpreadParams, q_c), p.q_c),
-        (port_k, *p.K.value()),
-        (port!(SpreadParams, d_t), d_t),
-        (port_s, p.d_s),
-        (port_d, p.d_d),
-        (port!(SpreadParams, lifetime), lifetime),
-    ] {
-        if !v.is_finite() || v < 0.0 {
-            return Err(param_error(name, format!("must be a finite number ≥ 0, got {v}")));
+impl SpreadParams {
+    /// Checks spread parameters no port range can (`fps` converts the lifetime from frames to
+    /// seconds); errors name the parameter. Gives the curvature distance in use (0 with `curvature`
+    /// off) and the lifetime in seconds.
+    pub(crate) fn validate(&self, fps: f32) -> Result<(f32, f32), SpreadError> {
+        let p = self;
+        let d_t = if p.curvature { p.d_t } else { 0.0 };
+        let lifetime = p.lifetime as f32 / fps;
+        let port_k = port!(SpreadParams, K);
+        let (port_s, port_d) = (port!(SpreadParams, d_s), port!(SpreadParams, d_d));
+        for (name, v) in [
+            (port!(SpreadParams, q_o), p.q_o),
+            (port!(SpreadParams, q_c), p.q_c),
+            (port_k, *p.K.value()),
+            (port!(SpreadParams, d_t), d_t),
+            (port_s, p.d_s),
+            (port_d, p.d_d),
+            (port!(SpreadParams, lifetime), lifetime),
+        ] {
+            if !v.is_finite() || v < 0.0 {
+                return Err(param_error(name, format!("must be a finite number ≥ 0, got {v}")));
+            }
         }
-    }
-    if *p.K.value() <= 0.0 {
-        return Err(param_error(port_k, "the global time scale K must be positive"));
-    }
-    for (name, v) in [(port_s, p.d_s), (port_d, p.d_d)] {
-        if v <= 0.0 {
-            return Err(param_error(name, "must be positive"));
+        if *p.K.value() <= 0.0 {
+            return Err(param_error(port_k, "the global time scale K must be positive"));
         }
+        for (name, v) in [(port_s, p.d_s), (port_d, p.d_d)] {
+            if v <= 0.0 {
+                return Err(param_error(name, "must be positive"));
+            }
+        }
+        if p.points < 3 {
+            return Err(param_error(
+                port!(SpreadParams, points),
+                format!("an ignition ring needs at least 3 points (Perry used ≥ 8), got {}", p.points),
+            ));
+        }
+        Ok((d_t, lifetime))
     }
-    if p.points < 3 {
-        return Err(param_error(
-            port!(SpreadParams, points),
-            format!("an ignition ring needs at least 3 points (Perry used ≥ 8), got {}", p.points),
-        ));
-    }
-    Ok((d_t, lifetime))
 }
 
 impl Spread {
     /// A spread over `surface` that will ignite at each of `ignitions` (at its time); `fps`
     /// converts the flame lifetime l_f from frames to seconds.
     pub fn new(surface: Arc<Surface>, ignitions: Vec<Ignition>, params: SpreadParams, fps: f32) -> Result<Spread, SpreadError> {
-        let (d_t, lifetime) = validate(&params, fps)?;
+        let (d_t, lifetime) = params.validate(fps)?;
         for (k, ig) in ignitions.iter().enumerate() {
             if ig.face as usize >= surface.len() {
                 return Err(SpreadError::Ignition(format!(
@@ -237,7 +241,7 @@ impl Spread {
 
     /// Samples the animated parameters (K) at `frame` (fractional for a sub-step) of a clip at
     /// `fps`, for the steps that follow. Errors name the port and the frame.
-    pub fn follow(&mut self, frame: f64, fps: f64) -> Result<(), NodeError> {
+    pub fn follow(&mut self, frame: f64, fps: f64) -> Result<(), AnimError> {
         if self.params.K.is_animated() {
             self.k = self.params.K.at(frame, fps)?;
         }

@@ -8,10 +8,10 @@ use glam::Vec3;
 use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::value::{Place, Points};
-use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
+use pyrograph_core::{AtPort, Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 
 use super::cache::SpreadSource;
-use super::front::{Ignition, Spread, SpreadError, validate};
+use super::front::{Ignition, Spread, SpreadError};
 use super::spread_params::SpreadParams;
 use super::surface::Surface;
 use crate::types::{Mesh, SpreadState, WindField};
@@ -53,9 +53,9 @@ pyrograph_core::node! {
 impl Cook for FireSpread {
     fn cook(self, _: &CookCtx) -> Result<ClipOf<Arc<SpreadState>>, NodeError> {
         let surface = Arc::new(Surface::new(&self.mesh).map_err(|m| NodeError::port(port!(FireSpread, mesh), m))?);
-        validate_wind(&self.wind, port!(FireSpread, wind))?;
-        validate(&self.params, self.timeline.fps as f32).map_err(port_error)?;
-        let ignitions = parse_ignitions(&self.ignite, &surface, self.snap)?;
+        validate_wind(&self.wind).at_port(port!(FireSpread, wind))?;
+        self.params.validate(self.timeline.fps as f32).map_err(FireSpread::error)?;
+        let ignitions = parse_ignitions(&self.ignite, &surface, self.snap).map_err(FireSpread::error)?;
         let (frames, fps, substeps) = (self.timeline.frames, self.timeline.fps, self.substeps);
         let mut h = Fingerprinter::new();
         "particles.fire_spread".hash(&mut h);
@@ -63,25 +63,27 @@ impl Cook for FireSpread {
         Value::custom(self.wind.clone()).hash_into(&mut h);
         format!("{:?}{ignitions:?}", self.params).hash(&mut h);
         (frames, fps.to_bits(), substeps).hash(&mut h);
-        let spread = Spread::new(surface, ignitions, self.params, fps as f32).map_err(port_error)?;
+        let spread = Spread::new(surface, ignitions, self.params, fps as f32).map_err(FireSpread::error)?;
         let source = SpreadSource::new(spread, (*self.wind).clone(), frames, fps as f32, substeps);
         Ok(ClipOf::new(Clip::new(PortType::of::<SpreadState>(), fps, h.finish(), Arc::new(source))))
     }
 }
 
-/// The node error for a spread that cannot start: a parameter's error names its port, an
-/// ignition's names `ignite`.
-fn port_error(e: SpreadError) -> NodeError {
-    match e {
-        SpreadError::Param { param, message } => NodeError::port(param, message),
-        SpreadError::Ignition(message) => NodeError::port(port!(FireSpread, ignite), message),
+impl FireSpread {
+    /// The node error for a spread that cannot start: a parameter's error names its port, an
+    /// ignition's names `ignite`.
+    pub(crate) fn error(e: SpreadError) -> NodeError {
+        match e {
+            SpreadError::Param { param, message } => NodeError::port(param, message),
+            SpreadError::Ignition(message) => NodeError::port(port!(FireSpread, ignite), message),
+        }
     }
 }
 
 /// Resolves the `ignite` points on the surface: a position snaps to the nearest surface point
 /// (an error farther than `snap`), a face must exist. Errors name the point, counted from 1.
-pub fn parse_ignitions(points: &Points, surface: &Surface, snap: f32) -> Result<Vec<Ignition>, NodeError> {
-    let err = |m: String| NodeError::port(port!(FireSpread, ignite), m);
+pub fn parse_ignitions(points: &Points, surface: &Surface, snap: f32) -> Result<Vec<Ignition>, SpreadError> {
+    let err = SpreadError::Ignition;
     let mut out = Vec::with_capacity(points.points().len());
     for (k, (time, place)) in points.points().iter().enumerate() {
         // The spread computes in f32; the document holds f64.

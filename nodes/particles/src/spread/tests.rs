@@ -292,7 +292,7 @@ fn ignitions_parse_snap_and_report_errors_naming_the_port() {
     assert_eq!(ig.len(), 2);
     assert!((surf.point(ig[0].face, ig[0].bary) - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-5);
     assert_eq!((ig[1].face, ig[1].time, ig[1].bary), (3, 1.5, [0.2, 0.3, 0.5]));
-    let e = parse_ignitions(&points("[(0.5, 0, 0), (3, 0, 0)]"), &surf, 0.05).unwrap_err();
+    let e = FireSpread::error(parse_ignitions(&points("[(0.5, 0, 0), (3, 0, 0)]"), &surf, 0.05).unwrap_err());
     assert!(
         matches!(&e, NodeError::Port { port, message } if port == "ignite" && message.contains("point 2 at (3, 0, 0) is off the mesh")),
         "{e}"

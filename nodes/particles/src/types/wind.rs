@@ -3,9 +3,9 @@
 use std::hash::Hash;
 use std::sync::Arc;
 
-use pyrograph_core::declare::Anim;
+use pyrograph_core::declare::{Anim, AnimError};
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{NodeError, TypeInfo, ValueType};
+use pyrograph_core::{TypeInfo, ValueType};
 
 /// The large-scale part `w_L(p, t)` of a [`WindField`] (Perry 1994 §3.2.3, §3.4).
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -70,7 +70,7 @@ pub struct WindAnimation {
 impl WindField {
     /// The field as it is at `frame` (fractional for sub-steps) of a clip at `fps`: every animated
     /// parameter sampled, no animation left. Errors name the wind field's port and the frame.
-    pub fn at_frame(&self, frame: f64, fps: f64) -> Result<WindField, NodeError> {
+    pub fn at_frame(&self, frame: f64, fps: f64) -> Result<WindField, AnimError> {
         let Some(anim) = &self.animation else { return Ok(self.clone()) };
         let mut out = WindField { animation: None, ..self.clone() };
         if let (Some(w), LargeWind::Constant(v)) = (&anim.wind, &mut out.large) {

@@ -93,7 +93,7 @@ impl Cook for WriteUsd {
             let particles = value
                 .downcast::<Particles>()
                 .ok_or_else(|| NodeError::port(port!(WriteUsd, particles), format!("frame {i} holds no particles")))?;
-            check_finite(&particles, i)?;
+            WriteUsd::check_finite(&particles, i)?;
             pyrograph_usd::count_samples(&mut samples, particles.particles.len(), i)
                 .map_err(|m| NodeError::port(port!(WriteUsd, particles), m))?;
             frames.push(particles);
@@ -121,13 +121,16 @@ impl Cook for WriteUsd {
     }
 }
 
-fn check_finite(p: &Particles, frame: usize) -> Result<(), NodeError> {
-    match p.particles.iter().position(|q| q.position.iter().chain(&q.size).any(|v| !v.is_finite())) {
-        Some(k) => Err(NodeError::port(
-            port!(WriteUsd, particles),
-            format!("frame {frame}: particle {k} has a non-finite position or size; USD cannot hold it"),
-        )),
-        None => Ok(()),
+impl WriteUsd {
+    /// Refuses a frame USD cannot hold, naming the particle.
+    fn check_finite(p: &Particles, frame: usize) -> Result<(), NodeError> {
+        match p.particles.iter().position(|q| q.position.iter().chain(&q.size).any(|v| !v.is_finite())) {
+            Some(k) => Err(NodeError::port(
+                port!(WriteUsd, particles),
+                format!("frame {frame}: particle {k} has a non-finite position or size; USD cannot hold it"),
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -275,7 +278,7 @@ mod tests {
     fn numbers_usd_cannot_hold_are_refused() {
         let mut bad = (*frame(2, 0.0)).clone();
         bad.particles[1].position[0] = f32::NAN;
-        let e = check_finite(&bad, 4).unwrap_err().to_string();
+        let e = WriteUsd::check_finite(&bad, 4).unwrap_err().to_string();
         assert!(e.contains("frame 4: particle 1"), "{e}");
     }
 }

@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use pyrograph_core::declare::AnimError;
 use pyrograph_core::stepping::SteppingCache;
 use pyrograph_core::{CookCtx, FrameSource, NodeError, Value};
 use pyrograph_nodes_particles::types::WindField;
@@ -17,6 +18,7 @@ use super::state::SimState;
 use super::step::{Setup, SimError, substep, substeps};
 use crate::grid::{SimStats, Volume};
 use crate::source::VolumeSource;
+use crate::source::value::SourceError;
 
 /// Frames between kept checkpoints.
 const CHECKPOINT_EVERY: usize = 8;
@@ -24,6 +26,35 @@ const CHECKPOINT_EVERY: usize = 8;
 const CHECKPOINT_BUDGET: usize = 512 << 20;
 /// Bytes of recently stepped frames one clip keeps for callers that waited for them.
 const RECENT_BUDGET: usize = 256 << 20;
+
+/// Why a frame could not be stepped.
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    /// An emitter could not give its splats.
+    #[error(transparent)]
+    Source(#[from] SourceError),
+    /// An animated parameter or the wind could not be sampled.
+    #[error(transparent)]
+    Param(#[from] AnimError),
+    /// The solver refused the step (the voxel budget, a diverged state).
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// The cook was cancelled between sub-steps.
+    #[error(transparent)]
+    Cancelled(#[from] NodeError),
+}
+
+impl From<StepError> for NodeError {
+    fn from(e: StepError) -> Self {
+        match e {
+            StepError::Source(e) => e.into(),
+            StepError::Param(e) => e.into(),
+            // The voxel budget's message names its limit and how to raise it.
+            StepError::Sim(e) => NodeError::msg(e.to_string()),
+            StepError::Cancelled(e) => e,
+        }
+    }
+}
 
 /// Everything a simulation reads besides its state.
 pub struct Simulation {
@@ -42,10 +73,10 @@ pub struct Simulation {
 impl Simulation {
     /// Steps `state` over frame `frame` (1-based: the sub-steps covering seconds
     /// `(frame − 1) / fps .. frame / fps`).
-    pub fn step_frame(&self, state: &mut SimState, frame: usize, ctx: &CookCtx) -> Result<(), NodeError> {
+    pub fn step_frame(&self, state: &mut SimState, frame: usize, ctx: &CookCtx) -> Result<(), StepError> {
         let fps = self.fps;
         let start = (frame - 1) as f64;
-        let splats_at = |t: f64| -> Result<Vec<_>, NodeError> {
+        let splats_at = |t: f64| -> Result<Vec<_>, SourceError> {
             let mut all = Vec::new();
             for s in &self.sources {
                 all.extend(s.splats(t, fps, ctx)?);
@@ -71,18 +102,13 @@ impl Simulation {
                 _ => None,
             };
             let wind = still.as_ref().or(sampled.as_ref());
-            let projection = substep(state, &self.setup, &step_params, &splats, wind, dt).map_err(sim_error)?;
+            let projection = substep(state, &self.setup, &step_params, &splats, wind, dt)?;
             stats.max_divergence = projection.max_divergence;
             stats.pressure_iterations = projection.iterations;
         }
         state.stats = stats;
         Ok(())
     }
-}
-
-/// A simulation error as the node reports it (the voxel budget names its limit).
-fn sim_error(e: SimError) -> NodeError {
-    NodeError::msg(e.to_string())
 }
 
 /// Volumes of frames stepped while other callers waited for them, oldest dropped first beyond

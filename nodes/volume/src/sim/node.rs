@@ -6,14 +6,14 @@ use std::sync::Arc;
 
 use pyrograph_core::declare::Cook;
 use pyrograph_core::fingerprint::Fingerprinter;
-use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
+use pyrograph_core::{AtPort, Clip, ClipOf, CookCtx, NodeError, PortType, Value, port};
 use pyrograph_nodes_particles::types::{Mesh, WindField};
 use pyrograph_nodes_particles::wind::validate_wind;
 
 use super::cache::{Simulation, VolumeFrames};
 use super::collide::Solids;
 use super::forces::Turbulence;
-use super::params::{SimParams, validate};
+use super::params::SimParams;
 use super::step::{Setup, brick_bounds};
 use crate::grid::Volume;
 use crate::source::VolumeSource;
@@ -61,11 +61,11 @@ pyrograph_core::node! {
 impl Cook for Simulate {
     fn cook(self, ctx: &CookCtx) -> Result<ClipOf<Arc<Volume>>, NodeError> {
         let p = self.params;
-        validate(&p)?;
+        p.validate()?;
         if let (Some(dir), Some(node)) = (&ctx.settings().sim_cache, ctx.node_id()) {
             return Ok(ClipOf::new(cached_clip(dir, node, &p, self.timeline)));
         }
-        validate_wind(&self.wind, port!(Simulate, wind))?;
+        validate_wind(&self.wind).at_port(port!(Simulate, wind))?;
         let h = p.voxel_size;
         let ground = p.ground.then_some(p.ground_height);
         let solids = Solids::new(ground, &self.collider, h).map_err(|m| NodeError::port(port!(Simulate, collider), m))?;

@@ -2,7 +2,7 @@
 //! after its inputs), the values they take at one sub-step ([`StepParams`]) and the checks no
 //! port range can make.
 
-use pyrograph_core::declare::Anim;
+use pyrograph_core::declare::{Anim, AnimError};
 use pyrograph_core::{NodeError, port};
 
 pyrograph_core::ports! {
@@ -135,7 +135,7 @@ pub struct StepParams {
 impl SimParams {
     /// The animated parameters at (fractional) `frame` of a clip at `fps`; errors name the port
     /// and the frame.
-    pub fn at(&self, frame: f64, fps: f64) -> Result<StepParams, NodeError> {
+    pub fn at(&self, frame: f64, fps: f64) -> Result<StepParams, AnimError> {
         Ok(StepParams {
             buoyancy: self.buoyancy.at(frame, fps)?,
             smoke_weight: self.smoke_weight.at(frame, fps)?,
@@ -156,41 +156,44 @@ impl SimParams {
     }
 }
 
-/// Checks what no port range can (finite values, ordered bounds); errors name the port.
-pub fn validate(p: &SimParams) -> Result<(), NodeError> {
-    let scalars = [
-        (port!(SimParams, voxel_size), p.voxel_size),
-        (port!(SimParams, cfl), p.cfl),
-        (port!(SimParams, turbulence_scale), p.turbulence_scale),
-        (port!(SimParams, turbulence_speed), p.turbulence_speed),
-        (port!(SimParams, ground_height), p.ground_height),
-        (port!(SimParams, cutoff), p.cutoff),
-        (port!(SimParams, tolerance), p.tolerance),
-    ];
-    for (name, v) in scalars {
-        if !v.is_finite() {
-            return Err(NodeError::port(name, format!("must be finite, got {v}")));
+impl SimParams {
+    /// Checks what no port range can (finite values, ordered bounds); errors name the port.
+    pub fn validate(&self) -> Result<(), NodeError> {
+        let p = self;
+        let scalars = [
+            (port!(SimParams, voxel_size), p.voxel_size),
+            (port!(SimParams, cfl), p.cfl),
+            (port!(SimParams, turbulence_scale), p.turbulence_scale),
+            (port!(SimParams, turbulence_speed), p.turbulence_speed),
+            (port!(SimParams, ground_height), p.ground_height),
+            (port!(SimParams, cutoff), p.cutoff),
+            (port!(SimParams, tolerance), p.tolerance),
+        ];
+        for (name, v) in scalars {
+            if !v.is_finite() {
+                return Err(NodeError::port(name, format!("must be finite, got {v}")));
+            }
         }
-    }
-    if p.voxel_size <= 0.0 {
-        return Err(NodeError::port(port!(SimParams, voxel_size), format!("must be positive, got {}", p.voxel_size)));
-    }
-    for (name, v) in [(port!(SimParams, bounds_min), p.bounds_min), (port!(SimParams, bounds_max), p.bounds_max)] {
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(NodeError::port(name, format!("must be finite, got {v:?}")));
+        if p.voxel_size <= 0.0 {
+            return Err(NodeError::port(port!(SimParams, voxel_size), format!("must be positive, got {}", p.voxel_size)));
         }
+        for (name, v) in [(port!(SimParams, bounds_min), p.bounds_min), (port!(SimParams, bounds_max), p.bounds_max)] {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(NodeError::port(name, format!("must be finite, got {v:?}")));
+            }
+        }
+        if (0..3).any(|k| p.bounds_max[k] <= p.bounds_min[k]) {
+            return Err(NodeError::port(
+                port!(SimParams, bounds_max),
+                format!("must be above bounds_min {:?} on every axis, got {:?}", p.bounds_min, p.bounds_max),
+            ));
+        }
+        if p.max_substeps < p.min_substeps {
+            return Err(NodeError::port(
+                port!(SimParams, max_substeps),
+                format!("must be at least min_substeps ({}), got {}", p.min_substeps, p.max_substeps),
+            ));
+        }
+        Ok(())
     }
-    if (0..3).any(|k| p.bounds_max[k] <= p.bounds_min[k]) {
-        return Err(NodeError::port(
-            port!(SimParams, bounds_max),
-            format!("must be above bounds_min {:?} on every axis, got {:?}", p.bounds_min, p.bounds_max),
-        ));
-    }
-    if p.max_substeps < p.min_substeps {
-        return Err(NodeError::port(
-            port!(SimParams, max_substeps),
-            format!("must be at least min_substeps ({}), got {}", p.min_substeps, p.max_substeps),
-        ));
-    }
-    Ok(())
 }

@@ -5,4 +5,4 @@ pub mod node;
 pub mod value;
 
 pub use node::{Shape, Source};
-pub use value::{Emitter, Geometry, Rates, Splat, TimedPoint, VolumeSource};
+pub use value::{Emitter, Geometry, Rates, SourceError, Splat, TimedPoint, VolumeSource};

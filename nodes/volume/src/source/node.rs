@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use pyrograph_core::declare::{Anim, Cook};
 use pyrograph_core::value::{Place, Points};
-use pyrograph_core::{Clip, ClipOf, CookCtx, NodeError, PortType, ValueType, port};
+use pyrograph_core::{AtPort, Clip, ClipOf, CookCtx, NodeError, PortType, ValueType, port};
 use pyrograph_nodes_cloth::state::ClothState;
 use pyrograph_nodes_particles::types::{Mesh, SpreadState};
 use pyrograph_render::Particles;
@@ -107,7 +107,7 @@ impl Cook for Source {
         if !self.roots.particles.is_empty() {
             let points =
                 self.roots.particles.iter().map(|q| TimedPoint { position: q.position, velocity: q.velocity, start: 0.0 });
-            add(port!(Source, roots), Geometry::Points(Arc::new(finite(points.collect(), port!(Source, roots))?)));
+            add(port!(Source, roots), Geometry::Points(Arc::new(finite(points.collect()).at_port(port!(Source, roots))?)));
         }
         if !self.spread.is_empty() {
             add(port!(Source, spread), Geometry::Spread(self.spread.clone().into_inner()));
@@ -116,13 +116,16 @@ impl Cook for Source {
             add(port!(Source, cloth), Geometry::Cloth(self.cloth.clone().into_inner()));
         }
         if !self.mesh.triangles.is_empty() && self.shape != Shape::Points {
-            let samples = surface_samples(&self.mesh, self.mesh_spacing)?;
-            add(port!(Source, mesh), Geometry::Points(Arc::new(finite(samples, port!(Source, mesh))?)));
+            let samples = surface_samples(&self.mesh, self.mesh_spacing).at_port(port!(Source, mesh_spacing))?;
+            add(port!(Source, mesh), Geometry::Points(Arc::new(finite(samples).at_port(port!(Source, mesh))?)));
         }
         match self.shape {
             Shape::Inputs => {}
             Shape::Sphere => add(port!(Source, center), Geometry::Sphere(self.center.clone())),
-            Shape::Points => add(port!(Source, points), Geometry::Points(Arc::new(listed_points(&self.points, &self.mesh)?))),
+            Shape::Points => add(
+                port!(Source, points),
+                Geometry::Points(Arc::new(listed_points(&self.points, &self.mesh).at_port(port!(Source, points))?)),
+            ),
         }
         if emitters.is_empty() {
             return Err(NodeError::port(
@@ -134,27 +137,27 @@ impl Cook for Source {
     }
 }
 
-fn finite(points: Vec<TimedPoint>, port: &str) -> Result<Vec<TimedPoint>, NodeError> {
+/// `points` when every position and velocity is finite, else which is not.
+fn finite(points: Vec<TimedPoint>) -> Result<Vec<TimedPoint>, String> {
     match points.iter().position(|q| !q.position.iter().chain(&q.velocity).all(|x| x.is_finite())) {
-        Some(k) => Err(NodeError::port(port, format!("point {k} has a non-finite position or velocity"))),
+        Some(k) => Err(format!("point {k} has a non-finite position or velocity")),
         None => Ok(points),
     }
 }
 
 /// The point list as emitting points: positions as written, faces on the mesh.
-fn listed_points(points: &Points, mesh: &Mesh) -> Result<Vec<TimedPoint>, NodeError> {
-    let err = |m: String| NodeError::port(port!(Source, points), m);
+fn listed_points(points: &Points, mesh: &Mesh) -> Result<Vec<TimedPoint>, String> {
     let mut out = Vec::with_capacity(points.points().len());
     for (k, (time, place)) in points.points().iter().enumerate() {
         let position = match place {
             Place::At(p) => p.map(|x| x as f32),
             Place::Face(face, bary) => {
                 let Some(tri) = mesh.triangles.get(*face as usize) else {
-                    return Err(err(format!(
+                    return Err(format!(
                         "point {}: face {face} is past the {} faces of the connected mesh (connect a mesh to use faces)",
                         k + 1,
                         mesh.triangles.len()
-                    )));
+                    ));
                 };
                 let b = bary.map_or([1.0 / 3.0; 3], |b| b.map(|c| c as f32));
                 let v = tri.map(|i| Vec3::from_array(mesh.positions[i as usize]));
@@ -169,18 +172,15 @@ fn listed_points(points: &Points, mesh: &Mesh) -> Result<Vec<TimedPoint>, NodeEr
 /// Points over a mesh's surface about `spacing` apart: each triangle is cut into k² smaller ones
 /// (k = its longest edge / spacing, rounded up) and each small one emits from its centre, with the
 /// face normal as its velocity.
-pub fn surface_samples(mesh: &Mesh, spacing: f32) -> Result<Vec<TimedPoint>, NodeError> {
+pub fn surface_samples(mesh: &Mesh, spacing: f32) -> Result<Vec<TimedPoint>, String> {
     let mut out = Vec::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         let v = tri.map(|i| Vec3::from_array(mesh.positions[i as usize]));
         let longest = (v[1] - v[0]).length().max((v[2] - v[1]).length()).max((v[0] - v[2]).length());
         let k = (longest / spacing).ceil().max(1.0);
         if !k.is_finite() || out.len() as f32 + k * k > MAX_MESH_POINTS as f32 {
-            return Err(NodeError::port(
-                port!(Source, mesh_spacing),
-                format!(
-                    "sampling the mesh every {spacing} would make over {MAX_MESH_POINTS} points (at face {t}); raise mesh_spacing"
-                ),
+            return Err(format!(
+                "sampling the mesh every {spacing} would make over {MAX_MESH_POINTS} points (at face {t}); raise mesh_spacing"
             ));
         }
         let k = k as usize;

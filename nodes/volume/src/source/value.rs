@@ -7,7 +7,7 @@ use std::hash::Hash;
 use std::sync::Arc;
 
 use glam::Vec3;
-use pyrograph_core::declare::Anim;
+use pyrograph_core::declare::{Anim, AnimError};
 use pyrograph_core::fingerprint::{Fingerprinter, hash_f32s};
 use pyrograph_core::{Clip, CookCtx, NodeError, TypeInfo, ValueType};
 use pyrograph_nodes_cloth::state::ClothState;
@@ -96,11 +96,36 @@ pub struct VolumeSource {
     pub emitters: Vec<Emitter>,
 }
 
+/// Why a source could not give its splats at a sub-step.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SourceError {
+    /// A frame of a clip the source emits from failed to cook (the upstream node's error, or a
+    /// cancelled cook), passed on as it is.
+    #[error(transparent)]
+    Upstream(#[from] NodeError),
+    /// An animated rate could not be sampled.
+    #[error(transparent)]
+    Rate(#[from] AnimError),
+    /// A rate, point or clip the source cannot emit from.
+    #[error("{0}")]
+    Bad(String),
+}
+
+impl From<SourceError> for NodeError {
+    fn from(e: SourceError) -> Self {
+        match e {
+            SourceError::Upstream(e) => e,
+            SourceError::Rate(e) => e.into(),
+            SourceError::Bad(m) => NodeError::msg(m),
+        }
+    }
+}
+
 impl VolumeSource {
     /// Every splat at (fractional) `frame` of a clip at `fps`. Geometry from a clip is read at the
     /// frame the sub-step falls in (its last frame once the clip ends). Errors name the
     /// emitter, the frame and the point.
-    pub fn splats(&self, frame: f64, fps: f64, ctx: &CookCtx) -> Result<Vec<Splat>, NodeError> {
+    pub fn splats(&self, frame: f64, fps: f64, ctx: &CookCtx) -> Result<Vec<Splat>, SourceError> {
         let mut out = Vec::new();
         for e in &self.emitters {
             emitter_splats(e, frame, fps, ctx, &mut out)?;
@@ -109,11 +134,11 @@ impl VolumeSource {
     }
 }
 
-fn emitter_splats(e: &Emitter, frame: f64, fps: f64, ctx: &CookCtx, out: &mut Vec<Splat>) -> Result<(), NodeError> {
+fn emitter_splats(e: &Emitter, frame: f64, fps: f64, ctx: &CookCtx, out: &mut Vec<Splat>) -> Result<(), SourceError> {
     let r = &e.rates;
     let (fuel, smoke, temperature) = (r.fuel.at(frame, fps)?, r.smoke.at(frame, fps)?, r.temperature.at(frame, fps)?);
     let (velocity, radius) = (Vec3::from_array(r.velocity.at(frame, fps)?), r.radius.at(frame, fps)?);
-    let bad = |what: String| NodeError::msg(format!("source '{}' at frame {frame:.3}: {what}", e.label));
+    let bad = |what: String| SourceError::Bad(format!("source '{}' at frame {frame:.3}: {what}", e.label));
     for (name, v) in
         [("the fuel rate", fuel), ("the smoke rate", smoke), ("the held temperature", temperature), ("the splat radius", radius)]
     {
@@ -159,13 +184,15 @@ fn emitter_splats(e: &Emitter, frame: f64, fps: f64, ctx: &CookCtx, out: &mut Ve
 }
 
 /// Frame ⌊`frame`⌋ of `clip` (its last once it ends), `None` for an empty clip.
-fn clip_frame<T: ValueType>(clip: &Clip, frame: f64, ctx: &CookCtx) -> Result<Option<Arc<T>>, NodeError> {
+fn clip_frame<T: ValueType>(clip: &Clip, frame: f64, ctx: &CookCtx) -> Result<Option<Arc<T>>, SourceError> {
     if clip.is_empty() {
         return Ok(None);
     }
     let index = (frame.max(0.0).floor() as usize).min(clip.len() - 1);
     let v = clip.get(index, ctx)?;
-    v.downcast::<T>().map(Some).ok_or_else(|| NodeError::msg(format!("expected a clip of {}, got {}", T::INFO.name, v.summary())))
+    v.downcast::<T>()
+        .map(Some)
+        .ok_or_else(|| SourceError::Bad(format!("expected a clip of {}, got {}", T::INFO.name, v.summary())))
 }
 
 /// Up to [`CLOTH_POINTS_PER_FLAME`] masses of each cloth flame, spread over its rows and columns.

@@ -17,6 +17,8 @@ use std::path::{Path, PathBuf};
 
 use pyrograph_testing::workspace;
 
+mod cook_side;
+
 /// The documented exception: these files of `crates/core` may form one cycle between them.
 const ALLOWED_CYCLE: &[&str] = &["crates/core/src/graph/build.rs", "crates/core/src/graph/include.rs"];
 
@@ -334,9 +336,14 @@ fn edges(tree: &Tree) -> Edges {
 
 /// The bodies of a file's `node! { ... }` blocks.
 fn node_blocks(text: &str) -> Vec<&str> {
+    macro_blocks(text, "node!")
+}
+
+/// The bodies of a file's `name { ... }` macro calls (`node!`, `ports!`).
+fn macro_blocks<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
     let mut out = Vec::new();
-    for (i, _) in text.match_indices("node!") {
-        let rest = &text[i + 5..];
+    for (i, _) in text.match_indices(name) {
+        let rest = &text[i + name.len()..];
         let Some(open) = rest.find('{').filter(|&o| rest[..o].trim().is_empty()) else { continue };
         out.push(&rest[open..open + closing(&rest[open..])]);
     }
@@ -363,11 +370,12 @@ fn closing(text: &str) -> usize {
 
 /// The structs a file declares inside `node! { ... }` blocks: node types and their outputs.
 fn node_structs(text: &str) -> BTreeSet<String> {
-    let mut out = BTreeSet::new();
-    for block in node_blocks(text) {
-        out.extend(block.match_indices("struct ").map(|(k, m)| ident_at(block, k + m.len())));
-    }
-    out
+    node_blocks(text).into_iter().flat_map(structs_in).collect()
+}
+
+/// The names of the structs declared in a piece of code.
+fn structs_in(code: &str) -> Vec<String> {
+    code.match_indices("struct ").map(|(k, m)| ident_at(code, k + m.len())).filter(|n| !n.is_empty()).collect()
 }
 
 /// The output structs of a file's `node!` blocks that hold one field: a node with one output
@@ -487,6 +495,17 @@ fn problems(root: &Path, base: &Path) -> Vec<String> {
             let Some(declared) = nodes.get(t) else { continue };
             for name in names.iter().flatten().filter(|n| declared.contains(*n)) {
                 out.push(format!("algorithm module {} imports node {name} of {}", rel(from), rel(t)));
+            }
+        }
+    }
+    // The per-function rule applies to node crates, whose roots only wire modules and register.
+    if root.components().any(|c| c.as_os_str() == "nodes") {
+        let side = cook_side::CookSide::of(tree.values().map(|m| m.text.as_str()), |t| {
+            (node_structs(t), macro_blocks(t, "ports!").iter().flat_map(|b| structs_in(b)).collect())
+        });
+        for (modpath, m) in &tree {
+            if !modpath.is_empty() {
+                out.extend(side.outside_cooks(&rel(&m.path), &m.text));
             }
         }
     }

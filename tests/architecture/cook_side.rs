@@ -2,8 +2,10 @@
 //! node's cook side may use `port!`, `NodeError` or a node struct. The cook side is
 //! - the body of an `impl` whose type is a node struct or its outputs (`impl Cook for Crop`, the
 //!   node's own helper methods `impl Crop { fn settings(&self) .. }`),
-//! - `impl FrameSource for ..` (core's lazy clip: its `frame` is the per-frame cook of a clip a
-//!   node returned, and core's trait returns `NodeError`),
+//! - the impls of a port group: a `ports!` struct, or a type with a hand-written `Field` impl
+//!   (describing and reading ports is what it is for),
+//! - the impls of a lazy clip, a type with `impl FrameSource for ..` (its `frame` is the per-frame
+//!   cook of a clip a node returned, and core's trait returns `NodeError`),
 //! - `impl .. for NodeError` (turning an algorithm's error into the node's),
 //! - the crate root, which registers the nodes.
 //!
@@ -135,8 +137,9 @@ fn impl_type(header: &str) -> String {
 pub struct CookSide {
     /// The structs of the crate's `node!` blocks (nodes and their outputs).
     nodes: BTreeSet<String>,
-    /// Types whose impls are on the cook side: the nodes, the `ports!` groups (reading ports), the
-    /// lazy clips (`impl FrameSource for T`: a clip's frames are cooked after its node returns),
+    /// Types whose impls are on the cook side: the nodes, the port groups (`ports!` ones and any
+    /// type with a hand-written `Field` impl: describing and reading ports is their job), the lazy
+    /// clips (`impl FrameSource for T`: a clip's frames are cooked after its node returns),
     /// and `NodeError` (turning an algorithm's error into the node's).
     impls: BTreeSet<String>,
 }
@@ -151,8 +154,10 @@ impl CookSide {
             side.impls.extend(nodes.iter().cloned().chain(groups));
             side.nodes.extend(nodes);
             for (i, _) in code.match_indices("impl") {
-                if let Some(open) = body_open(code, i).filter(|&o| code[i..o].contains("FrameSource for")) {
-                    side.impls.insert(impl_type(&code[i..open - 1]));
+                let Some(open) = body_open(code, i) else { continue };
+                let header = &code[i..open - 1];
+                if header.contains("FrameSource for") || header.contains("Field for") {
+                    side.impls.insert(impl_type(header));
                 }
             }
         }
@@ -230,6 +235,13 @@ pub fn crop(x: u32) -> Result<Image, CropError> { if x > 4 { Err(CropError) } el
 pub fn reads_a_port(x: u32) -> Result<u32, String> { Err(format!("{} {x}", port!(Crop, x))) }
 pub fn returns_a_node_error(x: [f32; 3]) -> Result<(), NodeError> { Ok(()) }
 pub fn takes_the_node(c: &Crop) -> u32 { c.x }
+struct Layer;
+impl Field for Layer {
+    fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> { Ok(Layer) }
+}
+impl Layer {
+    fn layer(&self, prefix: &str) -> Result<(), NodeError> { Ok(()) }
+}
 struct Helper;
 impl Helper {
     fn method(&self) -> Result<(), NodeError> { Ok(()) }

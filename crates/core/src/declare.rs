@@ -516,16 +516,17 @@ macro_rules! port {
 macro_rules! node {
     // The input struct and the `Declared` impl, for both forms below.
     (
-        @declare
-        $(#[doc = $doc:literal])*
-        #[node($type_name:literal, $category:literal, $time:ident)]
-        $vis:vis struct $name:ident {
-            $(
-                $(#[doc = $fdoc:literal])*
-                $(#[range($lo:expr, $hi:expr)])?
-                $field:ident : $fty:ty $(= $fdef:expr)?
-            ),*
-        }
+        @declare [
+            $(#[doc = $doc:literal])*
+            #[node($type_name:literal, $category:literal, $time:ident)]
+            $vis:vis struct $name:ident {
+                $(
+                    $(#[doc = $fdoc:literal])*
+                    $(#[range($lo:expr, $hi:expr)])?
+                    $field:ident : $fty:ty $(= $fdef:expr)?
+                ),* $(,)?
+            }
+        ]
         type Outputs = $outs:ty;
         $(
             $(#[doc = $odoc:literal])*
@@ -574,42 +575,24 @@ macro_rules! node {
             }
         }
     };
-    // One output, `-> name: Type`: the cook returns the value itself.
+    // One output, `-> name: Type`: the cook returns the value itself. The inputs are passed on as
+    // they are, for `@declare` to read.
     (
-        $(#[doc = $doc:literal])*
-        #[node($type_name:literal, $category:literal, $time:ident)]
-        $vis:vis struct $name:ident {
-            $(
-                $(#[doc = $fdoc:literal])*
-                $(#[range($lo:expr, $hi:expr)])?
-                $field:ident : $fty:ty $(= $fdef:expr)?
-            ),* $(,)?
-        }
+        $(#[$($attr:tt)*])*
+        $vis:vis struct $name:ident $inputs:tt
         $(#[doc = $odoc:literal])*
         -> $ofield:ident : $oty:ty
     ) => {
         $crate::node! {
-            @declare
-            $(#[doc = $doc])*
-            #[node($type_name, $category, $time)]
-            $vis struct $name {
-                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty $(= $fdef)? ),*
-            }
+            @declare [$(#[$($attr)*])* $vis struct $name $inputs]
             type Outputs = $oty;
             $(#[doc = $odoc])* $ofield : $oty
         }
     };
     // Several outputs, as a struct the cook returns.
     (
-        $(#[doc = $doc:literal])*
-        #[node($type_name:literal, $category:literal, $time:ident)]
-        $vis:vis struct $name:ident {
-            $(
-                $(#[doc = $fdoc:literal])*
-                $(#[range($lo:expr, $hi:expr)])?
-                $field:ident : $fty:ty $(= $fdef:expr)?
-            ),* $(,)?
-        }
+        $(#[$($attr:tt)*])*
+        $vis:vis struct $name:ident $inputs:tt
         $ovis:vis struct $out:ident {
             $(
                 $(#[doc = $odoc:literal])*
@@ -618,12 +601,7 @@ macro_rules! node {
         }
     ) => {
         $crate::node! {
-            @declare
-            $(#[doc = $doc])*
-            #[node($type_name, $category, $time)]
-            $vis struct $name {
-                $( $(#[doc = $fdoc])* $(#[range($lo, $hi)])? $field : $fty $(= $fdef)? ),*
-            }
+            @declare [$(#[$($attr)*])* $vis struct $name $inputs]
             type Outputs = $out;
             $( $(#[doc = $odoc])* $ofield : $oty ),*
         }

@@ -1,6 +1,7 @@
 //! `imaging.hsv_mask`: the multi-layer HSV colour mask of the Eigenfires thesis (§3.2, eq. 3–4, Fig. 17).
 
-use pyrograph_core::{Channels, Cook, CookCtx, Image, Mask, NodeError, port};
+use pyrograph_core::declare::Field;
+use pyrograph_core::{Channels, Cook, CookCtx, Image, Inputs, Mask, NodeError, PortDesc, port};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -294,7 +295,9 @@ impl From<HsvError> for NodeError {
     }
 }
 
-/// One layer's settings as plain values: what the node's `layer1`…`layer3` port groups read.
+/// The ports of one layer, `{prefix}_enabled`, `{prefix}_h_min` … `{prefix}_v_max`, `{prefix}_blend`:
+/// declared once by its [`Field`] impl and used three times by [`HsvMask`], whose field name is the
+/// prefix, whose `= default` the layer's defaults and whose doc the start of every port's doc.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HsvLayerPorts {
     /// Whether this layer contributes.
@@ -303,6 +306,72 @@ pub struct HsvLayerPorts {
     pub range: HsvRange,
     /// How it combines with the layers above.
     pub blend: Blend,
+}
+
+impl HsvLayerPorts {
+    /// The layer if it is enabled. A saturation or value minimum above its maximum is an error
+    /// naming the `{prefix}_…_min` port: only hue ranges wrap.
+    pub fn layer(&self, prefix: &str) -> Result<Option<HsvLayer>, NodeError> {
+        if !self.enabled {
+            return Ok(None);
+        }
+        let r = self.range;
+        for (what, lo, hi) in [("s", r.s_min, r.s_max), ("v", r.v_min, r.v_max)] {
+            if lo > hi {
+                return Err(NodeError::port(
+                    format!("{prefix}_{what}_min"),
+                    format!("{lo} is above {prefix}_{what}_max {hi}; only hue ranges wrap"),
+                ));
+            }
+        }
+        Ok(Some(HsvLayer { range: r, blend: self.blend }))
+    }
+}
+
+/// The field of an [`HsvRange`] that a port sets.
+type RangeField = fn(&mut HsvRange) -> &mut f32;
+
+/// The range ports of a layer in port order: name suffix, upper bound (the lower is 0), doc and
+/// the range's field.
+const RANGE_PORTS: [(&str, f64, &str, RangeField); 6] = [
+    ("h_min", 360.0, "lowest hue in degrees; above h_max wraps past red", |r| &mut r.h_min),
+    ("h_max", 360.0, "highest hue in degrees", |r| &mut r.h_max),
+    ("s_min", 255.0, "lowest saturation (0–255)", |r| &mut r.s_min),
+    ("s_max", 255.0, "highest saturation (0–255)", |r| &mut r.s_max),
+    ("v_min", 255.0, "lowest value (0–255)", |r| &mut r.v_min),
+    ("v_max", 255.0, "highest value (0–255)", |r| &mut r.v_max),
+];
+
+impl Field for HsvLayerPorts {
+    fn describe(name: &str, doc: &str, default: Option<Self>, _: Option<(f64, f64)>, out: &mut Vec<PortDesc>) {
+        let port = |suffix: &str| format!("{name}_{suffix}");
+        let doc = |text: &str| format!("{doc}: {text}");
+        <bool as Field>::describe(
+            &port("enabled"),
+            &doc("whether this layer contributes"),
+            default.map(|d| d.enabled),
+            None,
+            out,
+        );
+        for (suffix, hi, text, field) in RANGE_PORTS {
+            let value = default.map(|mut d| *field(&mut d.range));
+            <f32 as Field>::describe(&port(suffix), &doc(text), value, Some((0.0, hi)), out);
+        }
+        let blend_doc = doc("how it combines with the layers above: add = union");
+        <Blend as Field>::describe(&port("blend"), &blend_doc, default.map(|d| d.blend), None, out);
+    }
+
+    fn read(inputs: &Inputs<'_>, name: &str) -> Result<Self, NodeError> {
+        let mut range = HsvRange { h_min: 0.0, h_max: 0.0, s_min: 0.0, s_max: 0.0, v_min: 0.0, v_max: 0.0 };
+        for (suffix, _, _, field) in RANGE_PORTS {
+            *field(&mut range) = <f32 as Field>::read(inputs, &format!("{name}_{suffix}"))?;
+        }
+        Ok(HsvLayerPorts {
+            enabled: <bool as Field>::read(inputs, &format!("{name}_enabled"))?,
+            range,
+            blend: <Blend as Field>::read(inputs, &format!("{name}_blend"))?,
+        })
+    }
 }
 
 // Default layers, converted from the OpenCV peer's half-hue ranges (×2):
@@ -327,135 +396,6 @@ pub const YELLOW_DEFAULTS: HsvLayerPorts = HsvLayerPorts {
     blend: Blend::Add,
 };
 
-pyrograph_core::ports! {
-    /// The ports of `imaging.hsv_mask`'s layer 1: `layer1_enabled`, `layer1_h_min` … `layer1_v_max`, `layer1_blend`.
-    pub struct HsvLayer1 {
-        /// Layer 1 (blue by default): whether this layer contributes
-        layer1_enabled: bool = BLUE_DEFAULTS.enabled,
-        /// Layer 1 (blue by default): lowest hue in degrees; above h_max wraps past red
-        #[range(0.0, 360.0)]
-        layer1_h_min: f32 = BLUE_DEFAULTS.range.h_min,
-        /// Layer 1 (blue by default): highest hue in degrees
-        #[range(0.0, 360.0)]
-        layer1_h_max: f32 = BLUE_DEFAULTS.range.h_max,
-        /// Layer 1 (blue by default): lowest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer1_s_min: f32 = BLUE_DEFAULTS.range.s_min,
-        /// Layer 1 (blue by default): highest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer1_s_max: f32 = BLUE_DEFAULTS.range.s_max,
-        /// Layer 1 (blue by default): lowest value (0–255)
-        #[range(0.0, 255.0)]
-        layer1_v_min: f32 = BLUE_DEFAULTS.range.v_min,
-        /// Layer 1 (blue by default): highest value (0–255)
-        #[range(0.0, 255.0)]
-        layer1_v_max: f32 = BLUE_DEFAULTS.range.v_max,
-        /// Layer 1 (blue by default): how it combines with the layers above: add = union
-        layer1_blend: Blend = BLUE_DEFAULTS.blend,
-    }
-}
-
-impl HsvLayer1 {
-    /// The layer's settings.
-    pub fn settings(&self) -> HsvLayerPorts {
-        let range = HsvRange {
-            h_min: self.layer1_h_min,
-            h_max: self.layer1_h_max,
-            s_min: self.layer1_s_min,
-            s_max: self.layer1_s_max,
-            v_min: self.layer1_v_min,
-            v_max: self.layer1_v_max,
-        };
-        HsvLayerPorts { enabled: self.layer1_enabled, range, blend: self.layer1_blend }
-    }
-}
-
-pyrograph_core::ports! {
-    /// The ports of `imaging.hsv_mask`'s layer 2: `layer2_enabled`, `layer2_h_min` … `layer2_v_max`, `layer2_blend`.
-    pub struct HsvLayer2 {
-        /// Layer 2 (red by default): whether this layer contributes
-        layer2_enabled: bool = RED_DEFAULTS.enabled,
-        /// Layer 2 (red by default): lowest hue in degrees; above h_max wraps past red
-        #[range(0.0, 360.0)]
-        layer2_h_min: f32 = RED_DEFAULTS.range.h_min,
-        /// Layer 2 (red by default): highest hue in degrees
-        #[range(0.0, 360.0)]
-        layer2_h_max: f32 = RED_DEFAULTS.range.h_max,
-        /// Layer 2 (red by default): lowest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer2_s_min: f32 = RED_DEFAULTS.range.s_min,
-        /// Layer 2 (red by default): highest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer2_s_max: f32 = RED_DEFAULTS.range.s_max,
-        /// Layer 2 (red by default): lowest value (0–255)
-        #[range(0.0, 255.0)]
-        layer2_v_min: f32 = RED_DEFAULTS.range.v_min,
-        /// Layer 2 (red by default): highest value (0–255)
-        #[range(0.0, 255.0)]
-        layer2_v_max: f32 = RED_DEFAULTS.range.v_max,
-        /// Layer 2 (red by default): how it combines with the layers above: add = union
-        layer2_blend: Blend = RED_DEFAULTS.blend,
-    }
-}
-
-impl HsvLayer2 {
-    /// The layer's settings.
-    pub fn settings(&self) -> HsvLayerPorts {
-        let range = HsvRange {
-            h_min: self.layer2_h_min,
-            h_max: self.layer2_h_max,
-            s_min: self.layer2_s_min,
-            s_max: self.layer2_s_max,
-            v_min: self.layer2_v_min,
-            v_max: self.layer2_v_max,
-        };
-        HsvLayerPorts { enabled: self.layer2_enabled, range, blend: self.layer2_blend }
-    }
-}
-
-pyrograph_core::ports! {
-    /// The ports of `imaging.hsv_mask`'s layer 3: `layer3_enabled`, `layer3_h_min` … `layer3_v_max`, `layer3_blend`.
-    pub struct HsvLayer3 {
-        /// Layer 3 (yellow by default): whether this layer contributes
-        layer3_enabled: bool = YELLOW_DEFAULTS.enabled,
-        /// Layer 3 (yellow by default): lowest hue in degrees; above h_max wraps past red
-        #[range(0.0, 360.0)]
-        layer3_h_min: f32 = YELLOW_DEFAULTS.range.h_min,
-        /// Layer 3 (yellow by default): highest hue in degrees
-        #[range(0.0, 360.0)]
-        layer3_h_max: f32 = YELLOW_DEFAULTS.range.h_max,
-        /// Layer 3 (yellow by default): lowest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer3_s_min: f32 = YELLOW_DEFAULTS.range.s_min,
-        /// Layer 3 (yellow by default): highest saturation (0–255)
-        #[range(0.0, 255.0)]
-        layer3_s_max: f32 = YELLOW_DEFAULTS.range.s_max,
-        /// Layer 3 (yellow by default): lowest value (0–255)
-        #[range(0.0, 255.0)]
-        layer3_v_min: f32 = YELLOW_DEFAULTS.range.v_min,
-        /// Layer 3 (yellow by default): highest value (0–255)
-        #[range(0.0, 255.0)]
-        layer3_v_max: f32 = YELLOW_DEFAULTS.range.v_max,
-        /// Layer 3 (yellow by default): how it combines with the layers above: add = union
-        layer3_blend: Blend = YELLOW_DEFAULTS.blend,
-    }
-}
-
-impl HsvLayer3 {
-    /// The layer's settings.
-    pub fn settings(&self) -> HsvLayerPorts {
-        let range = HsvRange {
-            h_min: self.layer3_h_min,
-            h_max: self.layer3_h_max,
-            s_min: self.layer3_s_min,
-            s_max: self.layer3_s_max,
-            v_min: self.layer3_v_min,
-            v_max: self.layer3_v_max,
-        };
-        HsvLayerPorts { enabled: self.layer3_enabled, range, blend: self.layer3_blend }
-    }
-}
-
 pyrograph_core::node! {
     /// Binary mask of up to three HSV colour ranges blended in order (Eigenfires thesis §3.2, eq. 3–4, Fig. 17).
     ///
@@ -468,11 +408,11 @@ pyrograph_core::node! {
         /// RGBA frame to segment
         image: Arc<Image>,
         /// Layer 1 (blue by default)
-        layer1: HsvLayer1,
+        layer1: HsvLayerPorts = BLUE_DEFAULTS,
         /// Layer 2 (red by default)
-        layer2: HsvLayer2,
+        layer2: HsvLayerPorts = RED_DEFAULTS,
         /// Layer 3 (yellow by default)
-        layer3: HsvLayer3,
+        layer3: HsvLayerPorts = YELLOW_DEFAULTS,
     }
     /// 255 where the blended layers select the pixel
     -> mask: Arc<Mask>
@@ -482,29 +422,11 @@ impl HsvMask {
     /// The enabled layers, in order.
     pub fn layers(&self) -> Result<Vec<HsvLayer>, NodeError> {
         let layers = [
-            (self.layer1.settings(), port!(HsvMask, layer1)),
-            (self.layer2.settings(), port!(HsvMask, layer2)),
-            (self.layer3.settings(), port!(HsvMask, layer3)),
+            (&self.layer1, port!(HsvMask, layer1)),
+            (&self.layer2, port!(HsvMask, layer2)),
+            (&self.layer3, port!(HsvMask, layer3)),
         ];
-        layers.into_iter().filter_map(|(ports, prefix)| HsvMask::layer(&ports, prefix).transpose()).collect()
-    }
-
-    /// The layer if it is enabled. A saturation or value minimum above its maximum is an error
-    /// naming the `{prefix}_…_min` port: only hue ranges wrap.
-    fn layer(ports: &HsvLayerPorts, prefix: &str) -> Result<Option<HsvLayer>, NodeError> {
-        if !ports.enabled {
-            return Ok(None);
-        }
-        let r = ports.range;
-        for (what, lo, hi) in [("s", r.s_min, r.s_max), ("v", r.v_min, r.v_max)] {
-            if lo > hi {
-                return Err(NodeError::port(
-                    format!("{prefix}_{what}_min"),
-                    format!("{lo} is above {prefix}_{what}_max {hi}; only hue ranges wrap"),
-                ));
-            }
-        }
-        Ok(Some(HsvLayer { range: r, blend: ports.blend }))
+        layers.into_iter().filter_map(|(ports, prefix)| ports.layer(prefix).transpose()).collect()
     }
 }
 

@@ -85,7 +85,7 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         let started = std::time::Instant::now();
         let value = Evaluator::new()
             .output(&graph, &format!("{id}.volume"), &ctx)
-            .map_err(|e| Failure(format!("error: {}", crate::explain(id, &e))))?;
+            .map_err(|e| Failure(format!("error: {}: {}", a.graph.display(), crate::explain(id, &e))))?;
         let Value::Clip(clip) = value else {
             return Err(Failure(format!("error: simulation '{id}' made no clip")));
         };
@@ -106,7 +106,9 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         let node_ctx = ctx.for_node(id);
         let mut stats = Stats::default();
         for i in 0..last {
-            let frame = clip.get(i, &node_ctx).map_err(|e| Failure(format!("error: {}", crate::explain(id, &e))))?;
+            let frame = clip
+                .get(i, &node_ctx)
+                .map_err(|e| Failure(format!("error: {}: {}", a.graph.display(), crate::explain(id, &e))))?;
             let volume =
                 frame.downcast::<Volume>().ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
             stats.add(&volume);

@@ -513,11 +513,13 @@ fn cook_graph(graph: &Graph, path: &Path, o: &RenderOpts, targets: &[String]) ->
         let ok = result.root_errors().is_empty();
         write_manifest(file, path, &out, o, None, ok, &ctx.written(), started.elapsed())?;
     }
-    report(graph, targets, &result, &ctx.warnings(), started.elapsed(), o.json)
+    report(graph, path, targets, &result, &ctx.warnings(), started.elapsed(), o.json)
 }
 
+/// What a render cooked, its warnings and errors, each naming the graph file and node.
 fn report(
     graph: &Graph,
+    path: &Path,
     targets: &[String],
     result: &CookResult,
     warnings: &[Warning],
@@ -544,6 +546,7 @@ fn report(
             "{}",
             printable_json(json!({
                 "ok": errors.is_empty(),
+                "graph": path.display().to_string(),
                 "seconds": elapsed.as_secs_f64(),
                 "peak_rss_mib": memory_kib("VmHWM").map(|k| k >> 10),
                 "frame_cache": cache,
@@ -558,11 +561,12 @@ fn report(
                 outln!("{t}: {}", describe_outputs(graph, t, values));
             }
         }
+        let file = path.display();
         for w in warnings {
-            errln!("warning: node '{}': {}", warning_node(w), w.message);
+            errln!("warning: {file}: node '{}': {}", warning_node(w), w.message);
         }
         for (node, e) in &errors {
-            errln!("error: {}", explain(node, e));
+            errln!("error: {file}: {}", explain(node, e));
         }
         if errors.is_empty() {
             let peak = memory_kib("VmHWM").map(|k| format!(", peak memory {} MiB", k >> 10)).unwrap_or_default();

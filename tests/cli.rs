@@ -263,9 +263,10 @@ fn render_reports_a_flame_cut_by_the_bottom_edge_as_a_warning() {
     assert!(o.status.success(), "{}", text(&o));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
-        stderr.contains(
-            "warning: node 'crop': the flame touches the bottom edge in 100 % of frames: its base is outside the picture"
-        ),
+        stderr.contains(&format!(
+            "warning: {}: node 'crop': the flame touches the bottom edge in 100 % of frames: its base is outside the picture",
+            graph.display()
+        )),
         "{stderr}"
     );
     let written = image::open(dir.path().join("out/crop_0000.png")).unwrap();

@@ -8,15 +8,18 @@
 use std::borrow::Cow;
 
 /// A run of characters without whitespace longer than this is cut (a 100 kB node id would bury
-/// the message that names it).
-pub const MAX_RUN: usize = 256;
-/// What is kept of a cut run.
-const KEPT: usize = 200;
+/// the message that names it). It is Linux's longest path, so a real path is always shown whole.
+pub const MAX_RUN: usize = 4096;
+/// What is kept of the start of a cut run.
+const HEAD: usize = 160;
+/// What is kept of its end: a path's file name, the quote and colon that close an id.
+const TAIL: usize = 80;
 
 /// `text` with every control character but newline and tab (C0, DEL, C1) and every bidirectional
 /// override (the "Trojan Source" characters, which reorder what a terminal shows) written as a
 /// Rust escape (`\u{1b}`), and every run of more than [`MAX_RUN`] characters without whitespace
-/// cut to its first 200 with a note of how many more there were. Borrows when nothing changes.
+/// cut to its first 160 and last 80 with a note of how many were left out between them. Borrows
+/// when nothing changes.
 pub fn printable(text: &str) -> Cow<'_, str> {
     let mut run = 0usize;
     let clean = text.chars().all(|c| {
@@ -34,15 +37,19 @@ pub fn printable(text: &str) -> Cow<'_, str> {
         rest = &rest[gap..];
         let end = rest.find(space).unwrap_or(rest.len());
         let n = rest[..end].chars().count();
-        for c in rest[..end].chars().take(if n > MAX_RUN { KEPT } else { n }) {
+        let cut = n > MAX_RUN;
+        for (i, c) in rest[..end].chars().enumerate() {
+            if cut && i == HEAD {
+                out.push_str(&format!("…[{} more characters]…", n - HEAD - TAIL));
+            }
+            if cut && (HEAD..n - TAIL).contains(&i) {
+                continue;
+            }
             if hidden(c) {
                 out.extend(c.escape_unicode());
             } else {
                 out.push(c);
             }
-        }
-        if n > MAX_RUN {
-            out.push_str(&format!("…[{} more characters]", n - KEPT));
         }
         rest = &rest[end..];
     }
@@ -81,10 +88,23 @@ mod tests {
         let message = format!("error: node '{id}': unknown node type 'nope'");
         let shown = printable(&message);
         assert!(shown.len() < 400, "{} bytes", shown.len());
-        assert!(shown.contains("…[99803 more characters]"), "{shown}");
-        assert!(shown.ends_with(" unknown node type 'nope'"), "{shown}");
+        // The run is the id with its quotes and colon: 100,003 characters, 240 of them kept.
+        assert!(shown.contains("…[99763 more characters]…"), "{shown}");
+        assert!(shown.ends_with("xxx': unknown node type 'nope'"), "{shown}");
         // A run at the limit is kept whole.
         let edge = "y".repeat(MAX_RUN);
         assert_eq!(printable(&edge), edge.as_str());
+    }
+
+    #[test]
+    fn a_deep_path_is_shown_whole_and_a_cut_one_keeps_its_file_name() {
+        let deep = format!("/mnt/farm/{}/shot_010/fire.exr", "show/seq/department/version".repeat(40));
+        assert!(deep.len() > 1000);
+        let message = format!("cannot write {deep}: permission denied");
+        assert_eq!(printable(&message), message.as_str());
+        let absurd = format!("/{}fire_0042.exr", "d/".repeat(5000));
+        let shown = printable(&absurd);
+        assert!(shown.starts_with("/d/d/") && shown.ends_with("/d/d/d/fire_0042.exr"), "{shown}");
+        assert!(shown.chars().count() < 300, "{shown}");
     }
 }

@@ -75,18 +75,19 @@ fn viewer(doc: &mut GraphDoc, ty: &PortType, from: &str, files: &Files, name: &s
                 "particles.mesh_roots" => {
                     let mesh = need(port_type("Mesh"));
                     let flames =
-                        NodeDoc::new("particles.particle_flame").param("frames", int(24)).param("size", ParamValue::Float(0.06));
+                        NodeDoc::new("particles.particle_flame").param("frames", int(24)).param("size", ParamValue::Float(0.1));
                     let flames = view(doc, "v_flames", flames, &[(from, "roots")]) + ".flames";
                     let lights = view(
                         doc,
                         "v_lights",
-                        NodeDoc::new("particles.flame_lights").param("intensity", ParamValue::Float(0.05)),
+                        NodeDoc::new("particles.flame_lights").param("intensity", ParamValue::Float(0.2)),
                         &[(&flames, "flames")],
                     );
+                    // From above, so the top faces the roots stand on are in view.
                     let close = render_flames()
-                        .param("camera_position", floats(&[2.2, 1.5, 2.6]))
-                        .param("camera_target", floats(&[0.0, 0.2, 0.0]))
-                        .param("ambient", ParamValue::Float(0.15));
+                        .param("camera_position", floats(&[1.8, 2.4, 2.2]))
+                        .param("camera_target", floats(&[0.0, 0.5, 0.0]))
+                        .param("ambient", ParamValue::Float(0.3));
                     let wires =
                         [(flames.as_str(), "flames"), (&format!("{lights}.lights") as &str, "lights"), (mesh.as_str(), "mesh")];
                     view(doc, "v_render", close, &wires) + ".image"
@@ -135,6 +136,11 @@ fn viewer(doc: &mut GraphDoc, ty: &PortType, from: &str, files: &Files, name: &s
         "Volume" => view(doc, "v_volume", volume_render(), &[(from, "volume")]) + ".image",
         "ClothState" => view(doc, "v_cloth", NodeDoc::new("cloth.cloth_render"), &[(from, "cloth")]) + ".image",
         "Basis" => view(doc, "v_grid", NodeDoc::new("eigen.eigenfire_grid"), &[(from, "basis")]) + ".image",
+        // Hand-set weights: the flame they make (one row is a single point in the weight plot).
+        "Weights" if name == "eigen.weights_edit" => {
+            let basis = need(port_type("Basis"));
+            view(doc, "v_flame", NodeDoc::new("eigen.reconstruct"), &[(&basis, "basis"), (from, "weights")]) + ".clip"
+        }
         "Weights" => {
             let basis = need(port_type("Basis"));
             view(doc, "v_pca", NodeDoc::new("eigen.pca_plot"), &[(&basis, "basis"), (from, "weights")]) + ".image"
@@ -202,6 +208,12 @@ fn tweak(doc: &mut GraphDoc, name: &str) {
             set("n", "t2_end", int(100));
         }
         "eigen.motion_list" => set("n", "motions", ParamValue::String("T1 = 0-49; T2 = 51-100".into())),
+        // The defaults are all zeros, the mean image: start from a frame and push the first
+        // eigenfire two standard deviations, as the thesis's Fig. 44 edits do.
+        "eigen.weights_edit" => {
+            set("n", "frame", int(10));
+            set("n", "edits", ParamValue::String("1=2, 2=-1".into()));
+        }
         // The mask layers that catch the procedural flame (as supply()'s masks do).
         "imaging.hsv_mask" => {
             set("n", "layer1_enabled", ParamValue::Bool(false));

@@ -214,12 +214,16 @@ pub(crate) fn build_variant(
     Ok((graph, out))
 }
 
-fn run_variant(graph: &Graph, out: PathBuf, o: &RenderOpts, v: &Variant) -> Result<VariantRun, Failure> {
+fn run_variant(graph: &Graph, path: &Path, out: PathBuf, o: &RenderOpts, v: &Variant) -> Result<VariantRun, Failure> {
     let sinks: Vec<String> = graph.sinks().iter().map(|s| s.to_string()).collect();
     let targets: Vec<&str> = sinks.iter().map(String::as_str).collect();
     let ctx = CookCtx::new().with_settings(o.settings());
     let result = Evaluator::new().cook(graph, &targets, &ctx).map_err(|e| Failure(format!("error: {e}")))?;
-    let errors = result.root_errors().iter().map(|(n, e)| format!("error: wedge {}: {}", v.name, explain(n, e))).collect();
+    let errors = result
+        .root_errors()
+        .iter()
+        .map(|(n, e)| format!("error: {}: wedge {}: {}", path.display(), v.name, explain(n, e)))
+        .collect();
     Ok(VariantRun { variant: v.clone(), out, written: ctx.written(), errors })
 }
 
@@ -251,7 +255,7 @@ pub fn render_wedges(registry: &Registry, path: &Path, o: &RenderOpts, wedges: &
         .map(|v| build_variant(registry, path, &o.set, &out_root, o.allow_outside_out, v))
         .collect::<Result<_, _>>()?;
     let runs: Vec<VariantRun> =
-        chosen.par_iter().zip(built).map(|(v, (graph, out))| run_variant(&graph, out, o, v)).collect::<Result<_, _>>()?;
+        chosen.par_iter().zip(built).map(|(v, (graph, out))| run_variant(&graph, path, out, o, v)).collect::<Result<_, _>>()?;
     let mut failed = false;
     for r in &runs {
         outln!(

@@ -36,10 +36,44 @@ struct ModFile {
 type Tree = BTreeMap<Vec<String>, ModFile>;
 
 fn shipped(text: &str) -> String {
-    let code = text.find("#[cfg(test)]").map_or(text, |i| &text[..i]);
-    // Comments (doc examples among them) are not code, nor is the text of a string literal.
-    let code = code.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
-    blank_strings(&code)
+    // Comments (doc examples among them) are not code, nor is the text of a string literal; both
+    // go first, so a brace in them does not upset the test items' ends.
+    let code = text.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
+    without_test_items(&blank_strings(&code))
+}
+
+/// `text` without its `#[cfg(test)]` items (a `mod tests;` line, a `mod tests { .. }` block, a
+/// test-only `use`), wherever they stand: code after a test module is shipped code too.
+fn without_test_items(text: &str) -> String {
+    const ATTR: &str = "#[cfg(test)]";
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(i) = rest.find(ATTR) {
+        out.push_str(&rest[..i]);
+        let item = &rest[i + ATTR.len()..];
+        // The item ends at its first `;` or at the brace that closes its first `{`, whichever
+        // comes first outside brackets (an attribute such as `#[path = "x"]` may come between).
+        let mut depth = 0i32;
+        let mut end = item.len();
+        for (j, c) in item.char_indices() {
+            match c {
+                '(' | '[' => depth += 1,
+                ')' | ']' => depth -= 1,
+                ';' if depth == 0 => {
+                    end = j + 1;
+                    break;
+                }
+                '{' if depth == 0 => {
+                    end = j + closing(&item[j..]) + 1;
+                    break;
+                }
+                _ => {}
+            }
+        }
+        rest = &item[end.min(item.len())..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// `code` with the contents of string literals (plain, escaped and raw) replaced by spaces, so a
@@ -353,7 +387,12 @@ fn macro_blocks<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
 /// The offset of the brace that closes the one `text` opens with (its length when unclosed).
 fn closing(text: &str) -> usize {
     let mut depth = 0;
+    let bytes = text.as_bytes();
     for (j, c) in text.char_indices() {
+        // A brace in a char literal ('{') is not one.
+        if j > 0 && bytes[j - 1] == b'\'' && bytes.get(j + 1) == Some(&b'\'') {
+            continue;
+        }
         match c {
             '{' => depth += 1,
             '}' => {

@@ -64,17 +64,26 @@ impl NodeError {
     }
 }
 
-/// Names the port an algorithm's error concerns, in a cook: `crop_span(..).at_port(port!(Crop, x))?`.
-/// Algorithms return their own errors (they know values, not ports); the node that called them
-/// knows which port the value came from.
+/// Names the port an algorithm's message concerns, in a cook:
+/// `finite3(self.center).at_port(port!(Roots, center))?`. Algorithms say what is wrong with a
+/// value (they know values, not ports); the node that called them knows which port it came from.
+/// Implemented for plain messages only, never for a [`NodeError`]: a cancelled cook must stay
+/// [`NodeError::Cancelled`], not become a message on a port. An algorithm with an error type of
+/// its own maps it with an `impl From<ThatError> for NodeError` that names a port per variant.
 pub trait AtPort<T> {
-    /// The error as a [`NodeError::Port`] on `port`, its message the error's text.
+    /// The message as a [`NodeError::Port`] on `port`.
     fn at_port(self, port: &str) -> Result<T, NodeError>;
 }
 
-impl<T, E: fmt::Display> AtPort<T> for Result<T, E> {
+impl<T> AtPort<T> for Result<T, String> {
     fn at_port(self, port: &str) -> Result<T, NodeError> {
-        self.map_err(|e| NodeError::port(port, e.to_string()))
+        self.map_err(|e| NodeError::port(port, e))
+    }
+}
+
+impl<T> AtPort<T> for Result<T, &str> {
+    fn at_port(self, port: &str) -> Result<T, NodeError> {
+        self.map_err(|e| NodeError::port(port, e))
     }
 }
 

@@ -8,7 +8,8 @@
 use std::borrow::Cow;
 
 /// A run of characters without whitespace longer than this is cut (a 100 kB node id would bury
-/// the message that names it). It is Linux's longest path, so a real path is always shown whole.
+/// the message that names it). It is Linux's longest path, so a path is shown whole unless the
+/// characters around it (quotes, a colon) take it past the limit.
 pub const MAX_RUN: usize = 4096;
 /// What is kept of the start of a cut run.
 const HEAD: usize = 160;

@@ -286,6 +286,10 @@ impl Cook for RenderFire {
         ctx.check_cancel()?;
         let image =
             render_fire(&view, &self.mesh, &self.spread, &self.wind, &self.char, &self.look, self.pass).map_err(|e| match e {
+                // The look's port for the flames' size is `flame_size`.
+                FireError::Param(port, why) if port == port!(FlameParams, size) => {
+                    NodeError::port(port!(FireLook, flame_size), why)
+                }
                 FireError::Param(port, why) => NodeError::port(port, why),
                 FireError::Wind(why) => NodeError::port(port!(RenderFire, wind), why),
                 FireError::Mesh(why) => NodeError::port(port!(RenderFire, mesh), why),

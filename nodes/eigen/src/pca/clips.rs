@@ -1,10 +1,10 @@
 //! What the Eigenfires nodes share: frames between clips and sample buffers, checked for size
 //! and channels, and the number of components a node uses. These are algorithms: their errors
-//! are messages, and the node that calls them names the port they concern.
+//! say what is wrong with which clip's frame, and the node that calls them names the port.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
-use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, NodeError, PortType, Value};
 use rayon::prelude::*;
 
 use super::blocks::{BlockSource, train_blocks};
@@ -16,13 +16,37 @@ pub fn empty_clip() -> Clip {
     Clip::from_frames(PortType::Image, 0.0, Vec::new())
 }
 
+/// Why frames could not be read from a clip (the `clip`-th of those given) or trained on.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ClipError {
+    /// A frame failed to cook upstream, or the cook was cancelled: that node error as it is.
+    #[error("{error}")]
+    Upstream {
+        /// Which clip.
+        clip: usize,
+        /// The error.
+        error: NodeError,
+    },
+    /// A frame that cannot be trained on or projected (its channels or size), and why.
+    #[error("{message}")]
+    Frame {
+        /// Which clip.
+        clip: usize,
+        /// What is wrong with which frame.
+        message: String,
+    },
+    /// The training itself failed.
+    #[error("{0}")]
+    Training(String),
+}
+
 /// Pulls every frame of `clip` (in parallel) into `out` (one `N`-sample gray frame after
 /// another), checking size and channels; the error says what is wrong with which frame.
-pub fn gather_frames(clip: &Clip, size: (u32, u32), out: &mut [f32], ctx: &CookCtx) -> Result<(), String> {
+pub fn gather_frames(clip: &Clip, size: (u32, u32), out: &mut [f32], ctx: &CookCtx) -> Result<(), ClipError> {
     let n = size.0 as usize * size.1 as usize;
     out.par_chunks_mut(n).enumerate().try_for_each(|(i, dst)| {
-        let img = clip.image(i, ctx).map_err(|e| e.to_string())?;
-        check_frame(&img, size, i)?;
+        let img = clip.image(i, ctx).map_err(|error| ClipError::Upstream { clip: 0, error })?;
+        check_frame(&img, size, i).map_err(|message| ClipError::Frame { clip: 0, message })?;
         dst.copy_from_slice(img.data());
         ctx.frame_progress(i + 1, clip.len());
         Ok(())
@@ -73,31 +97,39 @@ pub fn components_to_use(requested: usize, available: usize) -> Result<usize, St
     }
 }
 
-/// [`train_blocks`] over the frames of the training clips, read block by block. Each clip comes
-/// with the name its errors carry (the node passes its port's name).
+/// [`train_blocks`] over the frames of the training clips, read block by block. An error names
+/// the clip at fault by its index in `clips`.
 pub fn train_from_clips(
-    clips: &[(&str, &Clip)],
+    clips: &[&Clip],
     size: (u32, u32),
     max_components: usize,
     block: usize,
     ctx: &CookCtx,
-) -> Result<Database, String> {
+) -> Result<Database, ClipError> {
     let n = size.0 as usize * size.1 as usize;
     let mut starts = Vec::with_capacity(clips.len());
     let mut sources = Vec::new();
-    for (k, (_, clip)) in clips.iter().enumerate() {
+    for (k, clip) in clips.iter().enumerate() {
         starts.push(sources.len());
         sources.extend((0..clip.len()).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
     }
+    // The block reader reports a message; the error behind it is kept here, whole, so a cancelled
+    // cook stays cancelled and a bad frame names its clip.
+    let failed: Mutex<Option<ClipError>> = Mutex::new(None);
+    let fail = |e: ClipError| {
+        let message = e.to_string();
+        if let Ok(mut slot) = failed.lock() {
+            slot.get_or_insert(e);
+        }
+        message
+    };
     let read = |r: std::ops::Range<usize>, out: &mut [f32]| -> Result<(), String> {
-        ctx.check_cancel().map_err(|e| e.to_string())?;
+        ctx.check_cancel().map_err(|error| fail(ClipError::Upstream { clip: 0, error }))?;
         out.par_chunks_mut(n).enumerate().try_for_each(|(j, dst)| {
             let g = r.start + j;
             let k = starts.partition_point(|&s| s <= g) - 1;
-            let (name, clip) = clips[k];
-            let img = clip.image(g - starts[k], ctx).map_err(|e| format!("{name}: {e}"))?;
-            // The node blames its first clip port for any failure; this names the clip at fault.
-            check_frame(&img, size, g - starts[k]).map_err(|m| format!("port '{name}': {m}"))?;
+            let img = clips[k].image(g - starts[k], ctx).map_err(|error| fail(ClipError::Upstream { clip: k, error }))?;
+            check_frame(&img, size, g - starts[k]).map_err(|message| fail(ClipError::Frame { clip: k, message }))?;
             dst.copy_from_slice(img.data());
             Ok(())
         })
@@ -106,4 +138,5 @@ pub fn train_from_clips(
     let progress = |done: usize, total: usize| ctx.frame_progress(done, total);
     let source = BlockSource { read: &read, scratch: Some(&scratch), progress: &progress };
     train_blocks(size.0, size.1, sources, max_components, block, &source)
+        .map_err(|m| failed.lock().ok().and_then(|mut slot| slot.take()).unwrap_or(ClipError::Training(m)))
 }

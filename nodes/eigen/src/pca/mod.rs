@@ -18,7 +18,7 @@ mod simd;
 pub mod training;
 
 pub use blocks::{BlockSource, ReadFrames, train_blocks};
-pub use clips::{components_to_use, empty_clip, gather_frames, samples_to_clip, train_from_clips};
+pub use clips::{ClipError, components_to_use, empty_clip, gather_frames, samples_to_clip, train_from_clips};
 pub use nodes::{Eigenfires, EigenfiresOut, Project, Reconstruct};
 pub use projection::{project, reconstruct};
 pub use training::{Database, RELATIVE_EIGENVALUE_FLOOR, train};

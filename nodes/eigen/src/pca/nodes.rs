@@ -7,7 +7,7 @@ use pyrograph_core::declare::{ClipOf, Cook};
 use pyrograph_core::{Clip, CookCtx, Image, NodeError, port};
 use rayon::prelude::*;
 
-use super::clips::{check_frame, components_to_use, empty_clip, gather_frames, samples_to_clip, train_from_clips};
+use super::clips::{ClipError, check_frame, components_to_use, empty_clip, gather_frames, samples_to_clip, train_from_clips};
 use super::projection::{project, reconstruct};
 use super::training::{Database, train};
 use crate::values::{Basis, FrameRef, Weights};
@@ -59,36 +59,48 @@ impl From<Database> for EigenfiresOut {
     }
 }
 
+impl Eigenfires {
+    /// A clip reader's error on the port of the clip at fault (`ports[clip]`; training failures
+    /// on the first): a cancelled cook stays cancelled.
+    pub(super) fn clip_error(ports: &[&str], e: ClipError) -> NodeError {
+        let port = |clip: usize| ports.get(clip).copied().unwrap_or(ports[0]);
+        match e {
+            ClipError::Upstream { error, .. } if error.is_cancelled() => error,
+            ClipError::Upstream { clip, error } => NodeError::port(port(clip), error.to_string()),
+            ClipError::Frame { clip, message } => NodeError::port(port(clip), message),
+            ClipError::Training(message) => NodeError::port(port(0), message),
+        }
+    }
+}
+
 impl Cook for Eigenfires {
     fn cook(self, ctx: &CookCtx) -> Result<EigenfiresOut, NodeError> {
-        let clips: [(&str, &Clip); 3] = [
-            (port!(Eigenfires, clip1), &*self.clip1),
-            (port!(Eigenfires, clip2), &*self.clip2),
-            (port!(Eigenfires, clip3), &*self.clip3),
-        ];
-        let clip1 = port!(Eigenfires, clip1);
+        let clips: [&Clip; 3] = [&self.clip1, &self.clip2, &self.clip3];
+        let ports = [port!(Eigenfires, clip1), port!(Eigenfires, clip2), port!(Eigenfires, clip3)];
+        let clip1 = ports[0];
         if self.clip1.is_empty() {
             return Err(NodeError::port(clip1, "the clip has no frames"));
         }
         let first = self.clip1.image(0, ctx).map_err(|e| NodeError::port(clip1, e.to_string()))?;
         let size = first.size();
         let n = size.0 as usize * size.1 as usize;
-        let m: usize = clips.iter().map(|(_, c)| c.len()).sum();
+        let m: usize = clips.iter().map(|c| c.len()).sum();
         let total = n.checked_mul(m).ok_or_else(|| NodeError::msg("database too large"))?;
         let max_components = self.max_components;
         let memory = self.memory_mb.saturating_mul(1 << 20);
         if total.saturating_mul(4) > memory {
             // Two blocks in memory: at most half the budget each, and no more than BLOCK_BYTES.
             let block = (BLOCK_BYTES.min(memory / 2) / (n * 4)).max(1);
-            let db = train_from_clips(&clips, size, max_components, block, ctx).map_err(|m| NodeError::port(clip1, m))?;
+            let db = train_from_clips(&clips, size, max_components, block, ctx).map_err(|e| Eigenfires::clip_error(&ports, e))?;
             return Ok(db.into());
         }
         let mut data = vec![0.0_f32; total];
         let mut sources = Vec::with_capacity(m);
         let mut offset = 0;
-        for (k, (port, clip)) in clips.iter().enumerate() {
+        for (k, clip) in clips.iter().enumerate() {
             let len = clip.len();
-            gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], ctx).map_err(|m| NodeError::port(*port, m))?;
+            gather_frames(clip, size, &mut data[offset * n..(offset + len) * n], ctx)
+                .map_err(|e| Eigenfires::clip_error(&ports[k..], e))?;
             sources.extend((0..len).map(|f| FrameRef { clip: k as u32, index: f as u32 }));
             offset += len;
         }

@@ -4,10 +4,11 @@ use std::sync::Arc;
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
-use pyrograph_core::{Channels, Clip, CookCtx, Image, PortType, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, NodeError, PortType, Value};
 use pyrograph_testing::lcg;
 
 use super::clips::train_from_clips;
+use super::nodes::Eigenfires;
 use super::projection::{LIFT_BAND_ROWS, lift_onto, reconstruct_with};
 use super::projection::{project, reconstruct};
 use super::training::{gram_matrix, lift_in_place, train};
@@ -33,7 +34,7 @@ fn out_of_core_training_from_clips_matches_the_in_memory_cook() {
     let clip1 = Clip::from_frames(PortType::Image, 24.0, (0..15).map(img).collect());
     let empty = Clip::from_frames(PortType::Image, 24.0, Vec::new());
     let clip3 = Clip::from_frames(PortType::Image, 24.0, (15..23).map(img).collect());
-    let clips = [("clip1", &clip1), ("clip2", &empty), ("clip3", &clip3)];
+    let clips = [&clip1, &empty, &clip3];
     let ctx = CookCtx::new();
     let out = train_from_clips(&clips, (w, h), 0, 4, &ctx).unwrap();
     let b = &out.basis;
@@ -52,8 +53,19 @@ fn out_of_core_training_from_clips_matches_the_in_memory_cook() {
     }
     // A frame of the wrong size is reported with its clip and index.
     let odd = Clip::from_frames(PortType::Image, 24.0, vec![img(0), Value::Image(Arc::new(Image::new(2, 2, Channels::Gray)))]);
-    let err = train_from_clips(&[("clip1", &odd)], (w, h), 0, 1, &ctx).unwrap_err().to_string();
+    let err = train_from_clips(&[&odd], (w, h), 0, 1, &ctx).unwrap_err().to_string();
     assert!(err.contains("frame 1 is 2x2"), "{err}");
+    // In the second clip, it is that clip's port, named once; a cancelled cook stays cancelled.
+    let ports = ["clip1", "clip2", "clip3"];
+    let err = Eigenfires::clip_error(&ports, train_from_clips(&[&clip1, &odd], (w, h), 0, 1, &ctx).unwrap_err());
+    assert_eq!(
+        err,
+        NodeError::port("clip2", "frame 1 is 2x2 but the database frames are 6x5; every frame must be the same size")
+    );
+    let cancelled = CookCtx::new();
+    cancelled.cancel_token().cancel();
+    let err = train_from_clips(&[&clip1], (w, h), 0, 1, &cancelled).unwrap_err();
+    assert!(Eigenfires::clip_error(&ports, err).is_cancelled());
 }
 
 #[test]

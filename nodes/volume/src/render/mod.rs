@@ -19,7 +19,7 @@ use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
-use pyrograph_core::{Cook, CookCtx, Image, NodeError, port};
+use pyrograph_core::{AtPort, Cook, CookCtx, Image, NodeError, port};
 use pyrograph_nodes_particles::lit_mesh::MeshShading;
 use pyrograph_nodes_particles::swept::Exposure;
 use pyrograph_nodes_particles::types::Mesh;
@@ -223,7 +223,7 @@ impl Cook for Render {
                 return Err(NodeError::port(name, format!("particle {k} has a non-finite position, size or colour")));
             }
         }
-        check_fields(&self.volume, port!(Render, volume))?;
+        check_fields(&self.volume).at_port(port!(Render, volume))?;
         if self.mesh.normals.len() != self.mesh.triangles.len() {
             return Err(NodeError::port(port!(Render, mesh), "the mesh has no face normals: load it with particles.mesh_load"));
         }
@@ -311,20 +311,17 @@ fn point_light(q: &Particle) -> Light {
     Light { kind: LightKind::Point(Vec3::from_array(q.position)), color: rgb * q.weight.max(0.0) }
 }
 
-/// The fields the march reads must be finite, and the density not negative.
-fn check_fields(v: &Volume, port: &'static str) -> Result<(), NodeError> {
+/// The fields the march reads must be finite, and the density not negative; else which is not.
+fn check_fields(v: &Volume) -> Result<(), String> {
     for name in ["density", "temperature", "flame"] {
         let Some(data) = v.scalar(name) else { continue };
         if let Some(bad) = data.iter().find(|x| !x.is_finite()) {
-            return Err(NodeError::port(port, format!("the volume's {name} field holds {bad}")));
+            return Err(format!("the volume's {name} field holds {bad}"));
         }
         if name == "density"
             && let Some(min) = data.iter().copied().reduce(f32::min).filter(|m| *m < 0.0)
         {
-            return Err(NodeError::port(
-                port,
-                format!("the volume's density field goes negative (down to {min}); a density is at least 0"),
-            ));
+            return Err(format!("the volume's density field goes negative (down to {min}); a density is at least 0"));
         }
     }
     Ok(())

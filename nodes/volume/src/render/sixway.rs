@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
-use pyrograph_core::{Channels, Cook, CookCtx, Image, NodeError, port};
+use pyrograph_core::{AtPort, Channels, Cook, CookCtx, Image, NodeError, port};
 use pyrograph_render::View;
 use pyrograph_render::ports::CameraPorts;
 
@@ -56,7 +56,7 @@ pyrograph_core::node! {
 impl Cook for RenderSixway {
     fn cook(self, ctx: &CookCtx) -> Result<RenderSixwayOut, NodeError> {
         let view = self.camera.view()?;
-        check_fields(&self.volume, port!(RenderSixway, volume))?;
+        check_fields(&self.volume).at_port(port!(RenderSixway, volume))?;
         ctx.check_cancel()?;
         let look =
             self.march.look(Vec3::splat(self.albedo), self.anisotropy, Vec3::ZERO, Vec4::ZERO, self.volume.time.to_bits())?;

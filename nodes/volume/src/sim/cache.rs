@@ -39,9 +39,9 @@ pub enum StepError {
     /// The solver refused the step (the voxel budget, a diverged state).
     #[error(transparent)]
     Sim(#[from] SimError),
-    /// The cook was cancelled between sub-steps.
+    /// A node error met on the way (the cook cancelled between sub-steps), passed on as it is.
     #[error(transparent)]
-    Cancelled(#[from] NodeError),
+    Node(#[from] NodeError),
 }
 
 impl From<StepError> for NodeError {
@@ -51,7 +51,7 @@ impl From<StepError> for NodeError {
             StepError::Param(e) => e.into(),
             // The voxel budget's message names its limit and how to raise it.
             StepError::Sim(e) => NodeError::msg(e.to_string()),
-            StepError::Cancelled(e) => e,
+            StepError::Node(e) => e,
         }
     }
 }

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 use pyrograph_testing::workspace;
 
 mod cook_side;
+mod test_placement;
 
 /// The documented exception: these files of `crates/core` may form one cycle between them.
 const ALLOWED_CYCLE: &[&str] = &["crates/core/src/graph/build.rs", "crates/core/src/graph/include.rs"];
@@ -714,6 +715,23 @@ fn workspace_deps(ws: &Path) -> Vec<(PathBuf, PathBuf)> {
         }
     }
     deps
+}
+
+/// Every crate's unit tests sit in one of the two placements (`test_placement.rs`).
+#[test]
+fn unit_tests_have_one_placement() {
+    let ws = workspace();
+    let mut found = Vec::new();
+    for root in crate_roots(&ws) {
+        let src = root.parent().expect("a crate root is in its src folder");
+        for file in test_placement::rust_files(src) {
+            let rel = file.strip_prefix(&ws).unwrap_or(&file).to_string_lossy().replace('\\', "/");
+            found.extend(test_placement::misplaced(&rel, &std::fs::read_to_string(&file).unwrap_or_default()));
+        }
+    }
+    found.sort();
+    found.dedup();
+    assert!(found.is_empty(), "unit tests out of place ({}):\n{}", found.len(), found.join("\n"));
 }
 
 #[test]

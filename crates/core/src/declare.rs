@@ -782,5 +782,4 @@ macro_rules! choice {
 }
 
 #[cfg(test)]
-#[path = "declare_tests.rs"]
 mod tests;

@@ -25,7 +25,7 @@ fn modules(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
     for entry in std::fs::read_dir(src).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-        if name == "lib" || name.ends_with("_tests") {
+        if name == "lib" || name == "tests" {
             continue;
         }
         let mut deps = BTreeSet::new();
@@ -49,9 +49,11 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).unwrap() {
         let p = entry.unwrap().path();
-        if p.is_dir() {
+        // A module's unit tests (`tests.rs`, or a `tests/` folder) are not its shipped code.
+        let tests = p.file_stem().is_some_and(|n| n == "tests");
+        if p.is_dir() && !tests {
             out.extend(walk(&p));
-        } else if p.extension().is_some_and(|e| e == "rs") && !p.to_string_lossy().ends_with("_tests.rs") {
+        } else if p.extension().is_some_and(|e| e == "rs") && !tests {
             out.push(p);
         }
     }

@@ -744,5 +744,4 @@ fn call_error(signature: &str) -> String {
 }
 
 #[cfg(test)]
-#[path = "expr_tests.rs"]
 mod tests;

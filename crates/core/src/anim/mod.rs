@@ -279,5 +279,4 @@ fn interp(pv: &ParamValue) -> Result<Interp, String> {
 }
 
 #[cfg(test)]
-#[path = "anim_tests.rs"]
 mod tests;

@@ -31,17 +31,7 @@ mod tiles;
 mod view;
 
 #[cfg(test)]
-mod avx2_tests;
-#[cfg(test)]
-mod draw_tests;
-#[cfg(test)]
-mod fan_tests;
-#[cfg(test)]
-mod framebuffer_tests;
-#[cfg(test)]
-mod strip_tests;
-#[cfg(test)]
-mod test_support;
+mod tests;
 
 pub use draw::{DrawList, TextureId};
 pub use framebuffer::Framebuffer;

@@ -110,5 +110,4 @@ pub fn relight(positive: Vec3, negative: Vec3, l: Vec3) -> f32 {
 }
 
 #[cfg(test)]
-#[path = "sixway_tests.rs"]
 mod tests;

@@ -2,8 +2,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::test_support::{screen_view, sv};
-use super::{Blend, DrawList, Vertex, render};
+use super::support::{screen_view, sv};
+use crate::raster::{Blend, DrawList, Vertex, render};
 
 #[test]
 fn fan_triangles_share_edges_without_double_blending() {

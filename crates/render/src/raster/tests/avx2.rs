@@ -4,12 +4,12 @@ use glam::{Vec2, Vec3};
 use pyrograph_core::{Channels, Image};
 use pyrograph_testing::lcg;
 
-use super::fan::envelope;
-use super::isa::{Avx2, Portable};
-use super::lanes::SMALL_LANES;
-use super::test_support::screen_view;
-use super::tiles::raster_tri;
-use super::{BAND_ROWS, Band, Blend, DrawList, SUB, SVert, Vertex, ceil_sub, floor_sub, raster_band_generic, round_i64};
+use super::support::screen_view;
+use crate::raster::fan::envelope;
+use crate::raster::isa::{Avx2, Portable};
+use crate::raster::lanes::SMALL_LANES;
+use crate::raster::tiles::raster_tri;
+use crate::raster::{BAND_ROWS, Band, Blend, DrawList, SUB, SVert, Vertex, ceil_sub, floor_sub, raster_band_generic, round_i64};
 
 /// AVX2 where the CPU has it. Without it the comparison cannot run and says so — unless
 /// `PYROGRAPH_REQUIRE_AVX2` is set (`.ci/run` sets it when /proc/cpuinfo lists avx2): then a

@@ -5,9 +5,9 @@ use std::mem::MaybeUninit;
 use glam::{Vec2, Vec3};
 use pyrograph_testing::lcg;
 
-use super::framebuffer::{straight, write_straight, write_straight_uninit};
-use super::test_support::{screen_view, sv};
-use super::{Blend, DrawList, Vertex, render, render_image};
+use super::support::{screen_view, sv};
+use crate::raster::framebuffer::{straight, write_straight, write_straight_uninit};
+use crate::raster::{Blend, DrawList, Vertex, render, render_image};
 
 #[test]
 fn render_image_equals_the_framebuffer_converted() {

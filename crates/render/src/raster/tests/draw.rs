@@ -5,9 +5,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use pyrograph_core::{Channels, Image};
 
-use super::test_support::{WHITE, screen_view, sv};
-use super::{Blend, DrawList, Vertex, View, blend_pixel, render};
+use super::support::{WHITE, screen_view, sv};
 use crate::camera::Camera;
+use crate::raster::{Blend, DrawList, Vertex, View, blend_pixel, render};
 
 #[test]
 fn one_triangle_covers_exactly_the_pixels_whose_centres_it_contains() {

@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 
-use super::{ScreenVertex, View};
 use crate::camera::Camera;
+use crate::raster::{ScreenVertex, View};
 
 /// A view of `w × h` pixels from 5 units up the z axis, looking at the origin.
 pub(super) fn screen_view(w: u32, h: u32) -> View {

@@ -3,8 +3,8 @@
 use glam::Vec3;
 use proptest::prelude::*;
 
-use super::{Blend, DrawList, Framebuffer, Vertex, View, render};
 use crate::camera::Camera;
+use crate::raster::{Blend, DrawList, Framebuffer, Vertex, View, render};
 
 /// A 96 × 64 view from `distance` units up the z axis, looking at the origin.
 fn view(distance: f32) -> View {

@@ -81,7 +81,8 @@ impl Cook for Eigenfires {
         if self.clip1.is_empty() {
             return Err(NodeError::port(clip1, "the clip has no frames"));
         }
-        let first = self.clip1.image(0, ctx).map_err(|e| NodeError::port(clip1, e.to_string()))?;
+        let first =
+            self.clip1.image(0, ctx).map_err(|error| Eigenfires::clip_error(&ports, ClipError::Upstream { clip: 0, error }))?;
         let size = first.size();
         let n = size.0 as usize * size.1 as usize;
         let m: usize = clips.iter().map(|c| c.len()).sum();

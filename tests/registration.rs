@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use pyrograph_testing::workspace;
 
-/// Every `#[node("family.name", ...)]` in shipped code (before the first `#[cfg(test)]`) under `dir`.
+/// Every `#[node("family.name", ...)]` in shipped code (test items left out) under `dir`.
 fn declared(dir: &Path, out: &mut BTreeSet<(String, PathBuf)>) {
     for entry in std::fs::read_dir(dir).unwrap().flatten() {
         let path = entry.path();
@@ -21,7 +21,7 @@ fn declared(dir: &Path, out: &mut BTreeSet<(String, PathBuf)>) {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        let shipped = text.find("#[cfg(test)]").map_or(text.as_str(), |i| &text[..i]);
+        let shipped = pyrograph_testing::without_test_items(&text);
         for line in shipped.lines().filter(|l| !l.trim_start().starts_with("//")) {
             if let Some(rest) = line.trim_start().strip_prefix("#[node(\"") {
                 let name = rest.split('"').next().unwrap_or_default();

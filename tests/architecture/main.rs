@@ -37,44 +37,10 @@ struct ModFile {
 type Tree = BTreeMap<Vec<String>, ModFile>;
 
 fn shipped(text: &str) -> String {
-    // Comments (doc examples among them) are not code, nor is the text of a string literal; both
-    // go first, so a brace in them does not upset the test items' ends.
-    let code = text.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
-    without_test_items(&blank_strings(&code))
-}
-
-/// `text` without its `#[cfg(test)]` items (a `mod tests;` line, a `mod tests { .. }` block, a
-/// test-only `use`), wherever they stand: code after a test module is shipped code too.
-fn without_test_items(text: &str) -> String {
-    const ATTR: &str = "#[cfg(test)]";
-    let mut out = String::with_capacity(text.len());
-    let mut rest = text;
-    while let Some(i) = rest.find(ATTR) {
-        out.push_str(&rest[..i]);
-        let item = &rest[i + ATTR.len()..];
-        // The item ends at its first `;` or at the brace that closes its first `{`, whichever
-        // comes first outside brackets (an attribute such as `#[path = "x"]` may come between).
-        let mut depth = 0i32;
-        let mut end = item.len();
-        for (j, c) in item.char_indices() {
-            match c {
-                '(' | '[' => depth += 1,
-                ')' | ']' => depth -= 1,
-                ';' if depth == 0 => {
-                    end = j + 1;
-                    break;
-                }
-                '{' if depth == 0 => {
-                    end = j + closing(&item[j..]) + 1;
-                    break;
-                }
-                _ => {}
-            }
-        }
-        rest = &item[end.min(item.len())..];
-    }
-    out.push_str(rest);
-    out
+    // Comments (doc examples among them) are not code, nor is the text of a string literal.
+    let code = pyrograph_testing::without_test_items(text);
+    let code = code.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
+    blank_strings(&code)
 }
 
 /// `code` with the contents of string literals (plain, escaped and raw) replaced by spaces, so a

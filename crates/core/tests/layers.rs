@@ -5,9 +5,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Code before the first `#[cfg(test)]`: tests may import anything.
-fn shipped(text: &str) -> &str {
-    text.find("#[cfg(test)]").map_or(text, |i| &text[..i])
+/// Code without its `#[cfg(test)]` items: tests may import anything.
+fn shipped(text: &str) -> String {
+    pyrograph_testing::without_test_items(text)
 }
 
 fn imports(text: &str, into: &mut BTreeSet<String>) {
@@ -37,7 +37,7 @@ fn modules(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
             continue;
         };
         for f in files {
-            imports(shipped(&std::fs::read_to_string(&f).unwrap()), &mut deps);
+            imports(&shipped(&std::fs::read_to_string(&f).unwrap()), &mut deps);
         }
         deps.remove(&name);
         out.entry(name).or_insert_with(BTreeSet::new).extend(deps);

@@ -185,6 +185,80 @@ pub fn mutated(seed: &str, alphabet: &str, rng: &mut XorShift) -> String {
     text.into_iter().collect()
 }
 
+/// `code` (Rust source) with every `#[cfg(test)]` item blanked to spaces, newlines kept so line
+/// numbers still match: a `mod tests;` line, a `mod tests { .. }` block, a test-only `use`,
+/// wherever it stands. The source scans (layout, registration, port names) read shipped code
+/// only; cutting a file at its first `#[cfg(test)]` would skip what follows a test module
+/// declared mid-file. Braces inside strings, char literals and comments do not count.
+pub fn without_test_items(code: &str) -> String {
+    const ATTR: &str = "#[cfg(test)]";
+    let mut out: Vec<u8> = code.as_bytes().to_vec();
+    let mut from = 0;
+    while let Some(at) = code[from..].find(ATTR).map(|i| from + i) {
+        let end = item_end(code, at + ATTR.len());
+        for b in &mut out[at..end] {
+            if *b != b'\n' {
+                *b = b' ';
+            }
+        }
+        from = end;
+    }
+    // Only ASCII spaces replaced whole items, so this is valid UTF-8 unless an item split a
+    // character, which `item_end` never does (it stops after an ASCII `;` or `}`).
+    String::from_utf8(out).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
+}
+
+/// Where the item starting at `from` ends: after its first `;` outside brackets, or after the
+/// brace that closes its first `{`; skipping strings, char literals and comments.
+fn item_end(code: &str, from: usize) -> usize {
+    let b = code.as_bytes();
+    let (mut i, mut brackets, mut braces) = (from, 0i32, 0i32);
+    while i < b.len() {
+        match b[i] {
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                i = code[i..].find('\n').map_or(b.len(), |n| i + n);
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < b.len() && b[i] != b'"' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'r' if matches!(b.get(i + 1), Some(b'"' | b'#'))
+                && !b[..i].last().is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_') =>
+            {
+                let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+                if b.get(i + 1 + hashes) == Some(&b'"') {
+                    let close = format!("\"{}", "#".repeat(hashes));
+                    i = code[i + 2 + hashes..].find(&close).map_or(b.len(), |n| i + 2 + hashes + n + close.len());
+                    continue;
+                }
+            }
+            // A char literal ('{', '\''); a lifetime has no closing quote this close.
+            b'\'' => {
+                let len = if b.get(i + 1) == Some(&b'\\') { 3 } else { 2 };
+                if b.get(i + len) == Some(&b'\'') {
+                    i += len;
+                }
+            }
+            b'(' | b'[' => brackets += 1,
+            b')' | b']' => brackets -= 1,
+            b';' if brackets == 0 && braces == 0 => return i + 1,
+            b'{' if brackets == 0 => braces += 1,
+            b'}' if brackets == 0 => {
+                braces -= 1;
+                if braces == 0 {
+                    return i + 1;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    b.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -232,5 +306,14 @@ mod tests {
             s ^= s << 17;
             assert_eq!(g.next_f32().to_bits(), ((s >> 40) as f32 / (1u64 << 24) as f32).to_bits());
         }
+    }
+
+    #[test]
+    fn test_items_are_blanked_wherever_they_stand_and_lines_are_kept() {
+        let code = "pub fn a() {}\n#[cfg(test)]\nmod tests;\npub fn b() { '{'; }\n#[cfg(test)]\nmod t {\n    fn s() -> &'static str { \"}\" } // }\n}\npub fn c() {}\n";
+        let kept = without_test_items(code);
+        assert_eq!(kept.lines().count(), code.lines().count());
+        assert!(kept.contains("pub fn a()") && kept.contains("pub fn b()") && kept.contains("pub fn c()"), "{kept}");
+        assert!(!kept.contains("mod") && !kept.contains("fn s"), "{kept}");
     }
 }

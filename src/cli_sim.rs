@@ -42,6 +42,13 @@ pub struct SimulateArgs {
     overwrite: bool,
 }
 
+impl SimulateArgs {
+    /// The graph file.
+    pub fn graph(&self) -> &std::path::Path {
+        &self.graph
+    }
+}
+
 fn build(registry: &Registry, a: &SimulateArgs) -> Result<Graph, Failure> {
     let wedges =
         pyrograph::wedge::Wedges::parse(&a.wedges.wedge, &a.wedges.wedge_zip).map_err(|e| Failure(format!("error: {e}")))?;

@@ -13,6 +13,7 @@ use pyrograph::{errln, outln};
 use pyrograph_frontend::text::printable_json;
 
 mod cli_farm;
+mod cli_plugins;
 mod cli_presets;
 mod cli_sim;
 
@@ -34,6 +35,8 @@ struct Cli {
     command: Option<Command>,
     #[command(flatten)]
     limits: Limits,
+    #[command(flatten)]
+    plugins: cli_plugins::PluginArgs,
 }
 
 /// What the process may read and how big a graph or image it builds (for services that cook
@@ -267,8 +270,8 @@ impl From<Diagnostics> for Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let registry = pyrograph_frontend::registry();
-    if let Err(Failure(msg)) = cli.limits.apply() {
+    let mut registry = pyrograph_frontend::registry();
+    if let Err(Failure(msg)) = cli.limits.apply().and_then(|()| cli.plugins.attach(&mut registry, cli.command.as_ref())) {
         errln!("{msg}");
         return ExitCode::FAILURE;
     }
@@ -307,10 +310,7 @@ fn main() -> ExitCode {
             check(&registry, &graph, &BuildOptions { output_dir: out, allow_outside_out, ..BuildOptions::default() }, json)
         }
         Some(Command::Save { graph, output, set, overwrite }) => save(&graph, &output, &set, overwrite),
-        Some(Command::Nodes { markdown, json }) => {
-            nodes(&registry, markdown, json);
-            Ok(())
-        }
+        Some(Command::Nodes { markdown, json }) => cli_plugins::nodes(&registry, markdown, json),
         Some(Command::Info { graph, json }) => info(&registry, &graph, json),
         Some(Command::Presets { dir, graph, tag, search, json, thumbnails, out, overwrite }) => {
             let thumbnails = thumbnails.then_some(out);
@@ -673,18 +673,6 @@ fn save(path: &Path, output: &Path, sets: &[String], overwrite: bool) -> Result<
     doc.save(output, overwrite).map_err(|e| Failure(format!("error: cannot write {}: {e}", output.display())))?;
     outln!("saved {}", output.display());
     Ok(())
-}
-
-fn nodes(registry: &Registry, markdown: bool, json_out: bool) {
-    if markdown {
-        print!("{}", pyrograph_frontend::reference::markdown(registry));
-    } else if json_out {
-        println!("{}", printable_json(pyrograph_frontend::reference::json(registry)));
-    } else {
-        for d in registry.descs() {
-            outln!("{:<32} {:<16} {}", d.type_name, d.category, d.summary());
-        }
-    }
 }
 
 fn info(registry: &Registry, path: &Path, json_out: bool) -> Result<(), Failure> {

@@ -5,6 +5,7 @@
 #![deny(missing_docs)]
 
 pub mod check;
+pub mod plugins;
 pub mod preset_cook;
 pub mod preset_docs;
 pub mod presets;
@@ -18,6 +19,7 @@ pub use pyrograph_nodes_flame_model as flame_model;
 pub use pyrograph_nodes_imaging as imaging;
 pub use pyrograph_nodes_particles as particles;
 pub use pyrograph_nodes_volume as volume;
+pub use pyrograph_plugin as plugin;
 pub use pyrograph_render as render;
 
 /// A registry with every node type pyrograph ships.

@@ -74,20 +74,22 @@ impl<T: Port> Field for T {
         let (value, port) = inputs.get_port(name)?;
         // The loader checks ranges of values written in the file; a value that arrives over an
         // edge (or a frame of a lifted clip) is checked here, so no node clamps it silently.
-        if let Some((lo, hi)) = port.range {
-            let x = match value {
-                Value::Float(x) => Some(*x),
-                Value::Int(i) => Some(*i as f64),
-                _ => None,
-            };
-            if let Some(x) = x
-                && !(lo..=hi).contains(&x)
-            {
-                return Err(NodeError::port(name, format!("{x} is outside the range {lo}..={hi}")));
-            }
-        }
+        check_range(port, value).map_err(|e| NodeError::port(name, e))?;
         T::from_port(value, port).map_err(|e| NodeError::port(name, e))
     }
+}
+
+/// Whether a number fits its port's range (anything else passes): what every declared field
+/// checks on read, and what a node whose ports are known only at run time (a Python plugin)
+/// checks itself.
+pub fn check_range(port: &PortDesc, value: &Value) -> Result<(), String> {
+    let Some((lo, hi)) = port.range else { return Ok(()) };
+    let x = match value {
+        Value::Float(x) => *x,
+        Value::Int(i) => *i as f64,
+        _ => return Ok(()),
+    };
+    if (lo..=hi).contains(&x) { Ok(()) } else { Err(format!("{x} is outside the range {lo}..={hi}")) }
 }
 
 /// The port name of a field: `r#type` is the port `type`.

@@ -222,6 +222,17 @@ impl<'a> Inputs<'a> {
         Inputs { desc, values }
     }
 
+    /// Every input value, in `desc().inputs` order: for nodes whose ports are known only at run
+    /// time (a Python plugin), which cannot declare typed fields.
+    pub fn values(&self) -> &'a [Value] {
+        self.values
+    }
+
+    /// The description the values belong to.
+    pub fn desc(&self) -> &'a NodeDesc {
+        self.desc
+    }
+
     /// The value of input `i` (in `desc.inputs` order).
     pub(crate) fn value(&self, i: usize) -> Option<&'a Value> {
         self.values.get(i)

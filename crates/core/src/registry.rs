@@ -12,6 +12,28 @@ pub struct Registry {
     nodes: BTreeMap<String, Arc<dyn Node>>,
     /// Types the graph loader builds itself (`graph.include`): listed, never cooked.
     loader: BTreeMap<String, NodeDesc>,
+    /// Types found at run time (Python plugins), asked only for a name no built-in has.
+    extension: Option<Arc<dyn Extension>>,
+}
+
+/// Node types found at run time (Python plugins in a folder). They are looked up only when a
+/// graph names a type no built-in has, so a graph of built-in nodes never pays for finding them
+/// (never starts an interpreter).
+pub trait Extension: Send + Sync {
+    /// The types found (found on the first call, then kept), and why some could not be read: one
+    /// line per broken file or clash, each naming its file.
+    fn found(&self) -> &Found;
+}
+
+/// What an [`Extension`] found.
+#[derive(Default)]
+pub struct Found {
+    /// The node types, by type name.
+    pub nodes: BTreeMap<String, Arc<dyn Node>>,
+    /// Why files or names could not be used, one line each, naming the file.
+    pub problems: Vec<String>,
+    /// Where each type is declared (`file:line`), for listings.
+    pub places: BTreeMap<String, String>,
 }
 
 impl Registry {
@@ -48,19 +70,38 @@ impl Registry {
         self.add(T::node());
     }
 
+    /// Whether `type_name` is a built-in type (compiled in or built by the loader): what a
+    /// run-time type may not claim.
+    pub fn is_builtin(&self, type_name: &str) -> bool {
+        self.nodes.contains_key(type_name) || self.loader.contains_key(type_name)
+    }
+
+    /// Adds run-time types (Python plugins), looked up after the built-in ones.
+    pub fn extend_with(&mut self, extension: Arc<dyn Extension>) {
+        self.extension = Some(extension);
+    }
+
+    /// What the run-time types' finder reported, finding them if no one asked before; `None`
+    /// without an extension.
+    pub fn extension(&self) -> Option<&Found> {
+        self.extension.as_deref().map(|e| e.found())
+    }
+
     /// The node type named `type_name`.
     pub fn get(&self, type_name: &str) -> Option<&Arc<dyn Node>> {
-        self.nodes.get(type_name)
+        self.nodes.get(type_name).or_else(|| self.extension()?.nodes.get(type_name))
     }
 
     /// The description of type `type_name`, cookable or built by the loader.
     pub fn desc(&self, type_name: &str) -> Option<&NodeDesc> {
-        self.nodes.get(type_name).map(|n| n.desc()).or_else(|| self.loader.get(type_name))
+        let builtin = self.nodes.get(type_name).map(|n| n.desc()).or_else(|| self.loader.get(type_name));
+        builtin.or_else(|| Some(self.extension()?.nodes.get(type_name)?.desc()))
     }
 
-    /// All descriptions, sorted by type name.
+    /// All descriptions, sorted by type name (run-time types included, which finds them).
     pub fn descs(&self) -> impl Iterator<Item = &NodeDesc> {
-        let mut all: Vec<&NodeDesc> = self.nodes.values().map(|n| n.desc()).chain(self.loader.values()).collect();
+        let found = self.extension().map(|f| f.nodes.values()).into_iter().flatten();
+        let mut all: Vec<&NodeDesc> = self.nodes.values().chain(found).map(|n| n.desc()).chain(self.loader.values()).collect();
         all.sort_by(|a, b| a.type_name.cmp(&b.type_name));
         all.into_iter()
     }
@@ -68,9 +109,11 @@ impl Registry {
     /// Type names close to `name` (same suffix or a small edit distance), for "did you mean" hints.
     pub fn suggest(&self, name: &str) -> Option<&str> {
         let tail = name.rsplit('.').next().unwrap_or(name);
+        let found = self.extension().map(|f| f.nodes.keys()).into_iter().flatten();
         self.nodes
             .keys()
             .chain(self.loader.keys())
+            .chain(found)
             .filter_map(|k| {
                 let whole = within_edits(k, name, 2);
                 let short = within_edits(k.rsplit('.').next().unwrap_or(k), tail, 2);
@@ -91,6 +134,40 @@ mod tests {
         assert_eq!(edit_distance("to_gray", "to_grey"), 1);
         assert_eq!(edit_distance("", "abc"), 3);
         assert_eq!(edit_distance("same", "same"), 0);
+    }
+
+    /// An extension that counts how often it is asked; it declares `studio.add` (math.add's node
+    /// under a second name: any node will do).
+    struct Counting {
+        asked: std::sync::atomic::AtomicUsize,
+        found: Found,
+    }
+
+    impl Extension for Counting {
+        fn found(&self) -> &Found {
+            self.asked.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            &self.found
+        }
+    }
+
+    #[test]
+    fn run_time_types_are_asked_for_only_when_no_built_in_has_the_name() {
+        let mut r = Registry::with_builtins();
+        let node = r.get("math.add").unwrap().clone();
+        let mut found = Found::default();
+        found.nodes.insert("studio.add".into(), node);
+        found.problems.push("plugin x.py could not be loaded".into());
+        let ext = Arc::new(Counting { asked: 0.into(), found });
+        r.extend_with(ext.clone());
+        let asked = || ext.asked.load(std::sync::atomic::Ordering::SeqCst);
+        assert!(r.get("math.add").is_some() && r.desc("graph.include").is_some());
+        assert_eq!(asked(), 0, "a built-in name never asks the extension");
+        assert!(r.get("studio.add").is_some());
+        assert!(r.get("studio.nothing").is_none());
+        assert!(r.descs().any(|d| d.type_name == "math.add"), "listings include the run-time types' descriptions");
+        assert!(r.is_builtin("math.add") && !r.is_builtin("studio.add"));
+        assert_eq!(r.extension().unwrap().problems, ["plugin x.py could not be loaded"]);
+        assert!(asked() >= 3);
     }
 
     #[test]

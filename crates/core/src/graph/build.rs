@@ -217,10 +217,16 @@ fn instantiate(id: &str, nd: &NodeDoc, ctx: &LoadCtx, diags: &mut Vec<Diagnostic
         Some(node) => Some(node.clone()),
         None => {
             let hint = ctx.registry.suggest(&nd.type_name).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
+            // A plugin that failed to load (or plugins turned off) may be why: say so.
+            let problems = ctx.registry.extension().map(|f| f.problems.as_slice()).unwrap_or_default();
+            let broken: String = problems.iter().map(|p| format!("; {p}")).collect();
             diags.push(diag(
                 DiagnosticKind::UnknownNodeType,
                 Location::Node(id.to_string()),
-                format!("unknown node type '{}'{hint}; `pyrograph nodes` lists them", crate::error::shortened(&nd.type_name)),
+                format!(
+                    "unknown node type '{}'{hint}; `pyrograph nodes` lists them{broken}",
+                    crate::error::shortened(&nd.type_name)
+                ),
             ));
             None
         }

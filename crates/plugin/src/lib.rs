@@ -1,0 +1,175 @@
+//! Node types written in Python. A plugin is a `.py` file in a plugin folder whose functions are
+//! declared with `@node` (`host/pyrograph_plugin.py`); pyrograph asks a Python worker process what
+//! the files declare only when a graph names a type no built-in node has, and cooks each plugin
+//! node in a pool of workers, one per cook thread. Nothing here links Python: a machine without
+//! it cooks every graph of built-in nodes as before.
+#![deny(missing_docs)]
+
+pub mod arena;
+pub mod decl;
+pub mod discover;
+pub mod host;
+pub mod node;
+pub mod pool;
+pub mod protocol;
+pub mod worker;
+
+use std::collections::BTreeMap;
+use std::ffi::OsString;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+
+use pyrograph_core::registry::{Extension, Found};
+use pyrograph_core::{Node, Registry};
+
+use crate::discover::{PluginDir, PluginFile};
+use crate::node::PyNode;
+use crate::pool::Pool;
+use crate::protocol::Reply;
+use crate::worker::{Launch, WorkerError};
+
+/// How plugins are found and run.
+#[derive(Clone, Debug)]
+pub struct PluginOptions {
+    /// The folders to search, in order ([`discover::plugin_dirs`]).
+    pub dirs: Vec<PluginDir>,
+    /// The Python interpreter (`PYROGRAPH_PYTHON`, else `python3`).
+    pub python: OsString,
+    /// The most workers at once (the cook's threads).
+    pub workers: usize,
+    /// Where the host script is written.
+    pub host_dir: PathBuf,
+}
+
+impl PluginOptions {
+    /// Options for these folders, with the interpreter from `PYROGRAPH_PYTHON` and a worker per core.
+    pub fn new(dirs: Vec<PluginDir>) -> PluginOptions {
+        PluginOptions {
+            dirs,
+            python: std::env::var_os("PYROGRAPH_PYTHON").filter(|p| !p.is_empty()).unwrap_or_else(|| "python3".into()),
+            workers: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            host_dir: host::default_dir(),
+        }
+    }
+}
+
+/// Adds the plugin nodes of `options.dirs` to `registry`, looked up only when a graph names a
+/// type no built-in has. The folders are scanned now (no Python runs); an unreadable folder or
+/// file is an error naming it.
+pub fn extend(registry: &mut Registry, options: &PluginOptions) -> Result<(), String> {
+    let files = discover::scan(&options.dirs)?;
+    let builtin: Vec<String> = registry.descs().map(|d| d.type_name.clone()).collect();
+    registry.extend_with(Arc::new(Plugins { files, builtin, options: options.clone(), found: OnceLock::new() }));
+    Ok(())
+}
+
+/// Turns plugins off: a graph that names a type no built-in has is refused, saying plugins are
+/// off (`--no-plugins`).
+pub fn refuse(registry: &mut Registry, why: &str) {
+    registry.extend_with(Arc::new(Refused(Found { problems: vec![why.to_string()], ..Found::default() })));
+}
+
+struct Refused(Found);
+
+impl Extension for Refused {
+    fn found(&self) -> &Found {
+        &self.0
+    }
+}
+
+/// The plugin files of a registry, described on first use.
+struct Plugins {
+    files: Vec<PluginFile>,
+    builtin: Vec<String>,
+    options: PluginOptions,
+    found: OnceLock<Found>,
+}
+
+impl Extension for Plugins {
+    fn found(&self) -> &Found {
+        self.found.get_or_init(|| self.describe())
+    }
+}
+
+impl Plugins {
+    /// Asks a worker what every file declares and builds the node types, keeping one line per
+    /// problem: a file that failed to load, a bad declaration, a name taken by a built-in or
+    /// declared twice (both places named; neither is used).
+    fn describe(&self) -> Found {
+        let mut found = Found::default();
+        if self.files.is_empty() {
+            return found;
+        }
+        let pool = Arc::new(Pool::new(
+            Launch { python: self.options.python.clone(), host_dir: self.options.host_dir.clone() },
+            self.options.workers,
+        ));
+        let described = match self.ask(&pool) {
+            Ok(d) => d,
+            Err(why) => {
+                found.problems.push(format!("the Python plugins could not be read: {why}"));
+                return found;
+            }
+        };
+        let mut places: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for (file, reply) in self.files.iter().zip(described) {
+            let file = Arc::new(file.clone());
+            if let Some(e) = reply.error {
+                found.problems.push(format!("plugin {} could not be loaded: {}", file.path.display(), e.render()));
+                continue;
+            }
+            for decl in reply.nodes {
+                let place = format!("{}:{}", file.path.display(), decl.line);
+                let desc = match decl.to_desc() {
+                    Ok(d) => d,
+                    Err(e) => {
+                        found.problems.push(format!("{place}: {}: {e}", decl.type_name));
+                        continue;
+                    }
+                };
+                if self.builtin.contains(&desc.type_name) {
+                    found.problems.push(format!(
+                        "{place}: '{}' is a built-in node type; give the plugin node another name",
+                        desc.type_name
+                    ));
+                    continue;
+                }
+                found.places.insert(desc.type_name.clone(), place.clone());
+                places.entry(desc.type_name.clone()).or_default().push(place);
+                let channels = decl.inputs.iter().map(|p| p.channels.clone().filter(|c| c != "any")).collect();
+                let salt = salt(&file, &desc.type_name);
+                let node = PyNode { desc, file: file.clone(), channels, pool: pool.clone(), salt };
+                found.nodes.insert(node.desc.type_name.clone(), Arc::new(node) as Arc<dyn Node>);
+            }
+        }
+        for (name, at) in places.into_iter().filter(|(_, at)| at.len() > 1) {
+            found.nodes.remove(&name);
+            found.places.remove(&name);
+            found.problems.push(format!("plugin node type '{name}' is declared twice: at {}", at.join(" and at ")));
+        }
+        found
+    }
+
+    fn ask(&self, pool: &Pool) -> Result<Vec<protocol::DescribedFile>, String> {
+        host::install(&self.options.host_dir)
+            .map_err(|e| format!("could not write the Python host files to {}: {e}", self.options.host_dir.display()))?;
+        let files: Vec<_> = self.files.iter().map(|f| serde_json::json!({"path": f.path, "sha256": f.sha256})).collect();
+        let request = serde_json::json!({"op": "describe", "files": files});
+        let reply = pool.with_worker(None, |w| w.request(&request, None)).map_err(|e| match e {
+            WorkerError::Cancelled => "cancelled".to_string(),
+            WorkerError::Broken(why) => why,
+        })?;
+        match reply {
+            Reply::Described { files } if files.len() == self.files.len() => Ok(files),
+            other => Err(format!("the Python worker answered a describe with {other:?}")),
+        }
+    }
+}
+
+/// The fingerprint salt of a plugin node: its file's hash, the host's, and its type name.
+fn salt(file: &PluginFile, type_name: &str) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    (file.sha256.as_str(), host::digest(), type_name).hash(&mut h);
+    h.finish()
+}

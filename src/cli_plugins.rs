@@ -1,0 +1,63 @@
+//! Python plugin nodes on the command line: the flags every command takes, the folders they
+//! name, and the node listing that shows where each plugin node comes from.
+
+use std::path::{Path, PathBuf};
+
+use pyrograph::outln;
+use pyrograph_frontend::core::Registry;
+use pyrograph_frontend::plugins::PluginFlags;
+use pyrograph_frontend::text::printable_json;
+
+use crate::{Command, Failure};
+
+/// Where Python plugin nodes come from (every command takes these).
+#[derive(clap::Args)]
+pub struct PluginArgs {
+    /// Load Python plugin nodes from this folder too (repeat for several). The folders of
+    /// PYROGRAPH_PLUGIN_PATH and the `plugins/` folder beside the graph are always searched;
+    /// Python (PYROGRAPH_PYTHON, else python3) starts only for a graph that uses a plugin node.
+    #[arg(long = "plugins", value_name = "DIR", global = true)]
+    dirs: Vec<PathBuf>,
+    /// Load no Python plugins: a graph that uses a plugin node is refused.
+    #[arg(long, global = true, conflicts_with = "dirs")]
+    no_plugins: bool,
+}
+
+impl PluginArgs {
+    /// Adds the plugin folders for `command` (the one beside its graph, if it has one).
+    pub fn attach(&self, registry: &mut Registry, command: Option<&Command>) -> Result<(), Failure> {
+        let flags = PluginFlags { dirs: self.dirs.clone(), off: self.no_plugins };
+        pyrograph_frontend::plugins::attach(registry, command.and_then(graph_of), &flags)
+            .map_err(|e| Failure(format!("error: {e}")))
+    }
+}
+
+/// The graph a command cooks or reads, whose `plugins/` folder is searched.
+fn graph_of(command: &Command) -> Option<&Path> {
+    match command {
+        Command::Render { graph, .. } | Command::Check { graph, .. } | Command::Info { graph, .. } => Some(graph),
+        Command::Job { graph, .. } | Command::Presets { graph, .. } | Command::Preset { graph, .. } => graph.as_deref(),
+        Command::Simulate(args) => Some(args.graph()),
+        _ => None,
+    }
+}
+
+/// Lists every node type (plugin nodes with the file and line that declare them); a plugin that
+/// could not be loaded is reported and fails the command.
+pub fn nodes(registry: &Registry, markdown: bool, json_out: bool) -> Result<(), Failure> {
+    if markdown {
+        print!("{}", pyrograph_frontend::reference::markdown(registry));
+    } else if json_out {
+        println!("{}", printable_json(pyrograph_frontend::reference::json(registry)));
+    } else {
+        let places = registry.extension().map(|f| &f.places);
+        for d in registry.descs() {
+            let place = places.and_then(|p| p.get(&d.type_name)).map(|p| format!("  ({p})")).unwrap_or_default();
+            outln!("{:<32} {:<16} {}{place}", d.type_name, d.category, d.summary());
+        }
+    }
+    match registry.extension().map(|f| f.problems.as_slice()).unwrap_or_default() {
+        [] => Ok(()),
+        problems => Err(Failure(problems.iter().map(|p| format!("error: {p}")).collect::<Vec<_>>().join("\n"))),
+    }
+}

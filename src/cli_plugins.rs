@@ -24,11 +24,27 @@ pub struct PluginArgs {
 }
 
 impl PluginArgs {
+    /// The flags a farm task needs to find the same plugins: every folder given here or on
+    /// `PYROGRAPH_PLUGIN_PATH`, absolute, as `--plugins DIR` (the graph's own `plugins/` folder
+    /// goes with the graph), or `--no-plugins`.
+    pub fn args(&self) -> Result<Vec<String>, Failure> {
+        if self.no_plugins {
+            return Ok(vec!["--no-plugins".into()]);
+        }
+        let flags = PluginFlags { dirs: self.dirs.clone(), off: false, python: None };
+        let mut args = Vec::new();
+        for dir in flags.dirs_for(None) {
+            let abs = std::path::absolute(&dir.path).map_err(|e| Failure(format!("error: {}: {e}", dir.path.display())))?;
+            args.extend(["--plugins".to_string(), abs.to_string_lossy().into_owned()]);
+        }
+        Ok(args)
+    }
+
     /// Adds the plugin folders for `command` (the one beside its graph, if it has one).
     pub fn attach(&self, registry: &mut Registry, command: Option<&Command>) -> Result<(), Failure> {
-        let flags = PluginFlags { dirs: self.dirs.clone(), off: self.no_plugins };
-        pyrograph_frontend::plugins::attach(registry, command.and_then(graph_of), &flags)
-            .map_err(|e| Failure(format!("error: {e}")))
+        let flags = PluginFlags { dirs: self.dirs.clone(), off: self.no_plugins, python: None };
+        let graph_dir = command.and_then(graph_of).map(|g| g.parent().unwrap_or(Path::new("")));
+        pyrograph_frontend::plugins::attach(registry, graph_dir, &flags).map_err(|e| Failure(format!("error: {e}")))
     }
 }
 
@@ -36,7 +52,9 @@ impl PluginArgs {
 fn graph_of(command: &Command) -> Option<&Path> {
     match command {
         Command::Render { graph, .. } | Command::Check { graph, .. } | Command::Info { graph, .. } => Some(graph),
-        Command::Job { graph, .. } | Command::Presets { graph, .. } | Command::Preset { graph, .. } => graph.as_deref(),
+        Command::Job { graph, .. } | Command::Presets { graph, .. } => graph.as_deref(),
+        // A preset named by its file: the plugins beside that file.
+        Command::Preset { graph, name, .. } => graph.as_deref().or_else(|| Some(Path::new(name)).filter(|p| p.is_file())),
         Command::Simulate(args) => Some(args.graph()),
         _ => None,
     }

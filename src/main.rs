@@ -298,7 +298,14 @@ fn main() -> ExitCode {
             overwrite,
         }) => match (graph, out, frames, job_dir) {
             (Some(graph), Some(out), Some(frames), Some(job_dir)) => {
-                let limits = cli.limits.args();
+                let mut limits = cli.limits.args();
+                match cli.plugins.args() {
+                    Ok(plugins) => limits.extend(plugins),
+                    Err(Failure(msg)) => {
+                        errln!("{msg}");
+                        return ExitCode::FAILURE;
+                    }
+                }
                 let spec =
                     JobArgs { graph, out, frames, chunk, sets: set, wedge, wedge_zip, task_chunking: !no_chunking, limits };
                 job(&registry, &spec, &job_dir, overwrite)

@@ -4,11 +4,10 @@
 //! golden frame, and a plugin that raises fails its node with the traceback while the other
 //! branches of the graph still cook.
 
-use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use pyrograph_testing::workspace;
+use pyrograph_testing::{python_with_numpy, workspace};
 
 fn bin() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_pyrograph"));
@@ -22,17 +21,6 @@ fn text(o: &Output) -> String {
 
 fn example() -> PathBuf {
     workspace().join("examples/plugins/heat_haze/heat-haze.ron")
-}
-
-/// A Python that has numpy: PYROGRAPH_PYTHON, /usr/bin/python3, then python3.
-fn python() -> OsString {
-    let candidates = std::env::var_os("PYROGRAPH_PYTHON").into_iter().chain(["/usr/bin/python3".into(), "python3".into()]);
-    for p in candidates {
-        if Command::new(&p).args(["-c", "import numpy"]).output().is_ok_and(|o| o.status.success()) {
-            return p;
-        }
-    }
-    panic!("needs python3 with numpy: none of PYROGRAPH_PYTHON, /usr/bin/python3, python3 has it");
 }
 
 /// A graph of built-in nodes in a folder whose `plugins/` holds a plugin.
@@ -89,7 +77,7 @@ fn a_missing_interpreter_or_plugin_folder_is_a_clear_error() {
 #[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
 fn nodes_lists_a_plugin_node_with_its_file_and_line() {
     let dir = workspace().join("examples/plugins/heat_haze/plugins");
-    let o = bin().env("PYROGRAPH_PYTHON", python()).arg("nodes").arg("--plugins").arg(&dir).output().unwrap();
+    let o = bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("nodes").arg("--plugins").arg(&dir).output().unwrap();
     let all = text(&o);
     assert!(o.status.success(), "{all}");
     let line = all.lines().find(|l| l.starts_with("studio.heat_haze")).unwrap_or_else(|| panic!("not listed:\n{all}"));
@@ -99,20 +87,37 @@ fn nodes_lists_a_plugin_node_with_its_file_and_line() {
 
 #[test]
 #[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
-fn the_example_plugin_graph_renders_its_golden_frame() {
-    let out = tempfile::tempdir().unwrap();
-    let o = bin().env("PYROGRAPH_PYTHON", python()).arg("render").arg(example()).arg("--out").arg(out.path()).output().unwrap();
-    assert!(o.status.success(), "{}", text(&o));
-    let frames = std::fs::read_dir(out.path().join("heat-haze")).unwrap().count();
-    assert_eq!(frames, 24);
-    let made = out.path().join("heat-haze/haze_0012.png");
-    let want = workspace().join("tests/golden/heat_haze_0012.png");
-    if std::env::var("REGENERATE").as_deref() == Ok("1") {
-        std::fs::copy(&made, &want).unwrap();
+fn each_example_plugin_graph_renders_its_golden_frame() {
+    // (graph, frames written, the frame compared, its golden copy)
+    let examples = [
+        ("heat_haze/heat-haze.ron", 24, "heat-haze/haze_0012.png", "heat_haze_0012.png"),
+        ("temporal_median/temporal-median.ron", 24, "temporal-median/median_0012.png", "temporal_median_0012.png"),
+        ("csv_emitter/csv-emitter.ron", 36, "csv-emitter/csv_0030.png", "csv_emitter_0030.png"),
+    ];
+    for (graph, count, frame, golden) in examples {
+        let out = tempfile::tempdir().unwrap();
+        let graph = workspace().join("examples/plugins").join(graph);
+        let o = bin()
+            .env("PYROGRAPH_PYTHON", python_with_numpy())
+            .arg("render")
+            .arg(&graph)
+            .arg("--out")
+            .arg(out.path())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        let made = out.path().join(frame);
+        let written = std::fs::read_dir(made.parent().unwrap()).unwrap().count();
+        assert_eq!(written, count, "{}", graph.display());
+        let want = workspace().join("tests/golden").join(golden);
+        if std::env::var("REGENERATE").as_deref() == Ok("1") {
+            std::fs::copy(&made, &want).unwrap();
+        }
+        let a = image::open(&made).unwrap().to_rgba8();
+        let b = image::open(&want).unwrap_or_else(|e| panic!("{}: {e} (REGENERATE=1 creates it)", want.display())).to_rgba8();
+        pyrograph_testing::pictures_match(a.as_raw(), a.dimensions(), b.as_raw(), b.dimensions())
+            .unwrap_or_else(|e| panic!("{frame}: {e}"));
     }
-    let a = image::open(&made).unwrap().to_rgba8();
-    let b = image::open(&want).unwrap_or_else(|e| panic!("{}: {e} (REGENERATE=1 creates it)", want.display())).to_rgba8();
-    pyrograph_testing::pictures_match(a.as_raw(), a.dimensions(), b.as_raw(), b.dimensions()).unwrap();
 }
 
 #[test]
@@ -137,7 +142,7 @@ fn a_raising_plugin_fails_its_node_with_the_traceback_and_other_branches_cook() 
     )
     .unwrap();
     let out = dir.path().join("out");
-    let o = bin().env("PYROGRAPH_PYTHON", python()).arg("render").arg(&graph).arg("--out").arg(&out).output().unwrap();
+    let o = bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("render").arg(&graph).arg("--out").arg(&out).output().unwrap();
     let all = text(&o);
     assert_eq!(o.status.code(), Some(1), "{all}");
     let place = format!("{}:6 in raises", dir.path().join("plugins/raises.py").display());
@@ -172,7 +177,7 @@ fn ctrl_c_stops_a_hanging_plugin_within_a_second() {
     )
     .unwrap();
     let mut child = bin()
-        .env("PYROGRAPH_PYTHON", python())
+        .env("PYROGRAPH_PYTHON", python_with_numpy())
         .arg("render")
         .arg(&graph)
         .arg("--out")
@@ -202,4 +207,87 @@ fn runs(pid: &str) -> bool {
     let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
     // The state follows the command name in parentheses: "1234 (python3) R …".
     stat.rsplit_once(") ").is_some_and(|(_, rest)| !rest.starts_with('Z') && !rest.starts_with('X'))
+}
+
+#[test]
+fn a_preset_names_the_plugin_it_needs_when_it_is_missing() {
+    // The example preset and a graph including it, in a folder without the plugin.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("presets")).unwrap();
+    let example = workspace().join("examples/plugins/heat_haze");
+    std::fs::copy(example.join("presets/hazy-flame.ron"), dir.path().join("presets/hazy-flame.ron")).unwrap();
+    std::fs::copy(example.join("hazy-flame.ron"), dir.path().join("hazy-flame.ron")).unwrap();
+    let o = bin()
+        .env("PYROGRAPH_PYTHON", "/nonexistent/python")
+        .arg("check")
+        .arg(dir.path().join("hazy-flame.ron"))
+        .output()
+        .unwrap();
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    for needle in ["node 'hazy'", "hazy-flame.ron needs the Python plugin node type 'studio.heat_haze'", "PYROGRAPH_PLUGIN_PATH"]
+    {
+        assert!(all.contains(needle), "{needle:?} in:\n{all}");
+    }
+    assert!(!all.contains("could not start Python"), "no plugin files: no Python was asked:\n{all}");
+}
+
+#[test]
+#[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
+fn a_preset_with_a_plugin_node_renders_where_the_plugin_is() {
+    let out = tempfile::tempdir().unwrap();
+    let graph = workspace().join("examples/plugins/heat_haze/hazy-flame.ron");
+    let o = bin()
+        .env("PYROGRAPH_PYTHON", python_with_numpy())
+        .arg("render")
+        .arg(&graph)
+        .arg("--out")
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read_dir(out.path().join("hazy-flame")).unwrap().count(), 12);
+}
+
+#[test]
+#[ignore = "needs python3 with numpy and openjd (PYROGRAPH_OPENJD): .ci/run installs both and runs the ignored tests"]
+fn a_farm_job_with_a_plugin_node_renders_what_a_plain_render_does() {
+    let dir = tempfile::tempdir().unwrap();
+    // The plugin in a studio folder named on the command line, not beside the graph: the bundle
+    // must pass it on to every task.
+    let (studio, shot) = (dir.path().join("studio-plugins"), dir.path().join("shot"));
+    std::fs::create_dir_all(&studio).unwrap();
+    std::fs::create_dir_all(&shot).unwrap();
+    let example = workspace().join("examples/plugins/heat_haze");
+    std::fs::copy(example.join("plugins/heat_haze.py"), studio.join("heat_haze.py")).unwrap();
+    std::fs::copy(example.join("heat-haze.ron"), shot.join("heat-haze.ron")).unwrap();
+    let graph = shot.join("heat-haze.ron");
+    let python = python_with_numpy();
+    let (single, farm, job) = (dir.path().join("single"), dir.path().join("farm"), dir.path().join("job"));
+    let run = |c: &mut Command| {
+        let o = c.env("PYROGRAPH_PYTHON", &python).output().unwrap();
+        assert!(o.status.success(), "{c:?}:\n{}", text(&o));
+        o
+    };
+    run(bin().arg("render").arg(&graph).arg("--out").arg(&single).args(["--frames", "0-5", "--plugins"]).arg(&studio));
+    run(bin()
+        .arg("job")
+        .arg(&graph)
+        .arg("--out")
+        .arg(&farm)
+        .args(["--frames", "0-5", "--chunk", "3", "--plugins"])
+        .arg(&studio)
+        .arg("-o")
+        .arg(&job));
+    let template = std::fs::read_to_string(job.join("template.yaml")).unwrap();
+    assert!(template.contains(&format!("\"--plugins\", \"{}\"", studio.display())), "{template}");
+    let openjd = || Command::new(std::env::var_os("PYROGRAPH_OPENJD").unwrap_or_else(|| "openjd".into()));
+    run(openjd().arg("check").arg(job.join("template.yaml")));
+    let params = format!("file://{}", job.join("job_params.yaml").display());
+    run(openjd().arg("run").arg(job.join("template.yaml")).args(["--step", "Render", "-p", &params]));
+    for i in 0..6 {
+        let name = format!("heat-haze/haze_{i:04}.png");
+        let (a, b) = (std::fs::read(single.join(&name)).unwrap(), std::fs::read(farm.join(&name)).unwrap());
+        assert!(a == b, "{name}: the farm frame differs from the plain render's");
+    }
 }

@@ -2,7 +2,6 @@
 //! the frames of a clip cook on several workers, results are cached by the plugin file's
 //! content, and a broken plugin is an error naming its file and line. Needs a Python with numpy.
 
-use std::ffi::OsString;
 use std::path::Path;
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, Registry, Value};
@@ -10,25 +9,10 @@ use pyrograph_frontend::plugin::discover::PluginDir;
 use pyrograph_frontend::plugin::{PluginOptions, extend};
 use rayon::prelude::*;
 
-/// The ignore reason of every test here.
-const NEEDS_PYTHON: &str = "needs python3 with numpy: .ci/run installs it and runs the ignored tests";
-
-/// A Python that has numpy: PYROGRAPH_PYTHON, /usr/bin/python3, then python3.
-fn python() -> OsString {
-    let candidates = std::env::var_os("PYROGRAPH_PYTHON").into_iter().chain(["/usr/bin/python3".into(), "python3".into()]);
-    for p in candidates {
-        let ok = std::process::Command::new(&p).args(["-c", "import numpy"]).output().is_ok_and(|o| o.status.success());
-        if ok {
-            return p;
-        }
-    }
-    panic!("{NEEDS_PYTHON}: no Python with numpy found");
-}
-
 fn registry_with(dir: &Path, workers: usize) -> Registry {
     let mut registry = pyrograph_frontend::registry();
     let mut options = PluginOptions::new(vec![PluginDir { path: dir.to_path_buf(), origin: "--plugins" }]);
-    options.python = python();
+    options.python = pyrograph_testing::python_with_numpy();
     options.workers = workers;
     extend(&mut registry, &options).unwrap();
     registry

@@ -504,6 +504,11 @@ impl EditorApp {
             self.dialog = Some(FileDialog::SaveAs(cur));
             ui.close();
         }
+        ui.separator();
+        if ui.button("Reload plugins").on_hover_text("Read the Python plugin files again after editing them").clicked() {
+            self.editor.reload_plugins();
+            ui.close();
+        }
     }
 
     /// The Presets menu: the preset browser and saving the selection as a preset.

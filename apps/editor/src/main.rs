@@ -18,13 +18,24 @@ fn main() {
     // Scrubbing back and forth re-uses cooked frames: interactive work gets a larger frame cache
     // than a batch render (which streams), unless --cache-mb says otherwise.
     let mut cache_mb: usize = 1024;
+    let mut plugins = pyrograph_frontend::plugins::PluginFlags::default();
     let mut args = std::env::args_os().skip(1);
     while let Some(a) = args.next() {
         if a == "--help" || a == "-h" {
-            println!("usage: pyrograph-editor [GRAPH.ron] [--select NODE] [--state-dump FILE.json] [--cache-mb MIB]");
+            println!(
+                "usage: pyrograph-editor [GRAPH.ron] [--select NODE] [--state-dump FILE.json] [--cache-mb MIB] [--plugins DIR]… [--no-plugins]"
+            );
+            println!(
+                "  --plugins     load Python plugin nodes from DIR too (also PYROGRAPH_PLUGIN_PATH and plugins/ beside the graph)"
+            );
+            println!("  --no-plugins  load no Python plugins");
             println!("  --cache-mb    memory for cooked frames shared by every clip (default 1024; View menu)");
             println!("  --state-dump  keep FILE.json current with the selection and node positions (for tests)");
             return;
+        } else if a == "--plugins" {
+            plugins.dirs.extend(args.next().map(PathBuf::from));
+        } else if a == "--no-plugins" {
+            plugins.off = true;
         } else if a == "--select" {
             select = args.next().map(|s| s.to_string_lossy().into_owned());
         } else if a == "--cache-mb" {
@@ -44,7 +55,7 @@ fn main() {
     pyrograph_frontend::core::FrameCache::global().set_budget(cache_mb << 20);
     // Previews revisit frames: hold 8-bit ones at a byte a sample.
     pyrograph_frontend::core::FrameCache::global().set_compact(true);
-    let mut editor = Editor::with_default_registry();
+    let mut editor = Editor::with_plugins(plugins);
     if let Some(f) = recent_file() {
         editor.use_recent_file(f);
     }

@@ -27,6 +27,7 @@ mod files;
 pub mod flow;
 mod keyframes;
 mod opening;
+mod plugins;
 mod preset_lib;
 mod scope;
 mod unpack;
@@ -121,6 +122,9 @@ pub struct Editor {
     saves: u64,
     /// The includes stepped into, outermost first; `doc` is then the innermost one's graph.
     scope: Vec<scope::Level>,
+    /// Where Python plugin nodes come from, when the session takes them (`registry` then holds
+    /// the plugins for the open document's folder).
+    plugins: Option<Arc<pyrograph_frontend::plugins::PluginRegistries>>,
 }
 
 impl Editor {
@@ -170,6 +174,7 @@ impl Editor {
             dirty: std::cell::Cell::new(None),
             saves: 0,
             scope: Vec::new(),
+            plugins: None,
         };
         ed.revalidate();
         ed

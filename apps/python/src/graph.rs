@@ -12,7 +12,8 @@ use pyo3::types::{PyDict, PyTuple};
 
 use pyrograph_frontend::core::document::split_endpoint;
 use pyrograph_frontend::core::{
-    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, ParamValue, Value,
+    BuildOptions, CookSettings, Diagnostics, Evaluator, Graph as RustGraph, GraphDoc, NodeDoc, NodeError, ParamValue, Registry,
+    Value,
 };
 
 use crate::clip::{Clip, frame_selection, frames_to_py, pull_frames};
@@ -28,8 +29,9 @@ use crate::registry;
 #[pyclass(module = "pyrograph")]
 pub struct Graph {
     state: Mutex<Doc>,
-    /// The graph built from `doc` for cooking, until the next edit.
-    built: Mutex<Option<Arc<RustGraph>>>,
+    /// The graph built from `doc` for cooking, until the next edit or a change of the plugin
+    /// files (a new registry), with the registry it was built with.
+    built: Mutex<Option<(Arc<Registry>, Arc<RustGraph>)>>,
     eval: Mutex<Evaluator>,
     last_cooked: Mutex<Vec<String>>,
     /// `(node, message)` of every warning of the last cook or render.
@@ -51,10 +53,19 @@ struct Doc {
 
 impl Doc {
     fn build(&self, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
+        self.build_on(&self.registry(), options)
+    }
+
+    fn build_on(&self, registry: &Registry, options: &BuildOptions) -> Result<RustGraph, Diagnostics> {
         match &self.file {
-            Some(f) => RustGraph::build_file(&self.doc, f, registry(), options),
-            None => RustGraph::build(&self.doc, registry(), &self.dir, options),
+            Some(f) => RustGraph::build_file(&self.doc, f, registry, options),
+            None => RustGraph::build(&self.doc, registry, &self.dir, options),
         }
+    }
+
+    /// The node types this graph can use: the built-ins and the plugins beside it.
+    fn registry(&self) -> Arc<Registry> {
+        registry(Some(&self.dir))
     }
 
     fn new(doc: GraphDoc, file: Option<PathBuf>, dir: PathBuf) -> Doc {
@@ -128,15 +139,19 @@ impl Graph {
         self.state().build(options)
     }
 
-    /// The graph for cooking outputs, built once per edit.
+    /// The graph for cooking outputs, built once per edit (and again when a plugin file
+    /// changed: the registry is then a new one, whose changed nodes have new fingerprints).
     fn cooking_graph(&self, py: Python<'_>) -> PyResult<Arc<RustGraph>> {
         let st = self.state();
+        let registry = st.registry();
         let mut slot = lock(&self.built);
-        if let Some(g) = &*slot {
+        if let Some((r, g)) = &*slot
+            && Arc::ptr_eq(r, &registry)
+        {
             return Ok(g.clone());
         }
-        let g = Arc::new(st.build(&BuildOptions::default()).map_err(|d| from_diagnostics(py, &d))?);
-        *slot = Some(g.clone());
+        let g = Arc::new(st.build_on(&registry, &BuildOptions::default()).map_err(|d| from_diagnostics(py, &d))?);
+        *slot = Some((registry, g.clone()));
         Ok(g)
     }
 
@@ -287,7 +302,7 @@ impl Graph {
         if id.is_empty() || id.contains(['.', '/']) {
             return Err(graph_error(py, Some(id), None, &format!("node id '{id}' must be non-empty, without '.' or '/'")));
         }
-        let reg = registry();
+        let reg = self.state().registry();
         if reg.desc(r#type).is_none() {
             let hint = reg.suggest(r#type).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
             return Err(graph_error(
@@ -301,7 +316,7 @@ impl Graph {
         if let Some(params) = params {
             for (k, v) in params.iter() {
                 let name: String = k.extract()?;
-                check_param(py, id, r#type, &name)?;
+                check_param(py, &reg, id, r#type, &name)?;
                 node.params.insert(name, crate::param_values::from_py(&v)?);
             }
         }
@@ -400,9 +415,9 @@ impl Graph {
             return crate::param_values::to_py(py, v).map(Some);
         }
         let ty = node.type_name.clone();
-        check_param(py, id, &ty, param)?;
-        let default =
-            registry().desc(&ty).and_then(|d| d.inputs.iter().find(|p| p.name == param)).and_then(|p| p.default.clone());
+        let reg = st.registry();
+        check_param(py, &reg, id, &ty, param)?;
+        let default = reg.desc(&ty).and_then(|d| d.inputs.iter().find(|p| p.name == param)).and_then(|p| p.default.clone());
         default.map(|v| crate::values::to_py(py, &v)).transpose()
     }
 
@@ -539,16 +554,17 @@ impl Graph {
     fn set_param(&self, py: Python<'_>, endpoint: &str, v: ParamValue) -> PyResult<()> {
         let (id, param) = self::endpoint(py, endpoint)?;
         let mut st = self.state();
+        let reg = st.registry();
         let node = st.node_mut(py, id)?;
-        check_param(py, id, &node.type_name.clone(), param)?;
+        check_param(py, &reg, id, &node.type_name.clone(), param)?;
         node.params.insert(param.to_string(), v);
         self.edited();
         Ok(())
     }
 }
 
-fn check_param(py: Python<'_>, id: &str, ty: &str, name: &str) -> PyResult<()> {
-    let Some(desc) = registry().desc(ty) else { return Ok(()) };
+fn check_param(py: Python<'_>, reg: &Registry, id: &str, ty: &str, name: &str) -> PyResult<()> {
+    let Some(desc) = reg.desc(ty) else { return Ok(()) };
     if ty == pyrograph_frontend::core::builtin::INCLUDE_TYPE || desc.input_index(name).is_some() {
         return Ok(());
     }

@@ -5,7 +5,7 @@
 //! editor; this crate only converts between Python and Rust and keeps the GIL released while
 //! a cook runs (see `run`).
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use pyo3::prelude::*;
 
@@ -16,17 +16,19 @@ mod param_values;
 mod run;
 mod values;
 
-/// The registry of every node type pyrograph ships, built once per process.
-fn registry() -> &'static pyrograph_frontend::core::Registry {
-    static REGISTRY: OnceLock<pyrograph_frontend::core::Registry> = OnceLock::new();
-    REGISTRY.get_or_init(pyrograph_frontend::registry)
+/// Every node type pyrograph ships, and the Python plugin nodes of `PYROGRAPH_PLUGIN_PATH` and of
+/// the `plugins/` folder in `graph_dir` (found again when a plugin file changes).
+fn registry(graph_dir: Option<&std::path::Path>) -> Arc<pyrograph_frontend::core::Registry> {
+    use pyrograph_frontend::plugins::{PluginFlags, PluginRegistries};
+    static REGISTRIES: OnceLock<PluginRegistries> = OnceLock::new();
+    REGISTRIES.get_or_init(|| PluginRegistries::new(pyrograph_frontend::registry(), PluginFlags::default())).for_graph(graph_dir)
 }
 
 /// Every node type with its category, doc (citing its paper section) and ports (name, type,
 /// default, range, options, doc): the same list as `pyrograph nodes --json`.
 #[pyfunction]
 fn nodes(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    let text = pyrograph_frontend::reference::json(registry()).to_string();
+    let text = pyrograph_frontend::reference::json(&registry(None)).to_string();
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -35,7 +37,7 @@ fn nodes(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 #[pyfunction]
 fn describe(py: Python<'_>, r#type: &str) -> PyResult<String> {
     let type_name = r#type;
-    let reg = registry();
+    let reg = registry(None);
     match reg.desc(type_name) {
         Some(d) => Ok(pyrograph_frontend::reference::node_markdown(d)),
         None => {

@@ -285,6 +285,10 @@ pub struct PresetDoc {
     /// The frame of the preview clip thumbnails show (default: the middle one).
     #[serde(default, skip_serializing_if = "Option::is_none", serialize_with = "bare_some")]
     pub thumbnail_frame: Option<u32>,
+    /// Node types from Python plugins the preset uses (`["studio.heat_haze"]`): a graph that
+    /// includes it without those plugins is told which are missing.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plugins: Vec<String>,
 }
 
 /// A graph document, version 4 (version 1 plus canvas groups and comments, then preset metadata,

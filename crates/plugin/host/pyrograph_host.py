@@ -3,7 +3,9 @@
 pyrograph starts it as `python3 -u pyrograph_host.py` with PYTHONPATH set to this folder and speaks
 protocol v1 over stdin/stdout: each message is a 4-byte little-endian length and that many bytes
 of UTF-8 JSON. Images travel through the arena, a shared file that both sides map; the messages
-only carry offsets, shapes and dtypes.
+only carry offsets, shapes and dtypes. A whole-clip cook also talks while it runs: it asks for
+the frames of its clip inputs and hands over the frames of its clip outputs one at a time
+(pyrograph_host_clip.py).
 
 Exit status: 0 after `bye` or when pyrograph closes the pipe, 1 when this Python cannot serve
 (no numpy, another protocol, no arena), 2 after a malformed request. Both failures first send
@@ -13,46 +15,29 @@ Exit status: 0 after `bye` or when pyrograph closes the pipe, 1 when this Python
 import contextlib
 import hashlib
 import io
-import json
 import linecache
-import mmap
 import os
 import platform
 import signal
-import struct
 import sys
 import time
 import tokenize
 import traceback
 import types
 
+import pyrograph_host_clip
+import pyrograph_host_io
 import pyrograph_plugin
+from pyrograph_host_clip import REPLY_OPS, Exchange, Raised, clip_views, emit_clip
+from pyrograph_host_io import (
+    CHECKS, Arena, Channel, Malformed, PortError, Stop, array_spec, cancellable, count, field, np, on_interrupt,
+    returned_values, shorten,
+)
 
 PROTOCOL = 1
-MAX_FRAME = 16 << 20
-ALIGN = 64  # output arrays start on cache-line boundaries
 FRAMES_KEPT = 5
-TEXT_KEPT = 8000  # longest message or code line sent, so a plugin's huge message cannot burst a frame
-DTYPES = ("<f4", "|u1")  # float32 images, uint8 masks
 VECTOR_SIZES = {"color": 4, "vec2": 2, "vec3": 3}
-
-np = None  # numpy, imported on hello so a missing numpy becomes a clear fatal message
-
-
-class Stop(Exception):
-    """Ends the worker with an exit status, after sending `fatal` when there is a message."""
-
-    def __init__(self, status, message=None):
-        super().__init__(message)
-        self.status = status
-        self.message = message
-
-
-class Malformed(Stop):
-    """A request this worker cannot have been sent by a correct pyrograph: the worker is broken."""
-
-    def __init__(self, message):
-        super().__init__(2, message)
+CONNECTIONS = ("image", "mask")  # the input kinds whose values come through the arena
 
 
 class LoadError(Exception):
@@ -63,163 +48,17 @@ class LoadError(Exception):
         self.error = error
 
 
-class PortError(Exception):
-    """A returned value does not match the declared outputs; `port` is the output at fault or None."""
-
-    def __init__(self, port, message):
-        super().__init__(message)
-        self.port = port
-
-
-# ---------------------------------------------------------------------------------------------
-# Framing.
-
-
-class Channel:
-    """The protocol's private pipe ends, out of reach of a plugin's print() and input()."""
-
-    def __init__(self):
-        self.inp = os.dup(0)
-        self.out = os.dup(1)
-        # fd 1 becomes stderr, so print() in a plugin (or a library it calls) cannot corrupt a
-        # frame; fd 0 becomes /dev/null, so input() gets EOF instead of eating requests.
-        null = os.open(os.devnull, os.O_RDONLY)
-        os.dup2(null, 0)
-        os.close(null)
-        os.dup2(2, 1)
-
-    def _read(self, count):
-        data = b""
-        while len(data) < count:
-            chunk = os.read(self.inp, count - len(data))
-            if not chunk:
-                if data:
-                    raise Malformed(f"the input ended inside a frame ({len(data)} of {count} bytes)")
-                raise Stop(0)
-            data += chunk
-        return data
-
-    def receive(self) -> dict:
-        (length,) = struct.unpack("<I", self._read(4))
-        if length > MAX_FRAME:
-            raise Malformed(f"a frame of {length} bytes is over the {MAX_FRAME}-byte limit")
-        body = self._read(length)
-        try:
-            message = json.loads(body)
-        except ValueError as error:
-            raise Malformed(f"a frame is not UTF-8 JSON: {error}") from None
-        if not isinstance(message, dict) or not isinstance(message.get("op"), str):
-            raise Malformed("a message must be a JSON object with a string \"op\"")
-        return message
-
-    def send(self, message):
-        # "replace" turns lone surrogates (undecodable file names) into '?' rather than failing.
-        body = json.dumps(message, ensure_ascii=False, allow_nan=False).encode("utf-8", "replace")
-        data = struct.pack("<I", len(body)) + body
-        while data:
-            data = data[os.write(self.out, data):]
-
-
-def field(message, name, kinds, nullable=False):
-    """message[name], checked to be of `kinds`; anything else is a malformed request."""
-    if not isinstance(message, dict):
-        raise Malformed(f"expected a JSON object, got {message!r:.200}")
-    if name not in message:
-        raise Malformed(f"op {message.get('op', '?')!r}: missing field {name!r}")
-    value = message[name]
-    if value is None and nullable:
-        return None
-    if not isinstance(value, kinds) or (isinstance(value, bool) and bool not in kinds):
-        raise Malformed(f"field {name!r} has the wrong type: {value!r:.200}")
-    return value
-
-
-def count(message, name):
-    """A non-negative integer field (an offset, a size or an id)."""
-    value = field(message, name, (int,))
-    if value < 0:
-        raise Malformed(f"field {name!r} must not be negative, got {value}")
-    return value
-
-
-def clip(text):
-    return text if len(text) <= TEXT_KEPT else text[:TEXT_KEPT] + " … (cut)"
-
-
-# ---------------------------------------------------------------------------------------------
-# The arena.
-
-
-class Arena:
-    """The shared file. pyrograph may grow it between cooks, and so may a cook's outputs."""
-
-    def __init__(self, path):
-        try:
-            self.fd = os.open(path, os.O_RDWR)
-        except OSError as error:
-            raise Stop(1, f"cannot open the arena {path}: {error}") from None
-        self.size = 0
-        self.map = None
-        self.refresh()
-
-    def refresh(self):
-        size = os.fstat(self.fd).st_size
-        if size != self.size:
-            # The old map is not closed: arrays a plugin kept from an earlier cook still view it.
-            self.map = mmap.mmap(self.fd, size) if size else None
-            self.size = size
-
-    def view(self, name, spec):
-        """A read-only array on an input's bytes, without a copy."""
-        offset = count(spec, "offset")
-        shape = field(spec, "shape", (list,))
-        dtype = field(spec, "dtype", (str,))
-        if dtype not in DTYPES or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape):
-            raise Malformed(f"array {name!r}: unsupported dtype or shape: {dtype!r} {shape!r}")
-        dtype = np.dtype(dtype)
-        nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
-        if self.map is None or offset + nbytes > self.size:
-            raise Malformed(f"array {name!r}: bytes {offset}..{offset + nbytes} lie outside the {self.size}-byte arena")
-        array = np.ndarray(shape, dtype, buffer=self.map, offset=offset)
-        array.flags.writeable = False
-        return array
-
-    def write(self, arrays, start):
-        """Writes arrays C-contiguous one after the other from `start`, each 64-byte aligned, growing
-        the file when they do not fit; their offsets."""
-        offsets = []
-        end = start
-        for array in arrays:
-            offset = -(-end // ALIGN) * ALIGN
-            offsets.append(offset)
-            end = offset + array.size * stored_dtype(array).itemsize
-        self.refresh()
-        if end > self.size:
-            os.ftruncate(self.fd, end)
-            self.refresh()
-        for array, offset in zip(arrays, offsets):
-            out = np.ndarray(array.shape, stored_dtype(array), buffer=self.map, offset=offset)
-            out[...] = array
-            if array.dtype == np.bool_:
-                out *= 255  # True is 255 in a mask
-        return offsets
-
-
-def stored_dtype(array):
-    """The dtype an output array is written as: images stay float32, masks become uint8."""
-    return np.dtype(np.float32 if array.dtype == np.float32 else np.uint8)
-
-
 # ---------------------------------------------------------------------------------------------
 # Loading plugin files.
 
 
 def frames_of(traceback_):
     """The last frames of a traceback outside this worker and the declaration API."""
-    ours = {os.path.realpath(__file__), os.path.realpath(pyrograph_plugin.__file__)}
+    ours = {os.path.realpath(module.__file__) for module in (pyrograph_plugin, pyrograph_host_io, pyrograph_host_clip)}
+    ours.add(os.path.realpath(__file__))
     frames = [f for f in traceback.extract_tb(traceback_) if os.path.realpath(f.filename) not in ours]
     return [
-        {"file": f.filename, "line": f.lineno or 0, "function": f.name, "code": clip(f.line or "")}
+        {"file": f.filename, "line": f.lineno or 0, "function": f.name, "code": shorten(f.line or "")}
         for f in frames[-FRAMES_KEPT:]
     ]
 
@@ -233,9 +72,9 @@ def error_of(exception):
         message = exception.msg
         frames.append({
             "file": exception.filename or "", "line": exception.lineno or 0, "function": "<module>",
-            "code": clip((exception.text or "").strip()),
+            "code": shorten((exception.text or "").strip()),
         })
-    return {"exception": type(exception).__name__, "message": clip(message), "frames": frames[-FRAMES_KEPT:]}
+    return {"exception": type(exception).__name__, "message": shorten(message), "frames": frames[-FRAMES_KEPT:]}
 
 
 class Loaded:
@@ -323,27 +162,6 @@ def remember_source(path, source):
 # Cooking.
 
 
-# SIGINT cancels the plugin code that is running; between cooks there is nothing to cancel, and
-# raising there would end the worker.
-_cancellable = False
-
-
-def on_interrupt(signum, frame):
-    if _cancellable:
-        raise KeyboardInterrupt
-
-
-@contextlib.contextmanager
-def cancellable():
-    """Lets SIGINT raise KeyboardInterrupt in the plugin code run inside."""
-    global _cancellable
-    try:
-        _cancellable = True
-        yield
-    finally:
-        _cancellable = False
-
-
 def argument(port, value):
     """A parameter's JSON value as the function receives it."""
     kind = port["kind"]
@@ -369,107 +187,68 @@ def is_number(value):
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def arguments(declaration, params, arrays, arena):
-    """The keyword arguments of a cook: parameters from JSON, images and masks from the arena."""
+def arguments(declaration, request, arena, exchange):
+    """The keyword arguments of a cook: parameters from JSON, images and masks from the arena,
+    clips as views that fetch their frames when indexed."""
+    params = field(request, "params", (dict,))
+    arrays = field(request, "arrays", (dict,))
+    clips = field(request, "clips", (dict,)) if "clips" in request else {}  # none to give: it may be left out
     ports = {port["name"]: port for port in declaration.inputs}
     arena.refresh()  # pyrograph grows the arena when a cook's inputs do not fit
     kwargs = {}
     for names, connection in ((params, False), (arrays, True)):
         for name, value in names.items():
             port = ports.get(name)
-            if port is None or (port["kind"] in ("image", "mask")) != connection:
+            if port is None or (port["kind"] in CONNECTIONS) != connection:
                 raise Malformed(f"{declaration.type_name} has no {'array' if connection else 'parameter'} input {name!r}")
             kwargs[name] = arena.view(name, value) if connection else argument(port, value)
+    kwargs.update(clip_views(declaration, clips, exchange))
     for port in declaration.inputs:
         if port["name"] not in kwargs and port["default"] is None:
             raise Malformed(f"{declaration.type_name}: the required input {port['name']!r} was not given")
     return kwargs
 
 
-def check_image(port, value):
-    channels = port["channels"]
-    shapes = {"any": "(H,W) or (H,W,4)", "gray": "(H,W)", "rgba": "(H,W,4)"}[channels]
-    expected = f"expected a float32 array of shape {shapes}"
-    if not isinstance(value, np.ndarray):
-        raise PortError(port["name"], f"{expected}, got {type(value).__name__}")
-    shape = value.shape
-    fits = (len(shape) == 2 and channels != "rgba") or (len(shape) == 3 and shape[2] == 4 and channels != "gray")
-    fits = fits and shape[0] >= 1 and shape[1] >= 1
-    if fits and value.dtype == np.float32:
-        return value
-    hint = "; convert with .astype(np.float32)" if fits else ""
-    raise PortError(port["name"], f"{expected}, got {value.dtype} {shape}{hint}")
-
-
-def check_mask(port, value):
-    expected = "expected a uint8 or bool array of shape (H,W)"
-    if not isinstance(value, np.ndarray):
-        raise PortError(port["name"], f"{expected}, got {type(value).__name__}")
-    if value.ndim == 2 and min(value.shape) >= 1 and value.dtype in (np.uint8, np.bool_):
-        return value
-    raise PortError(port["name"], f"{expected}, got {value.dtype} {value.shape}")
-
-
-def check_value(port, value):
-    """A Float, Int or Bool output as JSON."""
-    kind = port["kind"]
-    is_bool = isinstance(value, (bool, np.bool_))
-    if kind == "float" and isinstance(value, (int, float, np.integer, np.floating)) and not is_bool:
-        if np.isfinite(value):
-            return float(value)
-        raise PortError(port["name"], f"expected a finite float, got {value}")
-    if kind == "int" and isinstance(value, (int, np.integer)) and not is_bool:
-        if -(1 << 63) <= int(value) < (1 << 63):
-            return int(value)
-        raise PortError(port["name"], f"expected an int that fits in 64 bits, got {value}")
-    if kind == "bool" and is_bool:
-        return bool(value)
-    expected = {"float": "a float (or an int)", "int": "an int", "bool": "a bool"}[kind]
-    raise PortError(port["name"], f"expected {expected}, got {type(value).__name__}")
-
-
-CHECKS = {"image": check_image, "mask": check_mask, "float": check_value, "int": check_value, "bool": check_value}
-
-
-def returned_values(declaration, result):
-    """The returned value of each declared output, in declaration order."""
-    if not declaration.several_outputs:
-        return [result]
-    names = [port["name"] for port in declaration.outputs]
-    wanted = f"a dict with the keys {', '.join(names)} or a tuple of {len(names)} values in that order"
-    if isinstance(result, dict):
-        missing = [name for name in names if name not in result]
-        if missing:
-            raise PortError(missing[0], f"missing from the returned dict (it has {list(result)}); expected {wanted}")
-        extra = [key for key in result if key not in names]
-        if extra:
-            raise PortError(None, f"the returned dict has {extra}, which are not outputs; expected {wanted}")
-        return [result[name] for name in names]
-    if isinstance(result, (tuple, list)):
-        if len(result) != len(names):
-            raise PortError(None, f"expected {wanted}, got a {type(result).__name__} of {len(result)}")
-        return list(result)
-    raise PortError(None, f"expected {wanted}, got {type(result).__name__}")
-
-
-def call(declaration, kwargs, frame):
-    """Runs the node function, cancellable; its result and the time it took in ms."""
-    started = time.perf_counter()
+@contextlib.contextmanager
+def running(frame):
+    """The context plugin code runs in: cancellable, with current_frame() answering `frame`."""
     try:
         pyrograph_plugin._frame = frame
         with cancellable():
-            result = declaration.function(**kwargs)
+            yield
     finally:
         pyrograph_plugin._frame = None
-    return result, (time.perf_counter() - started) * 1000
+
+
+def call(declaration, kwargs, frame):
+    """Runs the node function, cancellable. A generator function only starts when its frames are
+    taken, in emit_clip."""
+    with running(frame):
+        return declaration.function(**kwargs)
+
+
+def error_reply(cook_id, kind, port=None, exception=None, message="", frames=()):
+    return {"op": "error", "id": cook_id, "kind": kind, "port": port, "exception": exception,
+            "message": message, "frames": list(frames)}
+
+
+def plugin_failure(cook_id, exchange, exception):
+    """The error reply for an exception raised by plugin code."""
+    if exchange.is_frame_error(exception):
+        # pyrograph knows why it could not make the frame, and reports the upstream node's error.
+        return error_reply(cook_id, "frame_error", exception="FrameError", message=str(exception))
+    return error_reply(cook_id, "exception", **error_of(exception))
 
 
 class Worker:
     """Serves describe and cook once hello has opened the arena."""
 
-    def __init__(self, arena):
+    def __init__(self, channel, arena):
+        self.channel = channel
         self.arena = arena
         self.plugins = Plugins()
+        # A cook was cancelled while it waited for pyrograph's answer, which may still come.
+        self.owed = False
 
     def describe(self, request):
         files = []
@@ -486,56 +265,82 @@ class Worker:
 
     def cook(self, request):
         cook_id = count(request, "id")
+        exchange = Exchange(self.channel, self.arena, cook_id)
+        try:
+            reply = self._cook(cook_id, request, exchange)
+        finally:
+            exchange.close()
+            self.owed = exchange.owed
+        if exchange.stop is not None:
+            raise exchange.stop  # met in plugin code, which may have caught it: the channel is done
+        if exchange.owed:
+            # Cancelled while waiting for pyrograph: the cook is cancelled whatever the plugin
+            # did with the KeyboardInterrupt.
+            return error_reply(cook_id, "cancelled", exception="KeyboardInterrupt", message="the cook was cancelled")
+        return reply
+
+    def _cook(self, cook_id, request, exchange):
         type_name = field(request, "type", (str,))
         path = field(request, "file", (str,))
         sha256 = field(request, "sha256", (str,))
         frame = field(request, "frame", (int,), nullable=True)
-        params = field(request, "params", (dict,))
-        arrays = field(request, "arrays", (dict,))
         out_offset = count(request, "out_offset")
-
-        def error(kind, port=None, exception=None, message="", frames=()):
-            return {"op": "error", "id": cook_id, "kind": kind, "port": port, "exception": exception,
-                    "message": message, "frames": list(frames)}
-
+        cancelled = error_reply(cook_id, "cancelled", exception="KeyboardInterrupt", message="the cook was cancelled")
+        started = time.perf_counter()
         try:
             with cancellable():  # a slow import at the top of a plugin file can be cancelled too
                 loaded = self.plugins.load(path, sha256)
             declaration = loaded.nodes.get(type_name)
             if declaration is None:
                 declared = ", ".join(loaded.nodes) or "no node types"
-                return error("load", message=f"{path} does not declare {type_name} (it declares {declared})")
-            result, ms = call(declaration, arguments(declaration, params, arrays, self.arena), frame)
+                return error_reply(cook_id, "load", message=f"{path} does not declare {type_name} (it declares {declared})")
+            result = call(declaration, arguments(declaration, request, self.arena, exchange), frame)
         except LoadError as failure:
-            return error("load", **failure.error)
+            return error_reply(cook_id, "load", **failure.error)
         except KeyboardInterrupt:
-            return error("cancelled", exception="KeyboardInterrupt", message="the cook was cancelled")
+            return cancelled
         except Stop:
             raise
         except BaseException as exception:  # SystemExit too: a plugin cannot end the worker
-            return error("exception", **error_of(exception))
+            return plugin_failure(cook_id, exchange, exception)
         try:
-            outputs = self.outputs(declaration, result, out_offset)
+            outputs = self.outputs(declaration, result, out_offset, exchange, frame)
+        except KeyboardInterrupt:
+            return cancelled
+        except Raised as raised:  # plugin code, while its returned frames were taken
+            return plugin_failure(cook_id, exchange, raised.error)
         except PortError as failure:
             text = f"output '{failure.port}': {failure}" if failure.port else str(failure)
-            return error("port", port=failure.port, message=text)
+            return error_reply(cook_id, "port", port=failure.port, message=text)
         except OSError as failure:  # the arena cannot grow: memory or the file system is full
             text = f"could not write the outputs into the shared file: {failure}"
-            return error("exception", exception=type(failure).__name__, message=text)
+            return error_reply(cook_id, "exception", exception=type(failure).__name__, message=text)
+        ms = (time.perf_counter() - started) * 1000
         return {"op": "result", "id": cook_id, "outputs": outputs, "ms": round(ms, 3)}
 
-    def outputs(self, declaration, result, out_offset):
-        """Checks the result against the declared outputs and writes its arrays to the arena."""
+    def outputs(self, declaration, result, out_offset, exchange, frame):
+        """Checks the result against the declared outputs and writes them: the frames of each clip
+        output one at a time (pyrograph copies each out before the next is written over it), then
+        the other arrays, from out_offset."""
         ports = declaration.outputs
-        checked = [CHECKS[port["kind"]](port, value) for port, value in zip(ports, returned_values(declaration, result))]
-        arrays = [value for value in checked if isinstance(value, np.ndarray)]
+        # The outputs that are not clips are checked first, so a wrong one fails before any frame
+        # is made.
+        checked = [
+            value if port["kind"] == "clip" else CHECKS[port["kind"]](port, value)
+            for port, value in zip(ports, returned_values(declaration, result))
+        ]
+        clips = {
+            port["name"]: emit_clip(exchange, port, value, out_offset, lambda: running(frame))
+            for port, value in zip(ports, checked) if port["kind"] == "clip"
+        }
+        arrays = [value for port, value in zip(ports, checked) if port["kind"] != "clip" and isinstance(value, np.ndarray)]
         offsets = iter(self.arena.write(arrays, out_offset))
         outputs = []
         for port, value in zip(ports, checked):
-            if isinstance(value, np.ndarray):
-                dtype = stored_dtype(value).str
-                array = {"offset": next(offsets), "shape": list(value.shape), "dtype": dtype}
-                outputs.append({"port": port["name"], "array": array})
+            if port["kind"] == "clip":
+                outputs.append(clips[port["name"]])
+            elif isinstance(value, np.ndarray):
+                outputs.append({"port": port["name"], "array": array_spec(value, next(offsets))})
             else:
                 outputs.append({"port": port["name"], "value": value})
         return outputs
@@ -546,8 +351,7 @@ class Worker:
 
 
 def hello(channel, message) -> Worker:
-    """Answers hello: imports numpy and opens the arena, or stops with a fatal message."""
-    global np
+    """Answers hello: checks numpy and opens the arena, or stops with a fatal message."""
     if message["op"] != "hello":
         raise Malformed(f"the first message must be hello, got {message['op']!r}")
     protocol = field(message, "protocol", (int,))
@@ -555,12 +359,12 @@ def hello(channel, message) -> Worker:
         raise Stop(1, f"this worker speaks protocol {PROTOCOL}, not {protocol}: its pyrograph_host.py is from another version")
     path = field(message, "arena", (str,))
     try:
+        # Imported again, though pyrograph_host_io tried already, for the reason it failed.
         import numpy
     except Exception as error:  # a broken install raises more than ImportError
         raise Stop(1, f"numpy is not installed for {sys.executable} ({error}): install it (pip install numpy) "
                       "or point PYROGRAPH_PYTHON at a Python that has it") from None
-    np = numpy
-    worker = Worker(Arena(path))
+    worker = Worker(channel, Arena(path))
     channel.send({"op": "ready", "protocol": PROTOCOL, "python": platform.python_version(),
                   "numpy": numpy.__version__, "pid": os.getpid()})
     return worker
@@ -571,6 +375,9 @@ def serve(channel):
     while True:
         message = channel.receive()
         op = message["op"]
+        owed, worker.owed = worker.owed, False
+        if owed and op in REPLY_OPS:
+            continue  # the answer to a cancelled cook's request, sent before pyrograph read the cancel
         if op == "describe":
             channel.send(worker.describe(message))
         elif op == "cook":

@@ -11,6 +11,15 @@ annotation names its outputs::
     def brighten(image: Image(doc="Frame to brighten"), gain: Float(range=(0.0, 8.0)) = 2.0) -> Image:
         return (image * gain).astype(np.float32)
 
+A whole-clip node (time="whole_clip") sees a clip at once: a Clip input arrives as a ClipView
+that fetches frames from pyrograph as they are indexed, and a Clip output is returned (or yielded)
+frame by frame::
+
+    @node("studio.reverse", time="whole_clip", doc="Plays a clip backwards.")
+    def reverse(clip: Clip) -> Clip:
+        for i in range(len(clip) - 1, -1, -1):
+            yield clip[i]
+
 The decorator returns the function unchanged, so it stays an ordinary function for tests and
 scripts. Every declaration problem raises PluginDeclarationError when the file is executed, with
 the function, the parameter and the file:line of the def in its message, so the editor can show a
@@ -24,18 +33,20 @@ import inspect
 import linecache
 import math
 import numbers
+import operator
 import re
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional
 
 __all__ = [
-    "node", "current_frame", "PluginDeclarationError", "NodeDeclaration",
-    "Float", "Int", "Bool", "String", "Enum", "Color", "Vec2", "Vec3", "Path", "Image", "Mask", "Outputs",
+    "node", "current_frame", "PluginDeclarationError", "NodeDeclaration", "ClipView", "FrameError",
+    "Float", "Int", "Bool", "String", "Enum", "Color", "Vec2", "Vec3", "Path", "Image", "Mask", "Clip", "Points",
+    "Outputs",
 ]
 
 TYPE_NAME = re.compile(r"[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)+")
 PORT_NAME = re.compile(r"[a-z][a-z0-9_]*")  # graph files name ports as node.port
-TIMES = ("per_frame",)
+TIMES = ("per_frame", "whole_clip")
 CHANNELS = ("any", "gray", "rgba")
 
 
@@ -45,6 +56,12 @@ class PluginDeclarationError(Exception):
 
 class _Problem(Exception):
     """A declaration problem before the function and parameter it belongs to are known."""
+
+
+class FrameError(Exception):
+    """pyrograph could not make a frame of a clip input, because a node upstream failed.
+
+    ClipView raises it; let it propagate, and pyrograph reports the upstream node's own error."""
 
 
 # Declarations made since the worker last took them: it executes a plugin file, then takes the
@@ -67,8 +84,60 @@ def current_frame() -> Optional[int]:
     """The frame the running cook is for, or None (outside a cook, or a cook without a frame).
 
     pyrograph does not send the frame to per-frame nodes: their result must depend only on their
-    inputs, which is what their cache key holds, so for them this is None."""
+    inputs, which is what their cache key holds, so for them this is None. A whole-clip node sees
+    every frame at once, so for it this is None too."""
     return _frame
+
+
+class ClipView:
+    """A clip input of a whole-clip node: its frames, fetched from pyrograph as they are indexed.
+
+    len(view) is the number of frames and view.fps their rate; view[i] is frame i as a read-only
+    float32 array of shape (H,W) or (H,W,4) (a negative i counts from the end, like a list's), and
+    `for frame in view` goes through them in order. Each view[i] fetches the frame again, so keep
+    the frames you still need instead of indexing them twice, and only those: a long clip does not
+    fit in memory at once. view[i] raises FrameError when pyrograph cannot make that frame.
+
+    ClipView(frames, fps) wraps arrays you already have, to call the function in a test or script.
+    """
+
+    def __init__(self, frames, fps=24.0):
+        frames = tuple(frames)
+        self._length = len(frames)
+        self._fps = float(fps)
+        self._fetch = frames.__getitem__
+
+    @classmethod
+    def _fetching(cls, length, fps, fetch):
+        """A view whose frame i is fetch(i), for 0 <= i < length (how the worker makes them)."""
+        view = cls.__new__(cls)
+        view._length, view._fps, view._fetch = length, float(fps), fetch
+        return view
+
+    def __len__(self):
+        return self._length
+
+    @property
+    def fps(self) -> float:
+        """Frames per second."""
+        return self._fps
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            raise TypeError("a clip is indexed one frame at a time: view[i], not a slice")
+        i = operator.index(index)  # numpy integers too; floats and strings raise TypeError
+        if i < 0:
+            i += self._length
+        if not 0 <= i < self._length:
+            raise IndexError(f"frame {index} is outside the clip of {self._length} frames")
+        return self._fetch(i)
+
+    def __iter__(self):
+        for i in range(self._length):
+            yield self[i]
+
+    def __repr__(self):
+        return f"ClipView({self._length} frames at {self._fps:g} fps)"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -294,8 +363,40 @@ class Mask(_Connection):
     kind = "mask"
 
 
+class Clip(_Connection):
+    """A clip of images, for whole-clip nodes. An input arrives as a ClipView; an output is the
+    frames, returned as a generator (or yielded), a list or tuple of float32 arrays of one shape,
+    or one float32 array of shape (N,H,W) or (N,H,W,4). Clip(Image) says the same as Clip.
+    """
+
+    kind = "clip"
+
+    def __init__(self, of=Image, doc=""):
+        super().__init__(doc)
+        self.of = of
+
+    def _check(self):
+        super()._check()
+        of = self.of
+        if isinstance(of, str):
+            raise _Problem(f"Clip takes the kind of its frames, Image; give the doc as Clip(doc={of!r})")
+        # A clip's frames may be gray or RGBA (pyrograph does not say which before it cooks), so
+        # an Image that insists on channels is refused rather than silently ignored.
+        if not (of is Image or (type(of) is Image and of.channels == "any")):
+            raise _Problem(f"a Clip holds images of any channels: Clip or Clip(Image), not Clip({of!r})")
+
+
+class Points(_Connection):
+    """Emitter points, as an output: a numpy array of shape (N,3) holding x,y,z (emitting from
+    time 0) or (N,4) holding seconds,x,y,z, for volume.source's point list."""
+
+    kind = "points"
+
+
 # What a function may return, and the name a single output of that kind takes.
-_SINGLE_OUTPUT = {Image: "image", Mask: "mask", Float: "value", Int: "value", Bool: "value"}
+_SINGLE_OUTPUT = {
+    Image: "image", Mask: "mask", Clip: "clip", Points: "points", Float: "value", Int: "value", Bool: "value",
+}
 
 
 class Outputs:
@@ -333,7 +434,10 @@ def _output_kind(kind) -> _Kind:
     if isinstance(kind, type) and issubclass(kind, _Kind):
         kind = kind()
     if type(kind) not in _SINGLE_OUTPUT:
-        raise _Problem(f"{kind!r} cannot be an output (outputs are Image, Mask, Float, Int or Bool; several go in Outputs(...))")
+        raise _Problem(
+            f"{kind!r} cannot be an output (outputs are Image, Mask, Clip, Points, Float, Int or Bool; "
+            "several go in Outputs(...))"
+        )
     kind._check()
     return kind
 
@@ -376,8 +480,9 @@ def node(type_name, *, category="Plugins", time="per_frame", doc=None):
     """Declares the decorated function as the node type `type_name` ("studio.heat_haze").
 
     category is the editor's palette section; doc is the one-line summary (by default the first
-    paragraph of the docstring); time says when the node cooks, and "per_frame" (once per frame)
-    is the only choice in this version. Returns the function itself.
+    paragraph of the docstring); time says when the node cooks: "per_frame" (once per frame of
+    the clips wired in, which pyrograph does itself) or "whole_clip" (once, seeing whole clips:
+    the only kind of node that may have Clip inputs or outputs). Returns the function itself.
     """
     if inspect.isfunction(type_name):
         # @node without parentheses passes the function as the type name.
@@ -442,6 +547,14 @@ def _declare(function, type_name, category, time, doc) -> NodeDeclaration:
         outputs, several = _outputs(signature.return_annotation, function.__globals__)
     except _Problem as problem:
         raise fail(f"return annotation: {problem}") from None
+    if time != "whole_clip":
+        clips = [f"parameter '{p['name']}'" for p in inputs if p["kind"] == "clip"]
+        clips += [f"return annotation: output '{p['name']}'" for p in outputs if p["kind"] == "clip"]
+        if clips:
+            raise fail(
+                f"{clips[0]}: a Clip needs @node(..., time=\"whole_clip\"); a per-frame node takes and "
+                "returns an Image, and pyrograph applies it to every frame of a clip by itself"
+            )
 
     return NodeDeclaration(
         type_name=type_name, category=category, doc=summary, time=time, function=function,
@@ -469,7 +582,7 @@ def _kind(annotation, namespace):
     if not isinstance(annotation, (_Kind, Outputs)):
         raise _Problem(
             f"the annotation {annotation!r} is not a port kind "
-            "(Float, Int, Bool, String, Enum, Color, Vec2, Vec3, Path, Image, Mask)"
+            "(Float, Int, Bool, String, Enum, Color, Vec2, Vec3, Path, Image, Mask, Clip, Points)"
         )
     return annotation
 
@@ -491,6 +604,8 @@ def _input(parameter, namespace) -> dict:
     kind = _kind(parameter.annotation, namespace)
     if isinstance(kind, Outputs):
         raise _Problem("Outputs(...) is for the return annotation")
+    if isinstance(kind, Points):
+        raise _Problem("Points inputs are not supported yet; Points can only be an output")
     kind._check()
     if parameter.default is inspect.Parameter.empty:
         return kind._port(parameter.name, None)
@@ -502,7 +617,7 @@ def _input(parameter, namespace) -> dict:
 def _outputs(annotation, namespace):
     """The output port dicts of a return annotation, and whether there are several."""
     if annotation is inspect.Signature.empty:
-        raise _Problem("missing; say what the node returns: -> Image, Mask, Float, Int, Bool or Outputs(...)")
+        raise _Problem("missing; say what the node returns: -> Image, Mask, Clip, Points, Float, Int, Bool or Outputs(...)")
     kind = _kind(annotation, namespace)
     if isinstance(kind, Outputs):
         return [k._port(name, None) for name, k in kind._kinds().items()], True

@@ -207,7 +207,7 @@ def test_the_worker_takes_the_declarations_of_a_file(tmp_path):
 ERRORS = {
     "type_name_not_namespaced": ('"heat_haze"', "x: Float = 1.0", "-> Image", None, "namespaced"),
     "type_name_uppercase": ('"Studio.Haze"', "x: Float = 1.0", "-> Image", None, "namespaced"),
-    "unsupported_time": ('"test.f", time="whole_clip"', "x: Float = 1.0", "-> Image", None, "'per_frame'"),
+    "unsupported_time": ('"test.f", time="per_step"', "x: Float = 1.0", "-> Image", None, "'per_frame', 'whole_clip'"),
     "no_doc": ('"test.f", doc=None', "x: Float = 1.0", "-> Image", None, "doc line"),
     "parameter_name_not_lower_case": ('"test.f"', "Gain: Float = 1.0", "-> Image", "Gain", "lower-case"),
     "output_name_not_lower_case": ('"test.f"', "x: Float = 1.0", "-> Outputs(Image=Image)", None, "output 'Image'"),

@@ -32,7 +32,8 @@ pub struct NodeDecl {
 pub struct PortDecl {
     /// The parameter's name.
     pub name: String,
-    /// `float`, `int`, `bool`, `string`, `enum`, `color`, `vec2`, `vec3`, `path`, `image`, `mask`.
+    /// `float`, `int`, `bool`, `string`, `enum`, `color`, `vec2`, `vec3`, `path`, `image`, `mask`,
+    /// `clip` (of images) or `points`.
     pub kind: String,
     /// The port's doc.
     #[serde(default)]
@@ -71,18 +72,27 @@ impl NodeDecl {
                 self.type_name
             ));
         }
-        if self.time != "per_frame" {
-            return Err(format!("time '{}' is not supported; plugin nodes are per_frame", self.time));
-        }
+        let time = match self.time.as_str() {
+            "per_frame" => TimeDep::PerFrame,
+            "whole_clip" => TimeDep::WholeClip,
+            other => return Err(format!("time '{other}' is not supported: per_frame or whole_clip")),
+        };
         if self.outputs.is_empty() {
             return Err("a node needs at least one output".into());
         }
-        let mut desc = NodeDesc::new(&self.type_name, &self.category, TimeDep::PerFrame, &self.doc);
+        let clips_allowed = |p: &PortDecl| match p.kind.as_str() {
+            "clip" if time != TimeDep::WholeClip => {
+                Err("clips are for whole_clip nodes (pyrograph applies a per_frame node to every frame itself)".to_string())
+            }
+            _ => Ok(()),
+        };
+        let mut desc = NodeDesc::new(&self.type_name, &self.category, time, &self.doc);
         for p in &self.inputs {
-            desc = desc.input(p.input_desc().map_err(|e| format!("input '{}': {e}", p.name))?);
+            let port = clips_allowed(p).and_then(|()| p.input_desc()).map_err(|e| format!("input '{}': {e}", p.name))?;
+            desc = desc.input(port);
         }
         for p in &self.outputs {
-            let ty = p.output_type().map_err(|e| format!("output '{}': {e}", p.name))?;
+            let ty = clips_allowed(p).and_then(|()| p.output_type()).map_err(|e| format!("output '{}': {e}", p.name))?;
             desc = desc.output(&p.name, ty, &p.doc);
         }
         for ports in [&desc.inputs, &desc.outputs] {
@@ -108,6 +118,8 @@ impl PortDecl {
             "path" => PortType::Path,
             "image" => PortType::Image,
             "mask" => PortType::Mask,
+            "clip" => PortType::clip_of(PortType::Image),
+            "points" => PortType::Points,
             other => return Err(format!("kind '{other}' is not one pyrograph knows")),
         })
     }
@@ -117,6 +129,9 @@ impl PortDecl {
             return Err("a port name is lower-case letters, digits and '_'".into());
         }
         let ty = self.port_type()?;
+        if ty == PortType::Points {
+            return Err("a plugin cannot take points yet".into());
+        }
         let mut port = PortDesc::new(&self.name, ty.clone(), &self.doc);
         if let Some((lo, hi)) = self.range {
             if !matches!(ty, PortType::Float | PortType::Int) || lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
@@ -149,8 +164,9 @@ impl PortDecl {
     fn output_type(&self) -> Result<PortType, String> {
         let ty = self.port_type()?;
         match ty {
-            PortType::Image | PortType::Mask | PortType::Float | PortType::Int | PortType::Bool => Ok(ty),
-            _ => Err(format!("a plugin cannot output a {} yet (image, mask, float, int or bool)", self.kind)),
+            PortType::Image | PortType::Mask | PortType::Points | PortType::Float | PortType::Int | PortType::Bool => Ok(ty),
+            _ if ty.clip_element().is_some() => Ok(ty),
+            _ => Err(format!("a plugin cannot output a {} yet (image, mask, clip, points, float, int or bool)", self.kind)),
         }
     }
 }
@@ -214,7 +230,10 @@ mod tests {
         let cases: Vec<(Break, &str)> = vec![
             (Box::new(|d| d.type_name = "heat_haze".into()), "is not a type name"),
             (Box::new(|d| d.type_name = "Studio.Haze".into()), "is not a type name"),
-            (Box::new(|d| d.time = "whole_clip".into()), "time 'whole_clip' is not supported"),
+            (Box::new(|d| d.time = "source".into()), "time 'source' is not supported"),
+            (Box::new(|d| d.inputs[0].kind = "clip".into()), "input 'image': clips are for whole_clip nodes"),
+            (Box::new(|d| d.outputs[0].kind = "clip".into()), "output 'image': clips are for whole_clip nodes"),
+            (Box::new(|d| d.inputs[0].kind = "points".into()), "input 'image': a plugin cannot take points"),
             (Box::new(|d| d.inputs[1].default = Some(serde_json::json!(40.0))), "input 'amount': 40 is outside the range 0..=20"),
             (Box::new(|d| d.inputs[1].default = Some(serde_json::json!("x"))), "input 'amount': default \"x\" is not a float"),
             (Box::new(|d| d.inputs[2].default = Some(serde_json::json!("diagonal"))), "default 'diagonal' is not one of"),
@@ -232,6 +251,23 @@ mod tests {
             let e = d.to_desc().unwrap_err();
             assert!(e.contains(expected), "{e:?} should contain {expected:?}");
         }
+    }
+
+    #[test]
+    fn a_whole_clip_node_takes_and_makes_clips_and_an_emitter_makes_points() {
+        let mut d = heat_haze();
+        d.time = "whole_clip".into();
+        d.inputs[0].kind = "clip".into();
+        d.outputs[0].kind = "clip".into();
+        let desc = d.to_desc().unwrap();
+        assert_eq!(desc.time, TimeDep::WholeClip);
+        assert_eq!(
+            (&desc.inputs[0].ty, &desc.outputs[0].ty),
+            (&PortType::clip_of(PortType::Image), &PortType::clip_of(PortType::Image))
+        );
+        let mut d = heat_haze();
+        d.outputs[0].kind = "points".into();
+        assert_eq!(d.to_desc().unwrap().outputs[0].ty, PortType::Points);
     }
 
     #[test]

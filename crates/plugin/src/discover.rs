@@ -29,15 +29,15 @@ pub struct PluginFile {
 }
 
 /// The folders to search, in order: `--plugins` folders, then `PYROGRAPH_PLUGIN_PATH`
-/// (`:`-separated, like `PATH`), then `plugins/` beside the graph.
-pub fn plugin_dirs(cli: &[PathBuf], env: Option<&OsStr>, graph: Option<&Path>) -> Vec<PluginDir> {
+/// (`:`-separated, like `PATH`), then `plugins/` in the graph's folder.
+pub fn plugin_dirs(cli: &[PathBuf], env: Option<&OsStr>, graph_dir: Option<&Path>) -> Vec<PluginDir> {
     let mut dirs: Vec<PluginDir> = cli.iter().map(|p| PluginDir { path: p.clone(), origin: "--plugins" }).collect();
     if let Some(env) = env {
         let from_env = std::env::split_paths(env).filter(|p| !p.as_os_str().is_empty());
         dirs.extend(from_env.map(|path| PluginDir { path, origin: "PYROGRAPH_PLUGIN_PATH" }));
     }
-    if let Some(graph) = graph {
-        let folder = graph.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if let Some(folder) = graph_dir {
+        let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
         dirs.push(PluginDir { path: folder.join("plugins"), origin: "beside the graph" });
     }
     dirs
@@ -97,7 +97,7 @@ mod tests {
     #[test]
     fn folders_come_in_flag_env_graph_order() {
         let env = std::env::join_paths(["/a", "", "/b"]).unwrap();
-        let dirs = plugin_dirs(&[PathBuf::from("/cli")], Some(&env), Some(Path::new("/g/fire.ron")));
+        let dirs = plugin_dirs(&[PathBuf::from("/cli")], Some(&env), Some(Path::new("/g")));
         let got: Vec<(&str, &str)> = dirs.iter().map(|d| (d.path.to_str().unwrap(), d.origin)).collect();
         assert_eq!(
             got,
@@ -108,7 +108,7 @@ mod tests {
                 ("/g/plugins", "beside the graph")
             ]
         );
-        let bare = plugin_dirs(&[], None, Some(Path::new("fire.ron")));
+        let bare = plugin_dirs(&[], None, Some(Path::new("")));
         assert_eq!(bare[0].path, Path::new("./plugins"));
     }
 

@@ -11,8 +11,13 @@ pub const HOST_FILE: &str = "pyrograph_host.py";
 /// The declaration module's file name.
 pub const API_FILE: &str = "pyrograph_plugin.py";
 
-const FILES: [(&str, &str); 2] =
-    [(HOST_FILE, include_str!("../host/pyrograph_host.py")), (API_FILE, include_str!("../host/pyrograph_plugin.py"))];
+/// Every file of `host/`, the worker's own modules beside the two above.
+const FILES: [(&str, &str); 4] = [
+    (HOST_FILE, include_str!("../host/pyrograph_host.py")),
+    (API_FILE, include_str!("../host/pyrograph_plugin.py")),
+    ("pyrograph_host_io.py", include_str!("../host/pyrograph_host_io.py")),
+    ("pyrograph_host_clip.py", include_str!("../host/pyrograph_host_clip.py")),
+];
 
 /// A hash of both files: part of every plugin node's fingerprint, since they convert its values.
 pub fn digest() -> [u8; 32] {
@@ -67,6 +72,18 @@ mod tests {
         std::fs::write(dir.path().join(HOST_FILE), "tampered").unwrap();
         install(dir.path()).unwrap();
         assert_eq!(std::fs::read_to_string(dir.path().join(HOST_FILE)).unwrap(), FILES[0].1);
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary file left");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), FILES.len(), "no temporary file left");
+    }
+
+    #[test]
+    fn every_python_file_of_the_host_folder_is_compiled_in() {
+        let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("host");
+        let mut on_disk: Vec<String> =
+            std::fs::read_dir(folder).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        on_disk.retain(|n| n.ends_with(".py"));
+        on_disk.sort();
+        let mut embedded: Vec<String> = FILES.iter().map(|(n, _)| n.to_string()).collect();
+        embedded.sort();
+        assert_eq!(embedded, on_disk, "a module the worker imports would be missing from the folder it runs in");
     }
 }

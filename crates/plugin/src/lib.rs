@@ -6,6 +6,7 @@
 #![deny(missing_docs)]
 
 pub mod arena;
+pub mod convert;
 pub mod decl;
 pub mod discover;
 pub mod host;
@@ -58,10 +59,15 @@ impl PluginOptions {
 /// type no built-in has. The folders are scanned now (no Python runs); an unreadable folder or
 /// file is an error naming it.
 pub fn extend(registry: &mut Registry, options: &PluginOptions) -> Result<(), String> {
-    let files = discover::scan(&options.dirs)?;
+    extend_scanned(registry, discover::scan(&options.dirs)?, options);
+    Ok(())
+}
+
+/// [`extend`] with files already scanned (a front end that compares them with the last scan to
+/// see whether a plugin changed).
+pub fn extend_scanned(registry: &mut Registry, files: Vec<PluginFile>, options: &PluginOptions) {
     let builtin: Vec<String> = registry.descs().map(|d| d.type_name.clone()).collect();
     registry.extend_with(Arc::new(Plugins { files, builtin, options: options.clone(), found: OnceLock::new() }));
-    Ok(())
 }
 
 /// Turns plugins off: a graph that names a type no built-in has is refused, saying plugins are
@@ -156,7 +162,7 @@ impl Plugins {
             .map_err(|e| format!("could not write the Python host files to {}: {e}", self.options.host_dir.display()))?;
         let files: Vec<_> = self.files.iter().map(|f| serde_json::json!({"path": f.path, "sha256": f.sha256})).collect();
         let request = serde_json::json!({"op": "describe", "files": files});
-        let reply = pool.with_worker(None, |w| w.request(&request, None)).map_err(|e| match e {
+        let reply = pool.with_worker(None, false, |w| w.request(&request, None)).map_err(|e| match e {
             WorkerError::Cancelled => "cancelled".to_string(),
             WorkerError::Broken(why) => why,
         })?;

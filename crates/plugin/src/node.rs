@@ -1,13 +1,17 @@
 //! A node type declared in Python: described like a built-in, cooked by sending its inputs to a
-//! worker (numbers as JSON, pixels through the arena) and reading its outputs back checked.
+//! worker (numbers as JSON, pixels through the arena) and reading its outputs back checked. A
+//! whole-clip node's worker asks for the frames of its clip inputs one at a time while it runs and
+//! hands its output frames over one at a time, so neither side holds a whole clip it does not need.
 
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use pyrograph_core::value::PortType;
-use pyrograph_core::{Channels, CookCtx, Image, Inputs, Mask, Node, NodeDesc, NodeError, Value};
+use pyrograph_core::{Channels, Clip, CookCtx, Image, Inputs, Node, NodeDesc, NodeError, TimeDep, Value};
 use serde_json::{Map, Value as Json, json};
 
 use crate::arena::{Arena, aligned};
+use crate::convert::{param_json, put_image, put_mask, read_image, read_output};
 use crate::discover::PluginFile;
 use crate::pool::Pool;
 use crate::protocol::{ArraySpec, OutputSpec, Reply};
@@ -37,75 +41,165 @@ impl Node for PyNode {
     }
 
     fn cook(&self, inputs: &Inputs<'_>, ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-        let outcome = self.pool.with_worker(Some(ctx), |worker| Ok(self.cook_on(worker, inputs.values(), ctx)));
-        match outcome {
-            Ok(result) => result,
-            Err(WorkerError::Cancelled) => Err(NodeError::Cancelled),
-            Err(WorkerError::Broken(why)) => Err(NodeError::Message(format!("{why} (plugin {})", self.file.path.display()))),
-        }
+        let whole_clip = self.desc.time == TimeDep::WholeClip;
+        let outcome = self.pool.with_worker(Some(ctx), whole_clip, |worker| Ok(self.cook_on(worker, inputs.values(), ctx)));
+        outcome.unwrap_or_else(|e| Err(self.worker_error(e)))
     }
 }
 
+/// What one cook keeps while its worker runs: the clips it may ask frames of, where frames and
+/// outputs go in the arena, the frames emitted so far, and the first upstream failure.
+struct Session {
+    clips: BTreeMap<String, Clip>,
+    out_offset: u64,
+    emitted: BTreeMap<String, Vec<Value>>,
+    upstream: Option<NodeError>,
+}
+
 impl PyNode {
-    /// One cook on one worker: inputs in, request, outputs back.
-    fn cook_on(&self, worker: &mut Worker, values: &[Value], ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
-        let mut params = Map::new();
-        let mut arrays = Map::new();
-        let mut offset = 0u64;
-        for ((port, value), channels) in self.desc.inputs.iter().zip(values).zip(&self.channels) {
-            pyrograph_core::declare::check_range(port, value).map_err(|e| NodeError::port(&port.name, e))?;
-            match value {
-                Value::Image(img) => {
-                    check_channels(img, channels.as_deref()).map_err(|e| NodeError::port(&port.name, e))?;
-                    let spec = put_image(&worker.arena, offset, img).map_err(|e| arena_error(&port.name, e))?;
-                    offset = aligned(spec.offset + (img.data().len() * 4) as u64);
-                    arrays.insert(port.name.clone(), json!(spec));
-                }
-                Value::Mask(mask) => {
-                    worker.arena.put(offset, mask.data()).map_err(|e| arena_error(&port.name, e))?;
-                    let spec = ArraySpec { offset, shape: vec![mask.height().into(), mask.width().into()], dtype: "|u1".into() };
-                    offset = aligned(offset + mask.data().len() as u64);
-                    arrays.insert(port.name.clone(), json!(spec));
-                }
-                other => {
-                    params.insert(port.name.clone(), param_json(other).map_err(|e| NodeError::port(&port.name, e))?);
-                }
-            }
-        }
-        let request = json!({
-            "op": "cook", "id": 1, "type": self.desc.type_name, "file": self.file.path, "sha256": self.file.sha256,
-            "frame": Json::Null, "params": params, "arrays": arrays, "out_offset": offset,
-        });
-        match worker.request(&request, Some(ctx)) {
-            Ok(Reply::Result { outputs, .. }) => self.read_outputs(&worker.arena, &outputs),
-            Ok(Reply::Error(failure)) => Err(match failure.kind.as_str() {
-                "cancelled" => NodeError::Cancelled,
-                "port" => NodeError::Message(failure.error.message),
-                _ => NodeError::Message(failure.error.render()),
-            }),
-            Ok(other) => Err(NodeError::Message(format!("the Python worker answered a cook with {other:?}"))),
-            Err(WorkerError::Cancelled) => Err(NodeError::Cancelled),
-            Err(WorkerError::Broken(why)) => Err(NodeError::Message(format!("{why} (plugin {})", self.file.path.display()))),
+    fn worker_error(&self, e: WorkerError) -> NodeError {
+        match e {
+            WorkerError::Cancelled => NodeError::Cancelled,
+            WorkerError::Broken(why) => NodeError::Message(format!("{why} (plugin {})", self.file.path.display())),
         }
     }
 
-    /// The outputs in declared order, each checked against its declared type.
-    fn read_outputs(&self, arena: &Arena, outputs: &[OutputSpec]) -> Result<Vec<Value>, NodeError> {
+    /// One cook on one worker: inputs in, the request, the worker's questions answered, outputs back.
+    fn cook_on(&self, worker: &mut Worker, values: &[Value], ctx: &CookCtx) -> Result<Vec<Value>, NodeError> {
+        let (request, mut session) = self.request(&worker.arena, values)?;
+        worker.send(&request).map_err(|e| self.worker_error(e))?;
+        loop {
+            let reply = worker.receive(Some(ctx)).map_err(|e| self.worker_error(e))?;
+            let answer = match reply {
+                Reply::NeedFrame { id, clip, index } => session.frame(&worker.arena, id, &clip, index, ctx),
+                Reply::Emit { id, port, array, .. } => match session.emit(&worker.arena, &port, &array) {
+                    Ok(()) => json!({"op": "ack", "id": id}),
+                    Err(e) => {
+                        // The worker waits for an answer it will not get: it cannot be used again.
+                        worker.discard();
+                        return Err(NodeError::Message(format!("output '{port}': {e}")));
+                    }
+                },
+                Reply::Result { outputs, .. } => return self.read_outputs(&worker.arena, &outputs, session),
+                Reply::Error(failure) => {
+                    return Err(match failure.kind.as_str() {
+                        "cancelled" => NodeError::Cancelled,
+                        "frame_error" => session.upstream.take().unwrap_or(NodeError::Message(failure.error.message)),
+                        "port" => NodeError::Message(failure.error.message),
+                        _ => NodeError::Message(failure.error.render()),
+                    });
+                }
+                other => {
+                    worker.discard();
+                    return Err(NodeError::Message(format!("the Python worker answered a cook with {other:?}")));
+                }
+            };
+            worker.send(&answer).map_err(|e| self.worker_error(e))?;
+        }
+    }
+
+    /// The cook request, with images and masks written to the arena and clips kept for later.
+    fn request(&self, arena: &Arena, values: &[Value]) -> Result<(Json, Session), NodeError> {
+        let (mut params, mut arrays, mut clip_info) = (Map::new(), Map::new(), Map::new());
+        let mut clips = BTreeMap::new();
+        let mut offset = 0u64;
+        for ((port, value), channels) in self.desc.inputs.iter().zip(values).zip(&self.channels) {
+            let at_port = |e: String| NodeError::port(&port.name, e);
+            pyrograph_core::declare::check_range(port, value).map_err(at_port)?;
+            let spec = match value {
+                Value::Image(img) => {
+                    check_channels(img, channels.as_deref()).map_err(at_port)?;
+                    put_image(arena, offset, img)
+                }
+                Value::Mask(mask) => put_mask(arena, offset, mask),
+                Value::Clip(clip) => {
+                    clip_info.insert(port.name.clone(), json!({"len": clip.len(), "fps": clip.fps()}));
+                    clips.insert(port.name.clone(), clip.clone());
+                    continue;
+                }
+                other => {
+                    params.insert(port.name.clone(), param_json(other).map_err(at_port)?);
+                    continue;
+                }
+            };
+            let spec = spec.map_err(|e| NodeError::port(&port.name, format!("could not pass the pixels to Python: {e}")))?;
+            offset = aligned(spec.offset + byte_len(&spec));
+            arrays.insert(port.name.clone(), json!(spec));
+        }
+        let request = json!({
+            "op": "cook", "id": 1, "type": self.desc.type_name, "file": self.file.path, "sha256": self.file.sha256,
+            "frame": Json::Null, "params": params, "arrays": arrays, "clips": clip_info, "out_offset": offset,
+        });
+        Ok((request, Session { clips, out_offset: offset, emitted: BTreeMap::new(), upstream: None }))
+    }
+
+    /// The outputs in declared order, each checked against its declared type; a clip output is
+    /// the frames emitted for it, at the first clip input's rate.
+    fn read_outputs(&self, arena: &Arena, outputs: &[OutputSpec], mut session: Session) -> Result<Vec<Value>, NodeError> {
+        let fps = session.clips.values().next().map_or(24.0, Clip::fps);
         self.desc
             .outputs
             .iter()
             .map(|port| {
-                let out = outputs.iter().find(|o| o.port == port.name);
-                let out =
-                    out.ok_or_else(|| NodeError::Message(format!("output '{}': the plugin returned nothing for it", port.name)))?;
-                read_output(arena, &port.ty, out).map_err(|e| NodeError::Message(format!("output '{}': {e}", port.name)))
+                let fail = |e: String| NodeError::Message(format!("output '{}': {e}", port.name));
+                let out = outputs
+                    .iter()
+                    .find(|o| o.port == port.name)
+                    .ok_or_else(|| fail("the plugin returned nothing for it".into()))?;
+                if port.ty.clip_element().is_none() {
+                    return read_output(arena, &port.ty, out).map_err(fail);
+                }
+                let frames = session.emitted.remove(&port.name).unwrap_or_default();
+                if frames.is_empty() || out.frames != Some(frames.len() as u64) {
+                    return Err(fail(format!("{} frames arrived, the plugin said {:?}", frames.len(), out.frames)));
+                }
+                Ok(Value::Clip(Clip::from_frames(PortType::Image, fps, frames)))
             })
             .collect()
     }
 }
 
-fn arena_error(port: &str, e: std::io::Error) -> NodeError {
-    NodeError::port(port, format!("could not pass the pixels to Python: {e}"))
+impl Session {
+    /// The answer to a worker asking for frame `index` of clip input `clip`: the frame written at
+    /// the output offset (the worker copies it before it asks again or writes an output), or why
+    /// it failed (kept, so the cook reports the upstream node's own error).
+    fn frame(&mut self, arena: &Arena, id: u64, clip: &str, index: i64, ctx: &CookCtx) -> Json {
+        let image =
+            self.clips.get(clip).ok_or_else(|| NodeError::Message(format!("there is no clip input '{clip}'"))).and_then(|c| {
+                let i = usize::try_from(index).ok().filter(|&i| i < c.len());
+                let i =
+                    i.ok_or_else(|| NodeError::Message(format!("frame {index} is outside the clip of {} frames", c.len())))?;
+                match c.get(i, ctx)? {
+                    Value::Image(img) => Ok(img),
+                    other => Err(NodeError::Message(format!("frame {i} of '{clip}' is a {}, not an image", other.type_name()))),
+                }
+            });
+        let written = image.and_then(|img| {
+            put_image(arena, self.out_offset, &img)
+                .map_err(|e| NodeError::Message(format!("could not pass a frame to Python: {e}")))
+        });
+        match written {
+            Ok(spec) => json!({"op": "frame", "id": id, "array": spec}),
+            Err(e) => {
+                let message = e.to_string();
+                self.upstream.get_or_insert(e);
+                json!({"op": "frame_error", "id": id, "message": message})
+            }
+        }
+    }
+
+    /// Copies out a frame the worker emitted for clip output `port`.
+    fn emit(&mut self, arena: &Arena, port: &str, array: &ArraySpec) -> Result<(), String> {
+        let frames = self.emitted.entry(port.to_string()).or_default();
+        let frame = read_image(arena, array).map_err(|e| format!("frame {}: {e}", frames.len()))?;
+        frames.push(Value::Image(Arc::new(frame)));
+        Ok(())
+    }
+}
+
+fn byte_len(spec: &ArraySpec) -> u64 {
+    let item = if spec.dtype == "|u1" { 1 } else { 4 };
+    spec.shape.iter().product::<u64>() * item
 }
 
 fn check_channels(img: &Image, wanted: Option<&str>) -> Result<(), String> {
@@ -113,115 +207,5 @@ fn check_channels(img: &Image, wanted: Option<&str>) -> Result<(), String> {
         (Some("gray"), Channels::Rgba) => Err("the plugin takes gray images; convert with imaging.to_gray first".into()),
         (Some("rgba"), Channels::Gray) => Err("the plugin takes RGBA images; this one is gray".into()),
         _ => Ok(()),
-    }
-}
-
-fn put_image(arena: &Arena, offset: u64, img: &Image) -> std::io::Result<ArraySpec> {
-    arena.put(offset, bytemuck::cast_slice(img.data()))?;
-    let mut shape = vec![u64::from(img.height()), u64::from(img.width())];
-    if img.channels() == Channels::Rgba {
-        shape.push(4);
-    }
-    Ok(ArraySpec { offset, shape, dtype: "<f4".into() })
-}
-
-/// A parameter as the plugin function receives it (colours and vectors as lists).
-fn param_json(v: &Value) -> Result<Json, String> {
-    Ok(match v {
-        Value::Float(x) => json!(x),
-        Value::Int(i) => json!(i),
-        Value::Bool(b) => json!(b),
-        Value::String(s) | Value::Enum(s) => json!(s),
-        Value::Color(c) => json!(c),
-        Value::Vec2(v) => json!(v),
-        Value::Vec3(v) => json!(v),
-        Value::Path(p) => json!(p.to_str().ok_or_else(|| format!("path {} is not valid UTF-8", p.display()))?),
-        other => return Err(format!("a plugin cannot take a {} here", other.type_name())),
-    })
-}
-
-/// One output value: an array read from the arena, or a number.
-fn read_output(arena: &Arena, ty: &PortType, out: &OutputSpec) -> Result<Value, String> {
-    match (ty, &out.array, &out.value) {
-        (PortType::Image, Some(a), _) => read_image(arena, a).map(|i| Value::Image(Arc::new(i))),
-        (PortType::Mask, Some(a), _) => read_mask(arena, a).map(|m| Value::Mask(Arc::new(m))),
-        (PortType::Float, _, Some(j)) => j.as_f64().map(Value::Float).ok_or(format!("{j} is not a number")),
-        (PortType::Int, _, Some(j)) => j.as_i64().map(Value::Int).ok_or(format!("{j} is not an integer")),
-        (PortType::Bool, _, Some(j)) => j.as_bool().map(Value::Bool).ok_or(format!("{j} is not true or false")),
-        _ => Err(format!("the plugin returned something that is not a {}", ty)),
-    }
-}
-
-/// Width and height of a `(H, W)` or `(H, W, C)` array, refused before allocating when the image
-/// would be over the pixel limit.
-fn image_size(shape: &[u64]) -> Result<(u32, u32), String> {
-    let (h, w) = (shape[0], shape[1]);
-    let limit = pyrograph_core::limits::max_pixels();
-    if h == 0 || w == 0 || h.saturating_mul(w) > limit {
-        let hint = pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", limit);
-        return Err(format!("a {w} × {h} image is empty or over the pixel limit ({hint})"));
-    }
-    Ok((w as u32, h as u32))
-}
-
-fn read_image(arena: &Arena, a: &ArraySpec) -> Result<Image, String> {
-    let channels = match (a.dtype.as_str(), a.shape.as_slice()) {
-        ("<f4", [_, _]) => Channels::Gray,
-        ("<f4", [_, _, 4]) => Channels::Rgba,
-        _ => return Err(format!("expected float32 (H, W) or (H, W, 4), got {} {:?}", a.dtype, a.shape)),
-    };
-    let (w, h) = image_size(&a.shape)?;
-    let mut data = vec![0f32; w as usize * h as usize * channels.count()];
-    arena.get_into(a.offset, bytemuck::cast_slice_mut(&mut data)).map_err(|e| e.to_string())?;
-    Image::from_vec(w, h, channels, data).ok_or_else(|| "the pixel count does not match the shape".into())
-}
-
-fn read_mask(arena: &Arena, a: &ArraySpec) -> Result<Mask, String> {
-    if a.dtype != "|u1" || a.shape.len() != 2 {
-        return Err(format!("expected uint8 (H, W), got {} {:?}", a.dtype, a.shape));
-    }
-    let (w, h) = image_size(&a.shape)?;
-    let mut data = vec![0u8; w as usize * h as usize];
-    arena.get_into(a.offset, &mut data).map_err(|e| e.to_string())?;
-    Mask::from_vec(w, h, data).ok_or_else(|| "the pixel count does not match the shape".into())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn images_and_masks_go_through_the_arena_unchanged() {
-        let arena = Arena::create().unwrap();
-        let img = Image::gray_from_fn(5, 3, |x, y| x as f32 + 10.0 * y as f32);
-        let spec = put_image(&arena, 64, &img).unwrap();
-        assert_eq!((spec.shape.as_slice(), spec.dtype.as_str()), (&[3u64, 5][..], "<f4"));
-        assert_eq!(read_image(&arena, &spec).unwrap(), img);
-        let rgba = img.to_rgba();
-        let spec = put_image(&arena, 0, &rgba).unwrap();
-        assert_eq!(spec.shape, [3, 5, 4]);
-        assert_eq!(read_image(&arena, &spec).unwrap(), rgba);
-    }
-
-    #[test]
-    fn wrong_or_absurd_arrays_are_refused_before_allocating() {
-        let arena = Arena::create().unwrap();
-        let spec = |shape: Vec<u64>, dtype: &str| ArraySpec { offset: 0, shape, dtype: dtype.into() };
-        let e = read_image(&arena, &spec(vec![4, 4, 3], "<f4")).unwrap_err();
-        assert!(e.contains("expected float32 (H, W) or (H, W, 4), got <f4 [4, 4, 3]"), "{e}");
-        let e = read_image(&arena, &spec(vec![1 << 31, 1 << 31], "<f4")).unwrap_err();
-        assert!(e.contains("over the pixel limit"), "{e}");
-        assert!(read_image(&arena, &spec(vec![0, 4], "<f4")).unwrap_err().contains("empty"));
-        let e = read_image(&arena, &spec(vec![8, 8], "<f4")).unwrap_err();
-        assert!(e.contains("past the end"), "an output the worker never wrote: {e}");
-        assert!(read_mask(&arena, &spec(vec![2, 2], "<f4")).unwrap_err().contains("expected uint8"));
-    }
-
-    #[test]
-    fn a_mask_read_back_is_zero_or_255() {
-        let arena = Arena::create().unwrap();
-        arena.put(0, &[0, 1, 255, 7]).unwrap();
-        let m = read_mask(&arena, &ArraySpec { offset: 0, shape: vec![2, 2], dtype: "|u1".into() }).unwrap();
-        assert_eq!(m.data(), [0, 255, 255, 255]);
     }
 }

@@ -42,12 +42,17 @@ impl Pool {
 
     /// Runs `f` on a worker: an idle one, a new one while under the cap, else the next one given
     /// back. A worker `f` leaves broken (killed on cancel, crashed) is retired, not given back.
+    ///
+    /// `beyond_cap` starts a worker even when the cap is reached: for a whole-clip node, whose
+    /// worker waits while the frames it asks for are cooked, perhaps by plugin nodes upstream that
+    /// need workers of their own; waiting for one of the capped workers could wait forever.
     pub fn with_worker<T>(
         &self,
         ctx: Option<&CookCtx>,
+        beyond_cap: bool,
         f: impl FnOnce(&mut Worker) -> Result<T, WorkerError>,
     ) -> Result<T, WorkerError> {
-        let mut worker = self.take(ctx)?;
+        let mut worker = self.take(ctx, beyond_cap)?;
         let seat = Seat(self);
         let out = f(&mut worker);
         std::mem::forget(seat);
@@ -55,14 +60,14 @@ impl Pool {
         out
     }
 
-    fn take(&self, ctx: Option<&CookCtx>) -> Result<Worker, WorkerError> {
+    fn take(&self, ctx: Option<&CookCtx>, beyond_cap: bool) -> Result<Worker, WorkerError> {
         let poisoned = || WorkerError::Broken("the Python worker pool failed earlier".into());
         let mut state = self.state.lock().map_err(|_| poisoned())?;
         loop {
             if let Some(worker) = state.idle.pop() {
                 return Ok(worker);
             }
-            if state.live < self.cap {
+            if state.live < self.cap || beyond_cap {
                 state.live += 1;
                 drop(state);
                 let started = Worker::start(&self.launch, ctx);
@@ -86,8 +91,10 @@ impl Pool {
     }
 
     fn give_back(&self, worker: Worker) {
+        // A worker started beyond the cap is not kept once the cook that needed it is done.
         if worker.healthy()
             && let Ok(mut s) = self.state.lock()
+            && s.live <= self.cap
         {
             s.idle.push(worker);
             drop(s);

@@ -77,6 +77,26 @@ pub enum Reply {
         /// One per declared output.
         outputs: Vec<OutputSpec>,
     },
+    /// A whole-clip cook asks for frame `index` of its clip input `clip`.
+    NeedFrame {
+        /// The request's id.
+        id: u64,
+        /// The clip input.
+        clip: String,
+        /// The frame, from 0 (negative indices are resolved by the worker).
+        index: i64,
+    },
+    /// A whole-clip cook hands over frame `index` of its clip output `port`.
+    Emit {
+        /// The request's id.
+        id: u64,
+        /// The clip output.
+        port: String,
+        /// The frame, from 0, in order.
+        index: u64,
+        /// Where the frame lies in the arena.
+        array: ArraySpec,
+    },
     /// A cook failed.
     Error(CookFailure),
     /// The worker cannot go on (no numpy, a malformed request) and exits.
@@ -129,7 +149,7 @@ pub struct CookFailure {
     /// The request's id.
     pub id: u64,
     /// `exception` (the function raised), `port` (it returned the wrong thing), `load` (its
-    /// file failed to load) or `cancelled`.
+    /// file failed to load), `frame_error` (a frame it asked for failed upstream) or `cancelled`.
     pub kind: String,
     /// The output the return check blames.
     pub port: Option<String>,
@@ -147,6 +167,8 @@ pub struct OutputSpec {
     pub array: Option<ArraySpec>,
     /// A number or flag output.
     pub value: Option<serde_json::Value>,
+    /// How many frames a clip output emitted.
+    pub frames: Option<u64>,
 }
 
 /// An array in the arena.

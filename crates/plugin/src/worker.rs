@@ -99,6 +99,11 @@ impl Worker {
         }
     }
 
+    /// Kills the worker: it is out of step with this side (a question left unanswered).
+    pub fn discard(&mut self) {
+        self.kill();
+    }
+
     /// Whether the worker may be used again.
     pub fn healthy(&self) -> bool {
         !self.broken
@@ -106,16 +111,29 @@ impl Worker {
 
     /// Sends `msg` and waits for the reply, killing the worker if `ctx` is cancelled meanwhile.
     pub fn request(&mut self, msg: &serde_json::Value, ctx: Option<&CookCtx>) -> Result<Reply, WorkerError> {
-        self.request_within(msg, ctx, Duration::MAX)
+        self.send(msg)?;
+        self.receive(ctx)
     }
 
     fn request_within(&mut self, msg: &serde_json::Value, ctx: Option<&CookCtx>, limit: Duration) -> Result<Reply, WorkerError> {
+        self.send(msg)?;
+        self.receive_within(ctx, limit)
+    }
+
+    /// Sends one message (a request, or the answer to a worker's question during a cook).
+    pub fn send(&mut self, msg: &serde_json::Value) -> Result<(), WorkerError> {
         if self.broken {
             return Err(WorkerError::Broken("the Python worker stopped earlier".into()));
         }
-        if let Err(e) = write_frame(&mut self.stdin, msg) {
-            return Err(self.fail(format!("could not send to the Python worker: {e}")));
-        }
+        write_frame(&mut self.stdin, msg).map_err(|e| self.fail(format!("could not send to the Python worker: {e}")))
+    }
+
+    /// Waits for the worker's next message, killing the worker if `ctx` is cancelled meanwhile.
+    pub fn receive(&mut self, ctx: Option<&CookCtx>) -> Result<Reply, WorkerError> {
+        self.receive_within(ctx, Duration::MAX)
+    }
+
+    fn receive_within(&mut self, ctx: Option<&CookCtx>, limit: Duration) -> Result<Reply, WorkerError> {
         let start = Instant::now();
         loop {
             match self.replies.recv_timeout(POLL) {

@@ -11,6 +11,22 @@ pub fn workspace() -> PathBuf {
     here.parent().and_then(Path::parent).expect("crates/testing lies two folders below the workspace root").to_path_buf()
 }
 
+/// A Python that has numpy, for the plugin tests: `PYROGRAPH_PYTHON`, `/usr/bin/python3`, then
+/// `python3`, the first that imports numpy.
+///
+/// # Panics
+/// When none does: those tests are ignored by default and run where `.ci/run` installed it.
+pub fn python_with_numpy() -> std::ffi::OsString {
+    let candidates = std::env::var_os("PYROGRAPH_PYTHON").into_iter().chain(["/usr/bin/python3".into(), "python3".into()]);
+    for p in candidates {
+        let ok = std::process::Command::new(&p).args(["-c", "import numpy"]).output().is_ok_and(|o| o.status.success());
+        if ok {
+            return p;
+        }
+    }
+    panic!("needs python3 with numpy: none of PYROGRAPH_PYTHON, /usr/bin/python3, python3 imports it");
+}
+
 /// Whether a picture made now still matches its committed copy (thumbnails, node pictures): both
 /// 8-bit RGBA, the same size, the mean difference under 1/255 and at most 0.5 % of samples more
 /// than 8/255 apart, so float sums in another order or another libm do not count as a change.

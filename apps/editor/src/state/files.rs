@@ -54,7 +54,8 @@ impl Editor {
                 self.push_recent(path);
                 self.set_status(format!("saved {}", path.display()), false);
                 if moved {
-                    // Relative paths now resolve against another folder.
+                    // Relative paths (and the plugins/ folder) now resolve against another folder.
+                    self.plugins_for(path.parent());
                     self.revalidate();
                     self.revision += 1;
                 }

@@ -140,6 +140,7 @@ impl Editor {
     /// [`Editor::poll_open`] adopts the document when it is read and validated.
     pub fn begin_open(&mut self, path: &Path) {
         self.cooker.cancel();
+        self.plugins_for(path.parent());
         let (tx, rx) = std::sync::mpsc::channel();
         let (file, registry) = (path.to_path_buf(), self.registry.clone());
         let spawned = std::thread::Builder::new().name("pyrograph-open".into()).spawn(move || {

@@ -68,6 +68,7 @@ fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc),
         )]);
     }
     let doc = GraphDoc::from_ron(&text).map_err(|d| nested(id, canon, d.0))?;
+    missing_plugins(id, canon, &doc, ctx)?;
     let mut stack = ctx.include_stack.clone();
     stack.push(canon.to_path_buf());
     let child = LoadCtx {
@@ -80,6 +81,28 @@ fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc),
     sub.file = Some(canon.to_path_buf());
     let desc = describe(&doc, &sub).map_err(|m| vec![include_diag(id, format!("{}: {m}", canon.display()))])?;
     Ok((sub, desc))
+}
+
+/// Refuses a preset whose recorded plugin node types this registry lacks, naming them and where
+/// plugins are looked for (before its build would call each one an unknown type).
+fn missing_plugins(id: &str, file: &Path, doc: &GraphDoc, ctx: &LoadCtx) -> Result<(), Vec<Diagnostic>> {
+    let needs = doc.preset.as_ref().map(|p| p.plugins.as_slice()).unwrap_or_default();
+    let missing: Vec<&str> = needs.iter().filter(|t| ctx.registry.get(t).is_none()).map(String::as_str).collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    let problems: String =
+        ctx.registry.extension().map(|f| f.problems.iter().map(|p| format!("; {p}")).collect()).unwrap_or_default();
+    Err(vec![include_diag(
+        id,
+        format!(
+            "preset {} needs the Python plugin node type{} '{}', which no plugin folder provides: put the plugin file in a \
+             folder named by --plugins or PYROGRAPH_PLUGIN_PATH, or in plugins/ beside the graph{problems}",
+            file.display(),
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join("', '")
+        ),
+    )])
 }
 
 /// How deep local subgraphs may nest (a subgraph in a subgraph …): far beyond any graph made by

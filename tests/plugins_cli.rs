@@ -230,6 +230,12 @@ fn a_preset_names_the_plugin_it_needs_when_it_is_missing() {
         assert!(all.contains(needle), "{needle:?} in:\n{all}");
     }
     assert!(!all.contains("could not start Python"), "no plugin files: no Python was asked:\n{all}");
+    // A plain graph whose plugin is missing: the node and the type are named.
+    std::fs::copy(example.join("heat-haze.ron"), dir.path().join("heat-haze.ron")).unwrap();
+    let o = bin().arg("check").arg(dir.path().join("heat-haze.ron")).output().unwrap();
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(all.contains("node 'haze': unknown node type 'studio.heat_haze'"), "{all}");
 }
 
 #[test]
@@ -290,4 +296,49 @@ fn a_farm_job_with_a_plugin_node_renders_what_a_plain_render_does() {
         let (a, b) = (std::fs::read(single.join(&name)).unwrap(), std::fs::read(farm.join(&name)).unwrap());
         assert!(a == b, "{name}: the farm frame differs from the plain render's");
     }
+}
+
+#[test]
+#[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
+fn a_plugin_that_crashes_its_interpreter_fails_its_node_and_leaves_files_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("plugins")).unwrap();
+    let plugin = dir.path().join("plugins/crash.py");
+    let write_plugin = |body: &str| {
+        let text = format!(
+            "import os, signal\nfrom pyrograph_plugin import node, Image\n\n@node(\"studio.crash\")\ndef crash(image: Image) -> Image:\n    \"\"\"Crashes its interpreter.\"\"\"\n    {body}\n"
+        );
+        std::fs::write(&plugin, text).unwrap();
+    };
+    let graph = dir.path().join("g.ron");
+    std::fs::write(
+        &graph,
+        r#"(version: 1, nodes: {
+            "flame": (type: "imaging.turbulence_flame", params: {"width": 32, "height": 48, "frames": 4}),
+            "c": (type: "studio.crash"),
+            "out": (type: "imaging.write_sequence", params: {"pattern": "c_####.png", "overwrite": true}),
+        }, edges: [("flame.clip", "c.image"), ("c.image", "out.clip")])"#,
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let render =
+        || bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("render").arg(&graph).arg("--out").arg(&out).output().unwrap();
+    // A first render that works leaves four frames; the same render with a crashing plugin must
+    // leave them as they were, with nothing half-written beside them.
+    write_plugin("return image");
+    let o = render();
+    assert!(o.status.success(), "{}", text(&o));
+    let before: Vec<_> = (0..4).map(|i| std::fs::read(out.join(format!("c_{i:04}.png"))).unwrap()).collect();
+    write_plugin("os.kill(os.getpid(), signal.SIGSEGV)");
+    let o = render();
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    for needle in ["node 'c' (studio.crash)", "killed by signal 11 (SIGSEGV)", "crash.py"] {
+        assert!(all.contains(needle), "{needle:?} in:\n{all}");
+    }
+    let after: Vec<_> = (0..4).map(|i| std::fs::read(out.join(format!("c_{i:04}.png"))).unwrap()).collect();
+    assert!(before == after, "the frames written before are untouched");
+    let names: Vec<String> =
+        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names.len(), 4, "no partial or temporary file: {names:?}");
 }

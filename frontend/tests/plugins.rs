@@ -191,3 +191,26 @@ fn a_hanging_plugin_is_killed_when_the_cook_is_cancelled() {
     // The worker is gone: /proc has no entry for a killed and reaped process.
     assert!(!Path::new(&format!("/proc/{pid}")).exists(), "worker {pid} still runs");
 }
+
+#[test]
+#[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
+fn ramps_and_curves_reach_python_as_their_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("ramps.py"),
+        "from pyrograph_plugin import node, ColorRamp, Curve, Float\n\n@node(\"studio.ramps\")\ndef ramps(ramp: ColorRamp = [(0.0, 0, 0, 0, 1), (1.0, 1, 0.8, 0.3, 1)], falloff: Curve = [(0.0, 0.0), (1.0, 1.0)]) -> Float:\n    \"\"\"Sums what it got.\"\"\"\n    return float(ramp.sum() + 10 * falloff.shape[0] + 100 * ramp.shape[1])\n",
+    )
+    .unwrap();
+    let registry = registry_with(dir.path(), 1);
+    let ctx = CookCtx::new();
+    let value = |ron: &str| match Evaluator::new().output(&graph(&registry, ron), "r.value", &ctx).unwrap() {
+        Value::Float(x) => x,
+        other => panic!("{other:?}"),
+    };
+    let defaults = value(r#"(version: 1, nodes: {"r": (type: "studio.ramps")}, edges: [])"#);
+    assert!((defaults - (5.1 + 20.0 + 500.0)).abs() < 1e-9, "{defaults}");
+    let set = value(
+        r#"(version: 1, nodes: {"r": (type: "studio.ramps", params: {"falloff": [(0.0, 1.0), (0.5, 2.0), (1.0, 3.0)]})}, edges: [])"#,
+    );
+    assert!((set - (5.1 + 30.0 + 500.0)).abs() < 1e-9, "a curve set in the graph file: {set}");
+}

@@ -37,6 +37,7 @@ from pyrograph_host_io import (
 PROTOCOL = 1
 FRAMES_KEPT = 5
 VECTOR_SIZES = {"color": 4, "vec2": 2, "vec3": 3}
+RAMP_WIDTHS = {"color_ramp": 4, "curve": 1}  # values per key, after the position
 CONNECTIONS = ("image", "mask")  # the input kinds whose values come through the arena
 
 
@@ -180,6 +181,13 @@ def argument(port, value):
     elif kind in ("string", "enum", "path"):
         if isinstance(value, str):
             return value
+    elif kind in RAMP_WIDTHS:
+        size = 1 + RAMP_WIDTHS[kind]
+        rows = value if isinstance(value, list) else []
+        if rows and all(isinstance(r, list) and len(r) == size and all(is_number(x) for x in r) for r in rows):
+            keys = pyrograph_host_io.np.array(rows, dtype=pyrograph_host_io.np.float64)
+            keys.flags.writeable = False
+            return keys
     raise Malformed(f"parameter {port['name']!r} ({kind}) cannot be {value!r:.200}")
 
 

@@ -40,7 +40,8 @@ from typing import Callable, Dict, List, Optional
 
 __all__ = [
     "node", "current_frame", "PluginDeclarationError", "NodeDeclaration", "ClipView", "FrameError",
-    "Float", "Int", "Bool", "String", "Enum", "Color", "Vec2", "Vec3", "Path", "Image", "Mask", "Clip", "Points",
+    "Float", "Int", "Bool", "String", "Enum", "Color", "Vec2", "Vec3", "ColorRamp", "Curve", "Path", "Image", "Mask",
+    "Clip", "Points",
     "Outputs",
 ]
 
@@ -327,6 +328,43 @@ class Vec3(_Vector):
     size = 3
 
 
+class _Ramp(_Kind):
+    """ColorRamp and Curve: keys over a position from 0 to 1, written as rows (position, values…)
+    in position order; the function gets them as a read-only (K, 1 + width) float64 array."""
+
+    width = 0
+
+    def _default(self, value):
+        size = 1 + self.width
+        rows = list(value) if isinstance(value, (tuple, list)) else None
+        ok = bool(rows) and all(
+            isinstance(r, (tuple, list)) and len(r) == size and all(map(_is_number, r)) for r in rows
+        )
+        if not ok:
+            raise _Problem(
+                f"the default of a {type(self).__name__} must be keys of {size} finite numbers "
+                f"(position, then {self.width} value{'s' if self.width > 1 else ''}), got {value!r}"
+            )
+        positions = [r[0] for r in rows]
+        if positions != sorted(positions):
+            raise _Problem(f"the keys of a {type(self).__name__} go in position order, got positions {positions}")
+        return [[float(x) for x in r] for r in rows]
+
+
+class ColorRamp(_Ramp):
+    """A colour ramp: RGBA keys over a position, e.g. [(0.0, 0, 0, 0, 1), (1.0, 1, 0.8, 0.3, 1)]."""
+
+    kind = "color_ramp"
+    width = 4
+
+
+class Curve(_Ramp):
+    """A scalar curve: keys (position, value) over a position, e.g. [(0.0, 0.0), (1.0, 1.0)]."""
+
+    kind = "curve"
+    width = 1
+
+
 class _Connection(_Kind):
     """A port whose value cannot be written in the declaration, so it has no default."""
 
@@ -582,7 +620,7 @@ def _kind(annotation, namespace):
     if not isinstance(annotation, (_Kind, Outputs)):
         raise _Problem(
             f"the annotation {annotation!r} is not a port kind "
-            "(Float, Int, Bool, String, Enum, Color, Vec2, Vec3, Path, Image, Mask, Clip, Points)"
+            "(Float, Int, Bool, String, Enum, Color, Vec2, Vec3, ColorRamp, Curve, Path, Image, Mask, Clip, Points)"
         )
     return annotation
 

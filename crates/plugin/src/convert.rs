@@ -39,6 +39,14 @@ pub fn param_json(v: &Value) -> Result<Json, String> {
         Value::Color(c) => json!(c),
         Value::Vec2(v) => json!(v),
         Value::Vec3(v) => json!(v),
+        Value::Ramp(keys) => {
+            let rows: Vec<Vec<f64>> = keys
+                .keys()
+                .iter()
+                .map(|(pos, v)| std::iter::once(*pos).chain(v[..keys.width()].iter().copied()).collect())
+                .collect();
+            json!(rows)
+        }
         Value::Path(p) => json!(p.to_str().ok_or_else(|| format!("path {} is not valid UTF-8", p.display()))?),
         other => return Err(format!("a plugin cannot take a {} here", other.type_name())),
     })
@@ -145,6 +153,13 @@ mod tests {
         let e = read_points(&arena, &spec(vec![1 << 40, 4], "<f8")).unwrap_err();
         assert!(e.contains("a point list holds 1 to 16777216"), "{e}");
         assert!(read_points(&arena, &spec(vec![2, 2], "<f8")).unwrap_err().contains("expected float64 (N, 3) or (N, 4)"));
+    }
+
+    #[test]
+    fn a_ramp_goes_to_python_as_rows_of_position_and_values() {
+        let ramp =
+            pyrograph_core::value::RampKeys::new(2, vec![(0.0, [1.0, 2.0, 9.0, 9.0]), (0.5, [3.0, 4.0, 9.0, 9.0])]).unwrap();
+        assert_eq!(param_json(&Value::Ramp(Arc::new(ramp))).unwrap(), json!([[0.0, 1.0, 2.0], [0.5, 3.0, 4.0]]));
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! A Python node's declaration (what `@node` in `pyrograph_plugin.py` reports) and its checked
 //! translation into a [`NodeDesc`], so a plugin node lists, wires and validates like a built-in.
 
-use pyrograph_core::value::PortType;
+use pyrograph_core::value::{PortType, RampKeys};
 use pyrograph_core::{NodeDesc, PathRole, PortDesc, TimeDep, Value};
 use serde::Deserialize;
 use serde_json::Value as Json;
@@ -33,7 +33,7 @@ pub struct PortDecl {
     /// The parameter's name.
     pub name: String,
     /// `float`, `int`, `bool`, `string`, `enum`, `color`, `vec2`, `vec3`, `path`, `image`, `mask`,
-    /// `clip` (of images) or `points`.
+    /// `color_ramp`, `curve`, `clip` (of images) or `points`.
     pub kind: String,
     /// The port's doc.
     #[serde(default)]
@@ -118,6 +118,8 @@ impl PortDecl {
             "path" => PortType::Path,
             "image" => PortType::Image,
             "mask" => PortType::Mask,
+            "color_ramp" => PortType::Ramp(4),
+            "curve" => PortType::Ramp(1),
             "clip" => PortType::clip_of(PortType::Image),
             "points" => PortType::Points,
             other => return Err(format!("kind '{other}' is not one pyrograph knows")),
@@ -189,6 +191,16 @@ fn default_value(ty: &PortType, json: &Json) -> Option<Value> {
         }
         PortType::Vec2 => Value::Vec2(floats(2)?.try_into().ok()?),
         PortType::Vec3 => Value::Vec3(floats(3)?.try_into().ok()?),
+        PortType::Ramp(width) => {
+            let keys = json.as_array()?.iter().map(|row| {
+                let row: Vec<f64> =
+                    row.as_array().filter(|r| r.len() == 1 + width)?.iter().map(Json::as_f64).collect::<Option<_>>()?;
+                let mut values = [0.0; 4];
+                values[..*width].copy_from_slice(&row[1..]);
+                Some((row[0], values))
+            });
+            Value::Ramp(std::sync::Arc::new(RampKeys::new(*width, keys.collect::<Option<_>>()?).ok()?))
+        }
         _ => return None,
     })
 }
@@ -268,6 +280,22 @@ mod tests {
         let mut d = heat_haze();
         d.outputs[0].kind = "points".into();
         assert_eq!(d.to_desc().unwrap().outputs[0].ty, PortType::Points);
+    }
+
+    #[test]
+    fn ramps_and_curves_take_their_keys_as_defaults() {
+        let mut d = heat_haze();
+        d.inputs[3].kind = "color_ramp".into();
+        d.inputs[3].default = Some(serde_json::json!([[0.0, 0, 0, 0, 1], [1.0, 1, 0.8, 0.3, 1]]));
+        let desc = d.to_desc().unwrap();
+        let Some(Value::Ramp(keys)) = &desc.inputs[3].default else { panic!("{:?}", desc.inputs[3].default) };
+        assert_eq!((keys.width(), keys.keys()), (4, &[(0.0, [0.0, 0.0, 0.0, 1.0]), (1.0, [1.0, 0.8, 0.3, 1.0])][..]));
+        d.inputs[3].kind = "curve".into();
+        assert!(d.to_desc().unwrap_err().contains("is not a curve"), "a colour ramp's keys are not a curve's");
+        d.inputs[3].default = Some(serde_json::json!([[1.0, 0.0], [0.0, 1.0]]));
+        assert!(d.to_desc().is_err(), "keys out of position order");
+        d.inputs[3].default = Some(serde_json::json!([[0.0, 0.5]]));
+        assert_eq!(d.to_desc().unwrap().inputs[3].ty, PortType::Ramp(1));
     }
 
     #[test]

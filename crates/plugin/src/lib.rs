@@ -37,19 +37,19 @@ pub struct PluginOptions {
     pub dirs: Vec<PluginDir>,
     /// The Python interpreter (`PYROGRAPH_PYTHON`, else `python3`).
     pub python: OsString,
-    /// The most workers at once (the cook's threads).
+    /// The most workers at once: the cook's threads (rayon's pool, `RAYON_NUM_THREADS`).
     pub workers: usize,
     /// Where the host script is written.
     pub host_dir: PathBuf,
 }
 
 impl PluginOptions {
-    /// Options for these folders, with the interpreter from `PYROGRAPH_PYTHON` and a worker per core.
+    /// Options for these folders, with the interpreter from `PYROGRAPH_PYTHON` and a worker per cook thread.
     pub fn new(dirs: Vec<PluginDir>) -> PluginOptions {
         PluginOptions {
             dirs,
             python: std::env::var_os("PYROGRAPH_PYTHON").filter(|p| !p.is_empty()).unwrap_or_else(|| "python3".into()),
-            workers: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            workers: rayon::current_num_threads(),
             host_dir: host::default_dir(),
         }
     }

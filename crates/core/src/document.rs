@@ -17,6 +17,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{Diagnostic, DiagnosticKind, Diagnostics, Location};
 
+pub(crate) mod node_count;
 mod param_serde;
 
 /// The newest version this build reads and writes (2: canvas groups and comments; 3: preset
@@ -381,6 +382,7 @@ impl GraphDoc {
 
     /// Parses a document from RON text, migrating older versions.
     pub fn from_ron(text: &str) -> Result<GraphDoc, Diagnostics> {
+        node_count::check_text(text.as_bytes())?;
         GraphDoc::parse_versioned(text).and_then(local_versions)
     }
 
@@ -418,6 +420,8 @@ impl GraphDoc {
 
     /// Reads and parses a graph file.
     pub fn load(path: &Path) -> Result<GraphDoc, Diagnostics> {
+        // A file of too many nodes is refused before it is read whole.
+        node_count::check_file(path)?;
         let text = std::fs::read_to_string(path).map_err(|e| {
             Diagnostics::one(Diagnostic::new(DiagnosticKind::Io, Location::File, format!("cannot read graph: {e}"))).in_file(path)
         })?;

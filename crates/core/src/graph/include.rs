@@ -57,6 +57,7 @@ fn load(id: &str, nd: &NodeDoc, ctx: &LoadCtx) -> Result<Rc<(Graph, NodeDesc)>, 
 
 /// Reads, parses and builds included file `canon`.
 fn load_file(id: &str, canon: &Path, ctx: &LoadCtx) -> Result<(Graph, NodeDesc), Vec<Diagnostic>> {
+    crate::document::node_count::check_file(canon).map_err(|d| nested(id, canon, d.0))?;
     let text =
         std::fs::read_to_string(canon).map_err(|e| vec![include_diag(id, format!("cannot read {}: {e}", canon.display()))])?;
     if !looks_like_a_graph(&text) {

@@ -33,7 +33,9 @@ impl PluginArgs {
         }
         let flags = PluginFlags { dirs: self.dirs.clone(), off: false, python: None };
         let mut args = Vec::new();
-        for dir in flags.dirs_for(None) {
+        // A folder of PYROGRAPH_PLUGIN_PATH that is not there is skipped here as in a local render
+        // (as a `--plugins` folder it would fail every task).
+        for dir in flags.dirs_for(None).into_iter().filter(|d| d.origin == "--plugins" || d.path.is_dir()) {
             let abs = std::path::absolute(&dir.path).map_err(|e| Failure(format!("error: {}: {e}", dir.path.display())))?;
             args.extend(["--plugins".to_string(), abs.to_string_lossy().into_owned()]);
         }

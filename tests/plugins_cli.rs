@@ -52,11 +52,16 @@ fn a_graph_of_builtin_nodes_never_starts_python() {
 
 #[test]
 fn no_plugins_refuses_a_graph_that_needs_one() {
-    let o = bin().args(["check", "--no-plugins"]).arg(example()).output().unwrap();
-    let all = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{all}");
-    for needle in ["node 'haze'", "unknown node type 'studio.heat_haze'", "plugin nodes are off (--no-plugins)"] {
-        assert!(all.contains(needle), "{needle:?} in:\n{all}");
+    let by_flag = bin().args(["check", "--no-plugins"]).arg(example()).output().unwrap();
+    let by_env = bin().arg("check").arg(example()).env("PYROGRAPH_NO_PLUGINS", "1").output().unwrap();
+    for o in [by_flag, by_env] {
+        let all = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{all}");
+        for needle in
+            ["node 'haze'", "unknown node type 'studio.heat_haze'", "plugin nodes are off (--no-plugins or PYROGRAPH_NO_PLUGINS)"]
+        {
+            assert!(all.contains(needle), "{needle:?} in:\n{all}");
+        }
     }
 }
 

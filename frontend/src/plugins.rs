@@ -37,11 +37,17 @@ impl PluginFlags {
     }
 }
 
+/// Whether `PYROGRAPH_NO_PLUGINS` turns plugins off (set, not empty, not `0`): for services and for
+/// the Python module, which has no command line.
+pub fn off_by_environment() -> bool {
+    std::env::var_os("PYROGRAPH_NO_PLUGINS").is_some_and(|v| !v.is_empty() && v != "0")
+}
+
 /// Adds plugin nodes to `registry` from the flags' folders, `PYROGRAPH_PLUGIN_PATH` and the
 /// `plugins/` folder in `graph_dir`. No Python runs until a graph names a type no built-in has.
 pub fn attach(registry: &mut Registry, graph_dir: Option<&Path>, flags: &PluginFlags) -> Result<(), String> {
-    if flags.off {
-        refuse(registry, "plugin nodes are off (--no-plugins)");
+    if flags.off || off_by_environment() {
+        refuse(registry, "plugin nodes are off (--no-plugins or PYROGRAPH_NO_PLUGINS)");
         return Ok(());
     }
     let options = flags.options_for(graph_dir);
@@ -83,8 +89,8 @@ impl PluginRegistries {
             refuse(&mut r, why);
             Arc::new(r)
         };
-        if self.flags.off {
-            return refused("plugin nodes are off");
+        if self.flags.off || off_by_environment() {
+            return refused("plugin nodes are off (--no-plugins or PYROGRAPH_NO_PLUGINS)");
         }
         let options = self.flags.options_for(graph_dir);
         let files = match scan(&options.dirs) {
@@ -93,7 +99,7 @@ impl PluginRegistries {
         };
         let key: Vec<(PathBuf, String)> = files.iter().map(|f: &PluginFile| (f.path.clone(), f.sha256.clone())).collect();
         let Ok(mut kept) = self.kept.lock() else { return refused("the plugin registries failed earlier") };
-        if let Some(k) = kept.iter().find(|k| k.dirs == options.dirs && k.files == key) {
+        if let Some(k) = kept.iter().find(|k| k.dirs == options.dirs && k.files == key && !k.registry.extension_is_stale()) {
             return k.registry.clone();
         }
         let mut registry = self.base.clone();

@@ -20,6 +20,7 @@ fn registry_with(dir: &Path, workers: usize) -> Registry {
 
 const OFFSET: &str = r#"
 import os
+import time
 import numpy as np
 from pyrograph_plugin import node, Image, Mask, Float, Int, Outputs
 
@@ -27,6 +28,7 @@ from pyrograph_plugin import node, Image, Mask, Float, Int, Outputs
 def offset(image: Image(doc="In"), amount: Float(range=(-10.0, 10.0)) = 0.25) -> Outputs(image=Image(), mask=Mask(), pid=Int()):
     """Adds amount to every sample; the mask is where the first channel is over one half."""
     first = image if image.ndim == 2 else image[..., 0]
+    time.sleep(0.05)  # long enough that two frames cooking at once need two workers
     return image + np.float32(amount), first > 0.5, os.getpid()
 "#;
 
@@ -70,7 +72,7 @@ fn pixels_cross_to_python_and_back_exactly_on_several_workers() {
     let mut workers: Vec<i64> = pids.iter().map(|p| if let Value::Int(i) = p { *i } else { panic!() }).collect();
     workers.sort();
     workers.dedup();
-    assert!(workers.len() <= 2, "at most the cap of workers: {workers:?}");
+    assert_eq!(workers.len(), 2, "two frames at a time on two workers, never more: {workers:?}");
     assert_ne!(workers, [i64::from(std::process::id())], "cooked in a worker process");
 }
 
@@ -213,4 +215,24 @@ fn ramps_and_curves_reach_python_as_their_keys() {
         r#"(version: 1, nodes: {"r": (type: "studio.ramps", params: {"falloff": [(0.0, 1.0), (0.5, 2.0), (1.0, 3.0)]})}, edges: [])"#,
     );
     assert!((set - (5.1 + 30.0 + 500.0)).abs() < 1e-9, "a curve set in the graph file: {set}");
+}
+
+#[test]
+#[ignore = "needs python3 with numpy: .ci/run installs it and runs the ignored tests"]
+fn a_plugin_file_that_hangs_while_loading_is_given_up_on_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a_hangs.py"), "while True:\n    pass\n").unwrap();
+    std::fs::write(dir.path().join("offset.py"), OFFSET).unwrap();
+    let mut registry = pyrograph_frontend::registry();
+    let mut options = PluginOptions::new(vec![PluginDir { path: dir.path().to_path_buf(), origin: "--plugins" }]);
+    options.python = pyrograph_testing::python_with_numpy();
+    options.describe_timeout = std::time::Duration::from_secs(2);
+    extend(&mut registry, &options).unwrap();
+    let started = std::time::Instant::now();
+    let found = registry.extension().unwrap();
+    let problems = found.problems.join("\n");
+    assert!(problems.contains("a_hangs.py could not be loaded: the Python worker did not answer within 2.0 s"), "{problems}");
+    assert!(found.nodes.contains_key("studio.offset"), "the next file is read by a fresh worker");
+    assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+    assert!(registry.extension_is_stale(), "asking again may help: a front end makes a new registry");
 }

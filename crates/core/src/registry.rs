@@ -23,6 +23,12 @@ pub trait Extension: Send + Sync {
     /// The types found (found on the first call, then kept), and why some could not be read: one
     /// line per broken file or clash, each naming its file.
     fn found(&self) -> &Found;
+
+    /// Whether asking again could find more though no plugin file changed (the interpreter was
+    /// missing, a worker hung): front ends that keep registries make a new one then.
+    fn is_stale(&self) -> bool {
+        false
+    }
 }
 
 /// What an [`Extension`] found.
@@ -85,6 +91,11 @@ impl Registry {
     /// without an extension.
     pub fn extension(&self) -> Option<&Found> {
         self.extension.as_deref().map(|e| e.found())
+    }
+
+    /// Whether the run-time types should be found again ([`Extension::is_stale`]); never finds them.
+    pub fn extension_is_stale(&self) -> bool {
+        self.extension.as_ref().is_some_and(|e| e.is_stale())
     }
 
     /// The node type named `type_name`.

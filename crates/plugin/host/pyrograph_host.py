@@ -323,6 +323,11 @@ class Worker:
         except OSError as failure:  # the arena cannot grow: memory or the file system is full
             text = f"could not write the outputs into the shared file: {failure}"
             return error_reply(cook_id, "exception", exception=type(failure).__name__, message=text)
+        except Stop:
+            raise
+        except Exception as failure:  # a value the checks choke on (10**400 as a float, a MemoryError)
+            text = f"the returned value could not be read: {type(failure).__name__}: {failure}"
+            return error_reply(cook_id, "port", message=text)
         ms = (time.perf_counter() - started) * 1000
         return {"op": "result", "id": cook_id, "outputs": outputs, "ms": round(ms, 3)}
 

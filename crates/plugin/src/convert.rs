@@ -31,6 +31,18 @@ pub fn put_mask(arena: &Arena, offset: u64, mask: &Mask) -> std::io::Result<Arra
 
 /// A parameter as the plugin function receives it (colours and vectors as lists).
 pub fn param_json(v: &Value) -> Result<Json, String> {
+    // JSON has no NaN or infinity: say so here rather than let the worker get a null.
+    let finite = |xs: &[f64]| match xs.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(format!("{x} cannot be passed to a Python plugin: only finite numbers can")),
+        None => Ok(()),
+    };
+    match v {
+        Value::Float(x) => finite(&[*x])?,
+        Value::Color(c) => finite(&c.map(f64::from))?,
+        Value::Vec2(v) => finite(v)?,
+        Value::Vec3(v) => finite(v)?,
+        _ => {}
+    }
     Ok(match v {
         Value::Float(x) => json!(x),
         Value::Int(i) => json!(i),
@@ -70,7 +82,7 @@ pub fn read_output(arena: &Arena, ty: &PortType, out: &OutputSpec) -> Result<Val
 fn image_size(shape: &[u64]) -> Result<(u32, u32), String> {
     let (h, w) = (shape[0], shape[1]);
     let limit = pyrograph_core::limits::max_pixels();
-    if h == 0 || w == 0 || h.saturating_mul(w) > limit {
+    if h == 0 || w == 0 || h.saturating_mul(w) > limit || h > u64::from(u32::MAX) || w > u64::from(u32::MAX) {
         let hint = pyrograph_core::limits::raise_hint("--max-pixels", "PYROGRAPH_MAX_PIXELS", limit);
         return Err(format!("a {w} × {h} image is empty or over the pixel limit ({hint})"));
     }
@@ -153,6 +165,15 @@ mod tests {
         let e = read_points(&arena, &spec(vec![1 << 40, 4], "<f8")).unwrap_err();
         assert!(e.contains("a point list holds 1 to 16777216"), "{e}");
         assert!(read_points(&arena, &spec(vec![2, 2], "<f8")).unwrap_err().contains("expected float64 (N, 3) or (N, 4)"));
+    }
+
+    #[test]
+    fn non_finite_parameters_are_refused_before_python() {
+        for v in [Value::Float(f64::NAN), Value::Vec3([0.0, f64::INFINITY, 0.0]), Value::Color([0.0, f32::NAN, 0.0, 1.0])] {
+            let e = param_json(&v).unwrap_err();
+            assert!(e.contains("cannot be passed to a Python plugin"), "{e}");
+        }
+        assert_eq!(param_json(&Value::Float(1.5)).unwrap(), json!(1.5));
     }
 
     #[test]

@@ -19,7 +19,9 @@ use std::collections::BTreeMap;
 use std::ffi::OsString;
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
+use std::time::Duration;
 
 use pyrograph_core::registry::{Extension, Found};
 use pyrograph_core::{Node, Registry};
@@ -29,6 +31,10 @@ use crate::node::PyNode;
 use crate::pool::Pool;
 use crate::protocol::Reply;
 use crate::worker::{Launch, WorkerError};
+
+/// How long a worker may take to load one plugin file and say what it declares (a plugin whose
+/// top level hangs is given up on, and named).
+pub const DESCRIBE_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// How plugins are found and run.
 #[derive(Clone, Debug)]
@@ -41,6 +47,8 @@ pub struct PluginOptions {
     pub workers: usize,
     /// Where the host script is written.
     pub host_dir: PathBuf,
+    /// How long a worker may take to load one plugin file ([`DESCRIBE_TIMEOUT`]).
+    pub describe_timeout: Duration,
 }
 
 impl PluginOptions {
@@ -51,6 +59,7 @@ impl PluginOptions {
             python: std::env::var_os("PYROGRAPH_PYTHON").filter(|p| !p.is_empty()).unwrap_or_else(|| "python3".into()),
             workers: rayon::current_num_threads(),
             host_dir: host::default_dir(),
+            describe_timeout: DESCRIBE_TIMEOUT,
         }
     }
 }
@@ -67,7 +76,13 @@ pub fn extend(registry: &mut Registry, options: &PluginOptions) -> Result<(), St
 /// see whether a plugin changed).
 pub fn extend_scanned(registry: &mut Registry, files: Vec<PluginFile>, options: &PluginOptions) {
     let builtin: Vec<String> = registry.descs().map(|d| d.type_name.clone()).collect();
-    registry.extend_with(Arc::new(Plugins { files, builtin, options: options.clone(), found: OnceLock::new() }));
+    registry.extend_with(Arc::new(Plugins {
+        files,
+        builtin,
+        options: options.clone(),
+        found: OnceLock::new(),
+        stale: AtomicBool::new(false),
+    }));
 }
 
 /// Turns plugins off: a graph that names a type no built-in has is refused, saying plugins are
@@ -90,11 +105,18 @@ struct Plugins {
     builtin: Vec<String>,
     options: PluginOptions,
     found: OnceLock<Found>,
+    /// Some file could not be asked (Python missing, a worker hung or died): asking again, after
+    /// the user mended it, may succeed though no plugin file changed.
+    stale: AtomicBool,
 }
 
 impl Extension for Plugins {
     fn found(&self) -> &Found {
         self.found.get_or_init(|| self.describe())
+    }
+
+    fn is_stale(&self) -> bool {
+        self.stale.load(Ordering::Relaxed)
     }
 }
 
@@ -111,16 +133,25 @@ impl Plugins {
             Launch { python: self.options.python.clone(), host_dir: self.options.host_dir.clone() },
             self.options.workers,
         ));
-        let described = match self.ask(&pool) {
-            Ok(d) => d,
-            Err(why) => {
-                found.problems.push(format!("the Python plugins could not be read: {why}"));
-                return found;
-            }
-        };
+        if let Err(e) = host::install(&self.options.host_dir) {
+            self.stale.store(true, Ordering::Relaxed);
+            let dir = self.options.host_dir.display();
+            found.problems.push(format!("the Python plugins could not be read: could not write the host files to {dir}: {e}"));
+            return found;
+        }
         let mut places: BTreeMap<String, Vec<String>> = BTreeMap::new();
-        for (file, reply) in self.files.iter().zip(described) {
+        for file in &self.files {
             let file = Arc::new(file.clone());
+            // One file a request: a file that hangs or kills its worker is named, and the others
+            // are read by the next worker.
+            let reply = match self.ask(&pool, &file) {
+                Ok(reply) => reply,
+                Err(why) => {
+                    self.stale.store(true, Ordering::Relaxed);
+                    found.problems.push(format!("plugin {} could not be loaded: {why}", file.path.display()));
+                    continue;
+                }
+            };
             if let Some(e) = reply.error {
                 found.problems.push(format!("plugin {} could not be loaded: {}", file.path.display(), e.render()));
                 continue;
@@ -157,18 +188,19 @@ impl Plugins {
         found
     }
 
-    fn ask(&self, pool: &Pool) -> Result<Vec<protocol::DescribedFile>, String> {
-        host::install(&self.options.host_dir)
-            .map_err(|e| format!("could not write the Python host files to {}: {e}", self.options.host_dir.display()))?;
-        let files: Vec<_> = self.files.iter().map(|f| serde_json::json!({"path": f.path, "sha256": f.sha256})).collect();
-        let request = serde_json::json!({"op": "describe", "files": files});
-        let reply = pool.with_worker(None, false, |w| w.request(&request, None)).map_err(|e| match e {
-            WorkerError::Cancelled => "cancelled".to_string(),
-            WorkerError::Broken(why) => why,
-        })?;
+    /// What one file declares, asked of a worker that gets `describe_timeout` to load it.
+    fn ask(&self, pool: &Pool, file: &PluginFile) -> Result<protocol::DescribedFile, String> {
+        let request = serde_json::json!({"op": "describe", "files": [{"path": file.path, "sha256": file.sha256}]});
+        let reply =
+            pool.with_worker(None, false, |w| w.request_within(&request, None, self.options.describe_timeout)).map_err(|e| {
+                match e {
+                    WorkerError::Cancelled => "cancelled".to_string(),
+                    WorkerError::Broken(why) => why,
+                }
+            })?;
         match reply {
-            Reply::Described { files } if files.len() == self.files.len() => Ok(files),
-            other => Err(format!("the Python worker answered a describe with {other:?}")),
+            Reply::Described { mut files } if files.len() == 1 => Ok(files.remove(0)),
+            other => Err(format!("the Python worker answered with '{}' instead of what the file declares", other.op())),
         }
     }
 }

@@ -17,6 +17,9 @@ use crate::pool::Pool;
 use crate::protocol::{ArraySpec, OutputSpec, Reply};
 use crate::worker::{Worker, WorkerError};
 
+/// The most frames a whole-clip plugin may make for one clip output: a timeline's longest clip.
+pub const MAX_CLIP_FRAMES: usize = 100_000;
+
 /// A plugin node type.
 pub struct PyNode {
     /// Its description, from the declaration.
@@ -51,6 +54,8 @@ impl Node for PyNode {
 /// outputs go in the arena, the frames emitted so far, and the first upstream failure.
 struct Session {
     clips: BTreeMap<String, Clip>,
+    /// The rate of the first clip input, in declared order: the rate of the clips it makes.
+    fps: Option<f64>,
     out_offset: u64,
     emitted: BTreeMap<String, Vec<Value>>,
     upstream: Option<NodeError>,
@@ -69,6 +74,11 @@ impl PyNode {
         let (request, mut session) = self.request(&worker.arena, values)?;
         worker.send(&request).map_err(|e| self.worker_error(e))?;
         loop {
+            // A worker that keeps talking (a generator yielding fast) must not outrun a cancel.
+            if ctx.cancel_token().is_cancelled() {
+                worker.discard();
+                return Err(NodeError::Cancelled);
+            }
             let reply = worker.receive(Some(ctx)).map_err(|e| self.worker_error(e))?;
             let answer = match reply {
                 Reply::NeedFrame { id, clip, index } => session.frame(&worker.arena, id, &clip, index, ctx),
@@ -91,7 +101,7 @@ impl PyNode {
                 }
                 other => {
                     worker.discard();
-                    return Err(NodeError::Message(format!("the Python worker answered a cook with {other:?}")));
+                    return Err(NodeError::Message(format!("the Python worker answered a cook with '{}'", other.op())));
                 }
             };
             worker.send(&answer).map_err(|e| self.worker_error(e))?;
@@ -102,6 +112,7 @@ impl PyNode {
     fn request(&self, arena: &Arena, values: &[Value]) -> Result<(Json, Session), NodeError> {
         let (mut params, mut arrays, mut clip_info) = (Map::new(), Map::new(), Map::new());
         let mut clips = BTreeMap::new();
+        let mut fps = None;
         let mut offset = 0u64;
         for ((port, value), channels) in self.desc.inputs.iter().zip(values).zip(&self.channels) {
             let at_port = |e: String| NodeError::port(&port.name, e);
@@ -115,6 +126,7 @@ impl PyNode {
                 Value::Clip(clip) => {
                     clip_info.insert(port.name.clone(), json!({"len": clip.len(), "fps": clip.fps()}));
                     clips.insert(port.name.clone(), clip.clone());
+                    fps = fps.or(Some(clip.fps()));
                     continue;
                 }
                 other => {
@@ -130,13 +142,13 @@ impl PyNode {
             "op": "cook", "id": 1, "type": self.desc.type_name, "file": self.file.path, "sha256": self.file.sha256,
             "frame": Json::Null, "params": params, "arrays": arrays, "clips": clip_info, "out_offset": offset,
         });
-        Ok((request, Session { clips, out_offset: offset, emitted: BTreeMap::new(), upstream: None }))
+        Ok((request, Session { clips, fps, out_offset: offset, emitted: BTreeMap::new(), upstream: None }))
     }
 
     /// The outputs in declared order, each checked against its declared type; a clip output is
     /// the frames emitted for it, at the first clip input's rate.
     fn read_outputs(&self, arena: &Arena, outputs: &[OutputSpec], mut session: Session) -> Result<Vec<Value>, NodeError> {
-        let fps = session.clips.values().next().map_or(24.0, Clip::fps);
+        let fps = session.fps.unwrap_or(24.0);
         self.desc
             .outputs
             .iter()
@@ -151,7 +163,8 @@ impl PyNode {
                 }
                 let frames = session.emitted.remove(&port.name).unwrap_or_default();
                 if frames.is_empty() || out.frames != Some(frames.len() as u64) {
-                    return Err(fail(format!("{} frames arrived, the plugin said {:?}", frames.len(), out.frames)));
+                    let said = out.frames.map_or("no count".to_string(), |n| n.to_string());
+                    return Err(fail(format!("{} frames arrived, and the plugin said {said}", frames.len())));
                 }
                 Ok(Value::Clip(Clip::from_frames(PortType::Image, fps, frames)))
             })
@@ -191,6 +204,9 @@ impl Session {
     /// Copies out a frame the worker emitted for clip output `port`.
     fn emit(&mut self, arena: &Arena, port: &str, array: &ArraySpec) -> Result<(), String> {
         let frames = self.emitted.entry(port.to_string()).or_default();
+        if frames.len() >= MAX_CLIP_FRAMES {
+            return Err(format!("the plugin made more than {MAX_CLIP_FRAMES} frames (a generator that never ends?)"));
+        }
         let frame = read_image(arena, array).map_err(|e| format!("frame {}: {e}", frames.len()))?;
         frames.push(Value::Image(Arc::new(frame)));
         Ok(())

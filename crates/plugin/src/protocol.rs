@@ -106,6 +106,21 @@ pub enum Reply {
     },
 }
 
+impl Reply {
+    /// The message's `op`, for errors that say what arrived instead of what was due.
+    pub fn op(&self) -> &'static str {
+        match self {
+            Reply::Ready { .. } => "ready",
+            Reply::Described { .. } => "described",
+            Reply::Result { .. } => "result",
+            Reply::NeedFrame { .. } => "need_frame",
+            Reply::Emit { .. } => "emit",
+            Reply::Error(_) => "error",
+            Reply::Fatal { .. } => "fatal",
+        }
+    }
+}
+
 /// One plugin file's declarations, or why it could not be loaded.
 #[derive(Debug, Deserialize)]
 pub struct DescribedFile {

@@ -79,8 +79,14 @@ impl Worker {
             let _ = child.kill();
             return Err(WorkerError::Broken("the Python worker's pipes could not be opened".into()));
         };
-        let arena =
-            Arena::create().map_err(|e| WorkerError::Broken(format!("could not make the shared file for pixels: {e}")))?;
+        let arena = match Arena::create() {
+            Ok(arena) => arena,
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(WorkerError::Broken(format!("could not make the shared file for pixels: {e}")));
+            }
+        };
         let mut worker = Worker {
             child,
             stdin: BufWriter::new(stdin),
@@ -115,7 +121,13 @@ impl Worker {
         self.receive(ctx)
     }
 
-    fn request_within(&mut self, msg: &serde_json::Value, ctx: Option<&CookCtx>, limit: Duration) -> Result<Reply, WorkerError> {
+    /// [`Worker::request`] with a time limit: a worker that has not answered by then is killed.
+    pub fn request_within(
+        &mut self,
+        msg: &serde_json::Value,
+        ctx: Option<&CookCtx>,
+        limit: Duration,
+    ) -> Result<Reply, WorkerError> {
         self.send(msg)?;
         self.receive_within(ctx, limit)
     }
@@ -148,7 +160,7 @@ impl Worker {
                 return Err(WorkerError::Cancelled);
             }
             if start.elapsed() > limit {
-                return Err(self.fail(format!("the Python worker did not answer within {} s", limit.as_secs())));
+                return Err(self.fail(format!("the Python worker did not answer within {:.1} s", limit.as_secs_f64())));
             }
         }
     }
@@ -221,7 +233,7 @@ fn exit_text(status: std::process::ExitStatus) -> String {
 fn describe(reply: &Reply) -> String {
     match reply {
         Reply::Error(f) => f.error.render(),
-        other => format!("an unexpected reply ({other:?})"),
+        other => format!("it answered '{}' to hello", other.op()),
     }
 }
 

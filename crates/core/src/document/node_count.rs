@@ -146,43 +146,74 @@ impl NodeCounter {
     }
 }
 
-fn over_limit(limit: u64) -> Diagnostics {
-    let hint = crate::limits::raise_hint("--max-nodes", "PYROGRAPH_MAX_NODES", limit.saturating_add(1));
-    Diagnostics::one(Diagnostic::new(
-        DiagnosticKind::Include,
-        Location::File,
-        format!("the graph has more than {limit} nodes, the most pyrograph builds; if it is meant to be this big, {hint}"),
-    ))
+/// How far past the limit a scan reads before it stops counting (`READ_PAST` times the limit, and
+/// at least `COUNT_ALWAYS` entries): far enough that an ordinary oversized file gets its exact count
+/// (and the flag value that would build it), near enough that a file of billions of nodes is refused
+/// within a second or two.
+const READ_PAST: u64 = 4;
+const COUNT_ALWAYS: u64 = 4_000_000;
+
+fn over_limit(count: u64, complete: bool, limit: u64) -> Diagnostics {
+    let message = if complete {
+        let hint = crate::limits::raise_hint("--max-nodes", "PYROGRAPH_MAX_NODES", count);
+        format!("the graph has {count} nodes, more than the {limit} pyrograph builds; if it is meant to be this big, {hint}")
+    } else {
+        format!(
+            "the graph has more than {count} nodes (counting stopped there), more than the {limit} pyrograph builds; if it \
+             is meant to be this big, raise the limit with --max-nodes or the environment variable PYROGRAPH_MAX_NODES"
+        )
+    };
+    Diagnostics::one(Diagnostic::new(DiagnosticKind::Include, Location::File, message))
+}
+
+/// A count checked against the node limit as pieces arrive.
+struct Scan {
+    counter: NodeCounter,
+    limit: u64,
+}
+
+impl Scan {
+    fn new() -> Scan {
+        Scan { counter: NodeCounter::default(), limit: crate::limits::max_nodes() }
+    }
+
+    /// Counts a piece; the refusal once the count is far past the limit.
+    fn feed(&mut self, piece: &[u8]) -> Result<(), Diagnostics> {
+        self.counter.feed(piece);
+        match self.counter.count() {
+            n if n > self.limit.saturating_mul(READ_PAST).max(COUNT_ALWAYS) => Err(over_limit(n, false, self.limit)),
+            _ => Ok(()),
+        }
+    }
+
+    /// The refusal when the whole count is over the limit.
+    fn finish(self) -> Result<(), Diagnostics> {
+        match self.counter.count() {
+            n if n > self.limit => Err(over_limit(n, true, self.limit)),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// Refuses RON text with more node entries than the node limit.
 pub(crate) fn check_text(text: &[u8]) -> Result<(), Diagnostics> {
-    let limit = crate::limits::max_nodes();
-    let mut counter = NodeCounter::default();
-    // In pieces, so a huge text stops at the limit instead of being scanned to its end.
+    let mut scan = Scan::new();
     for piece in text.chunks(1 << 16) {
-        counter.feed(piece);
-        if counter.count() > limit {
-            return Err(over_limit(limit));
-        }
+        scan.feed(piece)?;
     }
-    Ok(())
+    scan.finish()
 }
 
-/// Refuses a file with more node entries than the node limit, reading it in pieces: it stops at the
-/// limit and never holds more than one piece. An unreadable file passes (reading it again reports why).
+/// Refuses a file with more node entries than the node limit, reading it in pieces: it never
+/// holds more than one. An unreadable file passes (reading it again reports why).
 pub(crate) fn check_file(path: &std::path::Path) -> Result<(), Diagnostics> {
-    let limit = crate::limits::max_nodes();
     let Ok(mut file) = std::fs::File::open(path) else { return Ok(()) };
-    let mut counter = NodeCounter::default();
     let mut buf = vec![0u8; 1 << 16];
+    let mut scan = Scan::new();
     while let Ok(n @ 1..) = file.read(&mut buf) {
-        counter.feed(&buf[..n]);
-        if counter.count() > limit {
-            return Err(over_limit(limit).in_file(path));
-        }
+        scan.feed(&buf[..n]).map_err(|d| d.in_file(path))?;
     }
-    Ok(())
+    scan.finish().map_err(|d| d.in_file(path))
 }
 
 #[cfg(test)]
@@ -206,6 +237,17 @@ mod tests {
         assert_eq!(count("(nodes : /* c */ { \"a\" : () , \"b\":() })"), 2, "space and comments between the tokens");
         assert_eq!(count("(mynodes: {\"a\": ()}, nodes2: {\"b\": ()})"), 0, "only the key `nodes`");
         assert_eq!(count(r#"(nodes: {"a\": \"b": ()})"#), 1, "escaped quotes stay inside the id");
+    }
+
+    #[test]
+    fn the_refusal_gives_the_count_when_it_read_to_the_end() {
+        let whole = over_limit(2_000_000, true, 1_000_000).to_string();
+        assert!(
+            whole.contains("the graph has 2000000 nodes, more than the 1000000") && whole.contains("--max-nodes 2000000"),
+            "{whole}"
+        );
+        let cut = over_limit(4_000_123, false, 1_000).to_string();
+        assert!(cut.contains("more than 4000123 nodes (counting stopped there)") && cut.contains("--max-nodes or"), "{cut}");
     }
 
     #[test]

@@ -23,6 +23,11 @@ fn example() -> PathBuf {
     workspace().join("examples/plugins/heat_haze/heat-haze.ron")
 }
 
+/// `pyrograph render GRAPH --out OUT` with a Python that has numpy.
+fn render_with_python(graph: &Path, out: &Path) -> Output {
+    bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("render").arg(graph).arg("--out").arg(out).output().unwrap()
+}
+
 /// A graph of built-in nodes in a folder whose `plugins/` holds a plugin.
 fn builtin_graph_beside_a_plugin(dir: &Path) -> PathBuf {
     std::fs::create_dir(dir.join("plugins")).unwrap();
@@ -102,14 +107,7 @@ fn each_example_plugin_graph_renders_its_golden_frame() {
     for (graph, count, frame, golden) in examples {
         let out = tempfile::tempdir().unwrap();
         let graph = workspace().join("examples/plugins").join(graph);
-        let o = bin()
-            .env("PYROGRAPH_PYTHON", python_with_numpy())
-            .arg("render")
-            .arg(&graph)
-            .arg("--out")
-            .arg(out.path())
-            .output()
-            .unwrap();
+        let o = render_with_python(&graph, out.path());
         assert!(o.status.success(), "{}", text(&o));
         let made = out.path().join(frame);
         let written = std::fs::read_dir(made.parent().unwrap()).unwrap().count();
@@ -147,7 +145,7 @@ fn a_raising_plugin_fails_its_node_with_the_traceback_and_other_branches_cook() 
     )
     .unwrap();
     let out = dir.path().join("out");
-    let o = bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("render").arg(&graph).arg("--out").arg(&out).output().unwrap();
+    let o = render_with_python(&graph, &out);
     let all = text(&o);
     assert_eq!(o.status.code(), Some(1), "{all}");
     let place = format!("{}:6 in raises", dir.path().join("plugins/raises.py").display());
@@ -248,14 +246,7 @@ fn a_preset_names_the_plugin_it_needs_when_it_is_missing() {
 fn a_preset_with_a_plugin_node_renders_where_the_plugin_is() {
     let out = tempfile::tempdir().unwrap();
     let graph = workspace().join("examples/plugins/heat_haze/hazy-flame.ron");
-    let o = bin()
-        .env("PYROGRAPH_PYTHON", python_with_numpy())
-        .arg("render")
-        .arg(&graph)
-        .arg("--out")
-        .arg(out.path())
-        .output()
-        .unwrap();
+    let o = render_with_python(&graph, out.path());
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(std::fs::read_dir(out.path().join("hazy-flame")).unwrap().count(), 12);
 }
@@ -326,8 +317,7 @@ fn a_plugin_that_crashes_its_interpreter_fails_its_node_and_leaves_files_whole()
     )
     .unwrap();
     let out = dir.path().join("out");
-    let render =
-        || bin().env("PYROGRAPH_PYTHON", python_with_numpy()).arg("render").arg(&graph).arg("--out").arg(&out).output().unwrap();
+    let render = || render_with_python(&graph, &out);
     // A first render that works leaves four frames; the same render with a crashing plugin must
     // leave them as they were, with nothing half-written beside them.
     write_plugin("return image");

@@ -7,7 +7,7 @@ import weakref
 import numpy as np
 import pytest
 
-from test_plugin_api import PluginDeclarationError, def_line, load, port, write
+from test_plugin_api import check_declaration_error, def_line, load, port, write
 
 import pyrograph_plugin  # noqa: E402  (test_plugin_api put the host folder on sys.path)
 from pyrograph_plugin import ClipView, FrameError  # noqa: E402
@@ -106,16 +106,7 @@ ERRORS = {
 
 @pytest.mark.parametrize("case", ERRORS.values(), ids=ERRORS.keys())
 def test_clip_and_points_declaration_errors(tmp_path, case):
-    arguments, parameters, returns, parameter, words = case
-    path = tmp_path / "broken.py"
-    path.write_text(f'from pyrograph_plugin import *\n\n@node({arguments})\ndef broken({parameters}) {returns}:\n    "Doc."\n')
-    with pytest.raises(PluginDeclarationError) as error:
-        load(path)
-    message = str(error.value)
-    assert f"{path}:{def_line(path, 'def broken(')}: function 'broken'" in message
-    if parameter is not None:
-        assert f"parameter '{parameter}'" in message
-    assert words in message
+    check_declaration_error(tmp_path, case)
 
 
 def test_a_clip_view_acts_like_a_read_only_list_of_frames():

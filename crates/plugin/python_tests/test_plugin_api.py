@@ -244,8 +244,9 @@ ERRORS = {
 }
 
 
-@pytest.mark.parametrize("case", ERRORS.values(), ids=ERRORS.keys())
-def test_declaration_errors_name_the_function_the_parameter_and_the_def(tmp_path, case):
+def check_declaration_error(tmp_path, case):
+    """Declares `case` in a file and checks the error names the file, the def's line, the function,
+    the parameter (when the case has one) and the cause."""
     arguments, parameters, returns, parameter, words = case
     body = "..." if arguments.endswith("doc=None") else '"""Has a docstring."""'
     path = tmp_path / "broken.py"
@@ -257,6 +258,11 @@ def test_declaration_errors_name_the_function_the_parameter_and_the_def(tmp_path
     if parameter is not None:
         assert f"parameter '{parameter}'" in message
     assert words in message
+
+
+@pytest.mark.parametrize("case", ERRORS.values(), ids=ERRORS.keys())
+def test_declaration_errors_name_the_function_the_parameter_and_the_def(tmp_path, case):
+    check_declaration_error(tmp_path, case)
 
 
 def test_node_without_a_type_name_is_refused(tmp_path):

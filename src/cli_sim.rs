@@ -112,15 +112,36 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         }
         let node_ctx = ctx.for_node(id);
         let mut stats = Stats::default();
-        for i in 0..last {
-            let frame = clip
-                .get(i, &node_ctx)
-                .map_err(|e| Failure(format!("error: {}: {}", a.graph.display(), crate::explain(id, &e))))?;
-            let volume =
-                frame.downcast::<Volume>().ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
-            stats.add(&volume);
-            write_cache_frame(&a.sim_cache, id, i, &volume).map_err(|e| Failure(format!("error: simulation '{id}': {e}")))?;
-        }
+        // Frames are written on a second thread while the next ones are stepped (encoding and
+        // writing a frame of half a million voxels takes about as long as a sub-step), in
+        // order, at most two frames behind, so memory stays bounded and an interrupted run
+        // leaves every frame before the one it stopped at complete.
+        std::thread::scope(|scope| -> Result<(), Failure> {
+            let (to_writer, frames) = std::sync::mpsc::sync_channel::<(usize, std::sync::Arc<Volume>)>(2);
+            let writer = scope.spawn(move || -> Result<(), Failure> {
+                for (i, volume) in frames {
+                    write_cache_frame(&a.sim_cache, id, i, &volume)
+                        .map_err(|e| Failure(format!("error: simulation '{id}': {e}")))?;
+                }
+                Ok(())
+            });
+            let stepped = (0..last).try_for_each(|i| {
+                let frame = clip
+                    .get(i, &node_ctx)
+                    .map_err(|e| Failure(format!("error: {}: {}", a.graph.display(), crate::explain(id, &e))))?;
+                let volume = frame
+                    .downcast::<Volume>()
+                    .ok_or_else(|| Failure(format!("error: simulation '{id}' frame {i}: not a volume")))?;
+                stats.add(&volume);
+                // A closed channel means the writer stopped on an error: stop stepping; the
+                // writer's error is the one reported.
+                to_writer.send((i, volume)).map_err(|_| Failure(format!("error: simulation '{id}': the cache writer stopped")))
+            });
+            drop(to_writer);
+            let written =
+                writer.join().unwrap_or_else(|_| Err(Failure(format!("error: simulation '{id}': the cache writer failed"))));
+            written.and(stepped)
+        })?;
         let dir = a.sim_cache.join(cache_name(id));
         let secs = started.elapsed().as_secs_f64();
         outln!(

@@ -112,6 +112,19 @@ fn a_render_from_the_simulation_cache_equals_one_that_simulates_and_a_missing_fr
 }
 
 #[test]
+fn a_cache_that_cannot_be_written_stops_the_simulation_with_the_file_named() {
+    // The cache is written on its own thread while the next frames step: its failure must end the
+    // run with an error, not be lost.
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    std::fs::create_dir_all(&cache).unwrap();
+    std::fs::write(cache.join("fire_sim"), b"a file where the folder goes").unwrap();
+    let e = failed(simulate(&cache, "0-5", &[]), "a cache folder that is a file");
+    assert!(e.contains("simulation 'fire/sim'") && e.contains("cannot create") && e.contains("fire_sim"), "{e}");
+    assert!(!e.contains("writer stopped"), "the cause, not the symptom: {e}");
+}
+
+#[test]
 #[ignore = "needs openjd: set PYROGRAPH_OPENJD or put openjd-cli on PATH (.ci/run installs it)"]
 fn a_simulation_job_on_openjd_simulates_once_then_renders_chunks_identical_to_one_render() {
     let dir = tempfile::tempdir().unwrap();

@@ -126,47 +126,51 @@ fn main() {
     let names = ["topology", "emit", "advect", "burn", "forces", "project", "total"];
     let mut steps = 0;
     let all = Instant::now();
-    for frame in 0..frames {
-        let t0 = frame as f64;
-        let splats = source.splats(t0, fps, &ctx).unwrap();
-        let n = substeps(&state, &splats, (1.0 / fps) as f32, p.cfl, p.min_substeps, p.max_substeps);
-        let dt = (1.0 / (fps * f64::from(n))) as f32;
-        let mut last = None;
-        for _ in 0..n {
-            let sp = p.at(t0, fps).unwrap();
-            let mut lap = Instant::now();
-            let mut tick = |k: usize| {
-                times[k] += lap.elapsed();
-                lap = Instant::now();
-            };
-            let top = next_topology(&state, &emit::bricks(&splats, h), &setup).unwrap();
-            state.retopologize(top);
-            tick(0);
-            emit::emit(&mut state, &splats, dt);
-            tick(1);
-            advect::advect(&mut state, dt);
-            tick(2);
-            let target = combust::combust(&mut state, &sp, dt);
-            tick(3);
-            let time = state.time as f32;
-            forces::apply(&mut state, &sp, &Forces { wind: None, turbulence: &setup.turbulence, time }, dt);
-            tick(4);
-            let solid = setup.solids.mask(&state.top);
-            last = Some(pressure::project(&mut state, &solid, &target, p.tolerance, p.max_iterations));
-            tick(5);
-            state.time += f64::from(dt);
-            steps += 1;
+    rayon::scope(|_| {
+        for frame in 0..frames {
+            let t0 = frame as f64;
+            let splats = source.splats(t0, fps, &ctx).unwrap();
+            let n = substeps(&state, &splats, (1.0 / fps) as f32, p.cfl, p.min_substeps, p.max_substeps);
+            let dt = (1.0 / (fps * f64::from(n))) as f32;
+            let mut last = None;
+            let frame_start = Instant::now();
+            for _ in 0..n {
+                let sp = p.at(t0, fps).unwrap();
+                let mut lap = Instant::now();
+                let mut tick = |k: usize| {
+                    times[k] += lap.elapsed();
+                    lap = Instant::now();
+                };
+                let top = next_topology(&state, &emit::bricks(&splats, h), &setup, dt).unwrap();
+                state.retopologize(top);
+                tick(0);
+                emit::emit(&mut state, &splats, dt);
+                tick(1);
+                advect::advect(&mut state, dt);
+                tick(2);
+                let target = combust::combust(&mut state, &sp, dt);
+                tick(3);
+                let time = state.time as f32;
+                forces::apply(&mut state, &sp, &Forces { wind: None, turbulence: &setup.turbulence, time }, dt);
+                tick(4);
+                let solid = setup.solids.mask(&state.top);
+                last = Some(pressure::project(&mut state, &solid, &target, p.tolerance, p.max_iterations));
+                tick(5);
+                state.time += f64::from(dt);
+                steps += 1;
+            }
+            let pr = last.unwrap();
+            let top = state.top.voxel_bounds().unwrap();
+            println!(
+                "frame {frame:3}: {n} sub-steps, {:6.1} ms each, {:8} voxels, {:3} iterations, divergence {:.1e}, height {} voxels",
+                frame_start.elapsed().as_secs_f64() * 1e3 / f64::from(n),
+                state.top.voxels(),
+                pr.iterations,
+                pr.max_divergence,
+                top.1.y - top.0.y + 1
+            );
         }
-        let pr = last.unwrap();
-        let top = state.top.voxel_bounds().unwrap();
-        println!(
-            "frame {frame:3}: {n} sub-steps, {:8} voxels, {:3} iterations, divergence {:.1e}, height {} voxels",
-            state.top.voxels(),
-            pr.iterations,
-            pr.max_divergence,
-            top.1.y - top.0.y + 1
-        );
-    }
+    });
     times[6] = all.elapsed();
     for (n, t) in names.iter().zip(times) {
         println!("{n:9} {:8.1} ms per step", t.as_secs_f64() * 1e3 / steps as f64);

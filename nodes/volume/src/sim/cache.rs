@@ -17,8 +17,8 @@ use super::params::SimParams;
 use super::state::SimState;
 use super::step::{Setup, SimError, substep, substeps};
 use crate::grid::{SimStats, Volume};
-use crate::source::VolumeSource;
 use crate::source::value::SourceError;
+use crate::source::{Splat, VolumeSource};
 
 /// Frames between kept checkpoints.
 const CHECKPOINT_EVERY: usize = 8;
@@ -76,26 +76,47 @@ impl Simulation {
     pub fn step_frame(&self, state: &mut SimState, frame: usize, ctx: &CookCtx) -> Result<(), StepError> {
         let fps = self.fps;
         let start = (frame - 1) as f64;
-        let splats_at = |t: f64| -> Result<Vec<_>, SourceError> {
-            let mut all = Vec::new();
-            for s in &self.sources {
-                all.extend(s.splats(t, fps, ctx)?);
-            }
-            Ok(all)
-        };
-        let first = splats_at(start)?;
+        let first = self.splats_at(start, ctx)?;
         let p = &self.params;
         let n = substeps(state, &first, (1.0 / fps) as f32, p.cfl, p.min_substeps, p.max_substeps);
         let dt = (1.0 / (fps * f64::from(n))) as f32;
+        let mut stats = SimStats { substeps: n, ..SimStats::default() };
+        // On a pool thread: a sub-step starts a few hundred parallel loops, and one started from
+        // outside the pool is handed over to it and waited for (two thread wake-ups each).
+        rayon::scope(|_| self.substeps(state, (start, n, dt), &first, &mut stats, ctx))?;
+        state.stats = stats;
+        Ok(())
+    }
+
+    /// Every emitter's splats at frame time `t`.
+    fn splats_at(&self, t: f64, ctx: &CookCtx) -> Result<Vec<Splat>, SourceError> {
+        let mut all = Vec::new();
+        for s in &self.sources {
+            all.extend(s.splats(t, self.fps, ctx)?);
+        }
+        Ok(all)
+    }
+
+    /// Steps `state` through the `n` sub-steps of `dt` seconds of the frame starting at frame
+    /// time `start`, the first with the splats `first`.
+    fn substeps(
+        &self,
+        state: &mut SimState,
+        (start, n, dt): (f64, u32, f32),
+        first: &[Splat],
+        stats: &mut SimStats,
+        ctx: &CookCtx,
+    ) -> Result<(), StepError> {
+        let fps = self.fps;
+        let p = &self.params;
         let still = match &self.wind {
             Some(w) if w.animation.is_none() => Some(WindSampler::at_rate(w, fps)),
             _ => None,
         };
-        let mut stats = SimStats { substeps: n, ..SimStats::default() };
         for s in 0..n {
             ctx.check_cancel()?;
             let t = start + f64::from(s) / f64::from(n);
-            let splats = if s == 0 { first.clone() } else { splats_at(t)? };
+            let splats = if s == 0 { first.to_vec() } else { self.splats_at(t, ctx)? };
             let step_params = p.at(t, fps)?;
             let sampled = match (&self.wind, &still) {
                 (Some(w), None) => Some(WindSampler::at_rate(&w.at_frame(t, fps)?, fps)),
@@ -106,7 +127,6 @@ impl Simulation {
             stats.max_divergence = projection.max_divergence;
             stats.pressure_iterations = projection.iterations;
         }
-        state.stats = stats;
         Ok(())
     }
 }

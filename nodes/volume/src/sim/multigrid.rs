@@ -145,7 +145,7 @@ fn coarsen(fine: &mut Level) -> Level {
 
 /// `out = A x` on a level (0 at voxels not solved for).
 pub fn apply(level: &Level, x: &[f32], out: &mut [f32]) {
-    out.par_chunks_mut(VOXELS).enumerate().for_each(|(b, o)| {
+    each_brick(out, |b, o| {
         let mut tile = [0.0; TILE];
         gather(&level.top, x, b, 0.0, &mut tile);
         let diag = &level.diag[b * VOXELS..(b + 1) * VOXELS];
@@ -165,22 +165,22 @@ pub fn apply(level: &Level, x: &[f32], out: &mut [f32]) {
 /// One Gauss–Seidel half-sweep over the voxels of one colour (`(x + y + z) mod 2`), from `x`
 /// into `out` (the other colour copied), solving `A x = b`.
 fn sweep(level: &Level, x: &[f32], b: &[f32], colour: usize, out: &mut [f32]) {
-    out.par_chunks_mut(VOXELS).enumerate().for_each(|(bi, o)| {
+    each_brick(out, |bi, o| {
         let mut tile = [0.0; TILE];
         gather(&level.top, x, bi, 0.0, &mut tile);
-        let diag = &level.diag[bi * VOXELS..(bi + 1) * VOXELS];
-        let rhs = &b[bi * VOXELS..(bi + 1) * VOXELS];
+        let range = bi * VOXELS..(bi + 1) * VOXELS;
+        let (diag, rhs) = (&level.diag[range.clone()], &b[range.clone()]);
+        o.copy_from_slice(&x[range]);
+        // Only the voxels of this colour change: every second one along each row.
         for z in 0..8i32 {
             for y in 0..8i32 {
-                for xx in 0..8i32 {
-                    let i = voxel(xx as usize, y as usize, z as usize);
-                    let c = t(xx, y, z);
-                    o[i] = if diag[i] > 0.0 && ((xx + y + z) as usize & 1) == colour {
+                for xx in (((y + z) as usize + colour) & 1..8).step_by(2) {
+                    let i = voxel(xx, y as usize, z as usize);
+                    if diag[i] > 0.0 {
+                        let c = t(xx as i32, y, z);
                         let sum = tile[c - 1] + tile[c + 1] + tile[c - 10] + tile[c + 10] + tile[c - 100] + tile[c + 100];
-                        (rhs[i] + sum) / diag[i]
-                    } else {
-                        tile[c]
-                    };
+                        o[i] = (rhs[i] + sum) / diag[i];
+                    }
                 }
             }
         }
@@ -201,7 +201,8 @@ fn smooth(level: &Level, x: &mut Vec<f32>, b: &[f32], count: usize, order: [usiz
 /// (the factor makes the re-discretised coarse Laplacian, 4× the fine one per unit length,
 /// consistent).
 fn restrict(coarse: &Level, r: &[f32], out: &mut [f32]) {
-    out.par_chunks_mut(VOXELS).zip(coarse.children.par_iter()).enumerate().for_each(|(cb, (o, ch))| {
+    each_brick(out, |cb, o| {
+        let ch = &coarse.children[cb];
         o.fill(0.0);
         for (oct, fb) in ch.iter().enumerate() {
             if *fb == NONE {
@@ -224,7 +225,7 @@ fn restrict(coarse: &Level, r: &[f32], out: &mut [f32]) {
 
 /// Adds the coarse correction to each fine fluid voxel (piecewise constant prolongation).
 fn prolong(fine: &Level, coarse: &[f32], x: &mut [f32]) {
-    x.par_chunks_mut(VOXELS).enumerate().for_each(|(fb, o)| {
+    each_brick(x, |fb, o| {
         let c = fine.top.coords()[fb];
         let p = fine.parent[fb] as usize;
         let off = (((c.x & 1) * 4) as usize, ((c.y & 1) * 4) as usize, ((c.z & 1) * 4) as usize);
@@ -235,6 +236,21 @@ fn prolong(fine: &Level, coarse: &[f32], x: &mut [f32]) {
             }
         }
     });
+}
+
+/// Levels of fewer bricks than this are worked on the calling thread: a coarse level's sweep
+/// is a few microseconds of work, less than waking another thread for it, and the coarsest
+/// level alone is swept 64 times a V-cycle.
+const PARALLEL_BRICKS: usize = 16;
+
+/// Runs `f(brick, that brick's values)` over every brick of `out`, in parallel when there are
+/// enough of them.
+fn each_brick(out: &mut [f32], f: impl Fn(usize, &mut [f32]) + Sync + Send) {
+    if out.len() / VOXELS < PARALLEL_BRICKS {
+        out.chunks_mut(VOXELS).enumerate().for_each(|(b, o)| f(b, o));
+    } else {
+        out.par_chunks_mut(VOXELS).enumerate().for_each(|(b, o)| f(b, o));
+    }
 }
 
 /// `z = M⁻¹ r`: one V-cycle from zero.
@@ -256,7 +272,7 @@ pub fn v_cycle(levels: &[Level], r: &[f32]) -> Vec<f32> {
         smooth(level, &mut x, &bs[l], SWEEPS, [0, 1], &mut scratch);
         // scratch = b − A x
         apply(level, &x, &mut scratch);
-        scratch.par_iter_mut().zip(bs[l].par_iter()).for_each(|(s, b)| *s = b - *s);
+        each_brick(&mut scratch, |k, s| s.iter_mut().zip(&bs[l][k * VOXELS..(k + 1) * VOXELS]).for_each(|(s, b)| *s = b - *s));
         let mut coarse_b = vec![0.0; levels[l + 1].top.voxels()];
         restrict(&levels[l + 1], &scratch, &mut coarse_b);
         bs.push(coarse_b);

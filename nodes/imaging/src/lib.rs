@@ -59,6 +59,7 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<preprocess::hermite::HermiteBackgroundMasked>();
     registry.declare::<preprocess::pose::PoseNormalize>();
     registry.declare::<preprocess::pose_smooth::SmoothAngle>();
+    registry.declare::<preprocess::regions::FireRegionsNode>();
     registry.declare::<procedural::TurbulenceFlame>();
     registry.declare::<sheet::ContactSheet>();
     registry.declare::<sheet::Stack>();

@@ -191,7 +191,7 @@ pub fn keep_largest(contours: &Contours, n: usize) -> Contours {
 
 /// Drops the contours `keep` refuses, with all their descendants, re-indexing parents.
 /// Relies on parents coming before their children in the list (as traced).
-fn retain_contours(contours: &Contours, keep: impl Fn(usize, &Contour) -> bool) -> Contours {
+pub(crate) fn retain_contours(contours: &Contours, keep: impl Fn(usize, &Contour) -> bool) -> Contours {
     let mut new_index: Vec<Option<usize>> = Vec::with_capacity(contours.contours.len());
     let mut kept = Vec::new();
     for (i, c) in contours.contours.iter().enumerate() {
@@ -471,7 +471,7 @@ impl Cook for ContourOverlay {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn square(x0: f32, y0: f32, side: f32, depth: u32, parent: Option<usize>) -> Contour {

@@ -11,6 +11,7 @@ pub mod hsv_auto;
 pub mod morphology;
 pub mod pose;
 pub mod pose_smooth;
+pub mod regions;
 
 #[cfg(test)]
 mod tests {

@@ -8,6 +8,7 @@ use imageproc::geometric_transformations::{Border, Interpolation, Projection, wa
 use pyrograph_core::{Channels, Contour, Contours, Cook, CookCtx, Image, NodeError, port};
 
 use super::contours::simplify_closed;
+use super::pose_smooth::outline_elongation;
 use crate::auto_crop::fill_warning;
 use crate::convert::{from_gray32f, from_rgba32f, to_gray32f, to_rgba32f};
 
@@ -344,6 +345,10 @@ pyrograph_core::node! {
         tip: [f64; 2],
         /// Rotation applied in degrees (the lean, limited by the guards); 0 in center_scale mode
         turned: f64,
+        /// How much longer than wide the outline is (its principal axes' ratio; 0 without contours): for imaging.smooth_angle's judgement of fires with no single axis
+        elongation: f64,
+        /// Separate fires in the frame (outermost contours)
+        fires: i64,
     }
 }
 
@@ -404,8 +409,11 @@ impl Cook for PoseNormalize {
         };
         let axis = main_contour(contours).and_then(|c| flame_axis(c, weighting));
         let (angle, root, tip) = axis.map_or((0.0, [0.0; 2], [0.0; 2]), |a| (a.angle_deg, a.root, a.tip));
+        let elongation = main_contour(contours).map_or(0.0, outline_elongation);
+        let fires = contours.contours.iter().filter(|c| c.depth == 0).count() as i64;
         if self.mode == PoseModeOption::Measure {
-            return Ok(PoseNormalizeOut { image: Arc::clone(&self.image), angle, root, tip, turned: 0.0 });
+            let image = Arc::clone(&self.image);
+            return Ok(PoseNormalizeOut { image, angle, root, tip, turned: 0.0, elongation, fires });
         }
         let (image, turned) = match (mode, axis) {
             (PoseMode::Rotate, Some(a)) => {
@@ -438,7 +446,7 @@ impl Cook for PoseNormalize {
             }
             _ => (pose_normalize(image, contours, mode, weighting).image, 0.0),
         };
-        Ok(PoseNormalizeOut { image: Arc::new(image), angle, root, tip, turned })
+        Ok(PoseNormalizeOut { image: Arc::new(image), angle, root, tip, turned, elongation, fires })
     }
 }
 

@@ -14,6 +14,10 @@ use imageproc::geometric_transformations::{Border, Interpolation, Projection, wa
 use pyrograph::look::{ClipLook, graph_look};
 use pyrograph_testing::{footage, workspace};
 
+#[path = "support/plates.rs"]
+mod plates;
+use plates::iou;
+
 /// Frames of each hard case (the first of the clip): enough for per-clip thresholds and the
 /// smoothing window, few enough for the 4K case in a debug build.
 const FRAMES: usize = 12;
@@ -152,16 +156,6 @@ fn full_mask(run: &Run, i: usize, size: (u32, u32)) -> GrayImage {
     let mut full = GrayImage::new(size.0, size.1);
     image::imageops::replace(&mut full, &m, i64::from(run.crop.0), i64::from(run.crop.1));
     full
-}
-
-fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
-    let (mut inter, mut union) = (0u64, 0u64);
-    for (p, q) in a.pixels().zip(b.pixels()) {
-        let (x, y) = (p[0] > 127, q[0] > 127);
-        inter += u64::from(x && y);
-        union += u64::from(x || y);
-    }
-    if union == 0 { 1.0 } else { inter as f64 / union as f64 }
 }
 
 #[test]

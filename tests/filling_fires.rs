@@ -4,27 +4,20 @@
 //! one warning, the auto crop's.
 
 use std::path::Path;
-use std::process::Command;
 
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, ParamValue, Value};
 use pyrograph_testing::{footage, workspace};
 
+#[path = "support/plates.rs"]
+mod plates;
+use plates::ffmpeg_frames;
+
 /// Frames of each clip: enough for the clip-wide rule to be tested on a moving fire.
 const FRAMES: usize = 48;
 
-/// `FRAMES` frames of `source` through the ffmpeg `filter`, as PNG frames in `dir/name`.
+/// `FRAMES` frames of `input` through the ffmpeg `filter`, as PNG frames in `dir/name`.
 fn make_clip(dir: &Path, name: &str, input: &[&str], filter: &str) -> std::path::PathBuf {
-    let frames = dir.join(name);
-    std::fs::create_dir_all(&frames).unwrap();
-    let o = Command::new("ffmpeg")
-        .args(["-v", "error", "-y"])
-        .args(input)
-        .args(["-frames:v", &FRAMES.to_string(), "-vf", filter])
-        .arg(frames.join("f_%04d.png"))
-        .output()
-        .expect("ffmpeg runs (the CI installs it)");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    frames
+    ffmpeg_frames(dir, name, input, filter, FRAMES)
 }
 
 /// What the graph does with one clip: each frame's turn, whether the pose node changed it, its

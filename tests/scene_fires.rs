@@ -5,12 +5,15 @@
 //! masks are compared with the untouched clip's, mapped through the same construction.
 
 use std::path::Path;
-use std::process::Command;
 
 use image::GrayImage;
 use pyrograph_frontend::core::{BuildOptions, CookCtx, Evaluator, Graph, GraphDoc, ParamValue, Value};
 use pyrograph_frontend::imaging::preprocess::regions::FireRegions;
 use pyrograph_testing::{footage, workspace};
+
+#[path = "support/plates.rs"]
+mod plates;
+use plates::{ffmpeg_frames, iou};
 
 /// Frames of each plate: enough for the clip-wide judgement and the smoothing window.
 const FRAMES: usize = 24;
@@ -18,22 +21,7 @@ const FRAMES: usize = 24;
 /// `FRAMES` frames of the candle clip through the ffmpeg `filter`, as PNG frames in `dir/name`.
 fn make_clip(dir: &Path, name: &str, filter: &str) -> std::path::PathBuf {
     let candle = footage().join("candle-black/frames/frame_%04d.png");
-    make_from(dir, name, &["-framerate", "24", "-i", candle.to_str().unwrap()], filter)
-}
-
-/// `FRAMES` frames of the ffmpeg `input` through `filter`, as PNG frames in `dir/name`.
-fn make_from(dir: &Path, name: &str, input: &[&str], filter: &str) -> std::path::PathBuf {
-    let frames = dir.join(name);
-    std::fs::create_dir_all(&frames).unwrap();
-    let o = Command::new("ffmpeg")
-        .args(["-v", "error", "-y"])
-        .args(input)
-        .args(["-frames:v", &FRAMES.to_string(), "-vf", filter])
-        .arg(frames.join("f_%04d.png"))
-        .output()
-        .expect("ffmpeg runs (the CI installs it)");
-    assert!(o.status.success(), "ffmpeg {filter}: {}", String::from_utf8_lossy(&o.stderr));
-    frames
+    ffmpeg_frames(dir, name, &["-framerate", "24", "-i", candle.to_str().unwrap()], filter, FRAMES)
 }
 
 /// What the graph made of one plate.
@@ -92,16 +80,6 @@ fn cook(frames: &Path, size: (u32, u32)) -> Outcome {
     }
     out.warnings = ctx.warnings().into_iter().map(|w| w.message).collect();
     out
-}
-
-fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
-    let (mut inter, mut union) = (0u64, 0u64);
-    for (p, q) in a.pixels().zip(b.pixels()) {
-        let (x, y) = (p[0] > 127, q[0] > 127);
-        inter += u64::from(x && y);
-        union += u64::from(x || y);
-    }
-    if union == 0 { 1.0 } else { inter as f64 / union as f64 }
 }
 
 fn median(v: &[f64]) -> f64 {
@@ -165,7 +143,8 @@ fn the_glow_of_a_tealights_holder_is_not_taken_for_a_second_fire() {
     let dir = tempfile::tempdir().unwrap();
     // From 5 s on: the clip's first second is shaken by hand.
     let tealight = footage().join("tealight-candle/candle.mp4");
-    let o = cook(&make_from(dir.path(), "tea", &["-ss", "5", "-i", tealight.to_str().unwrap()], "null"), (480, 480));
+    let frames = ffmpeg_frames(dir.path(), "tea", &["-ss", "5", "-i", tealight.to_str().unwrap()], "null", FRAMES);
+    let o = cook(&frames, (480, 480));
     eprintln!("tealight: fires per frame {:?}, areas {:?}, warnings {:?}", o.counts, o.areas, o.warnings);
     assert!(o.counts.iter().all(|c| *c == 1), "{:?}", o.areas);
     assert!(!o.warnings.iter().any(|w| w.contains("left upright")), "{:?}", o.warnings);

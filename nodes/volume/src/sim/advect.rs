@@ -9,63 +9,58 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::state::SimState;
-use crate::grid::sample::corners;
+use crate::grid::sample::{Corners, corners};
 use crate::grid::{NONE, Topology, VOXELS, slot};
 
 /// Moves `fields` along per-voxel displacements `d` (index units over the step, pointing
 /// downstream): the value at voxel `x` comes from `x − d`. Returns the advected fields.
 pub fn maccormack<const N: usize>(top: &Topology, fields: [&[f32]; N], d: &[Vec3]) -> [Vec<f32>; N] {
-    let n = top.voxels();
     // Forward: φ̂(x) = φ(x − d).
-    let mut hat: [Vec<f32>; N] = std::array::from_fn(|_| vec![0.0; n]);
-    {
-        let mut outs: Vec<&mut [f32]> = hat.iter_mut().map(|v| v.as_mut_slice()).collect();
-        per_brick(&mut outs, |b, o| {
-            let base = top.origin(b).as_vec3();
-            for i in 0..VOXELS {
-                let p = base + local(i) - d[b * VOXELS + i];
-                let c = corners(top, b, p);
-                for k in 0..N {
-                    o[k][i] = c.sample(fields[k]);
-                }
+    let hat: [Vec<f32>; N] = pass(top, |b, o| {
+        let base = top.origin(b).as_vec3();
+        for i in 0..VOXELS {
+            let c = corners(top, b, base + local(i) - d[b * VOXELS + i]);
+            for k in 0..N {
+                o[k][i] = c.sample(fields[k]);
             }
-        });
-    }
+        }
+    });
     // Backward from φ̂ and the correction, clamped to the forward step's interpolation range.
-    let mut new: [Vec<f32>; N] = std::array::from_fn(|_| vec![0.0; n]);
-    {
-        let mut outs: Vec<&mut [f32]> = new.iter_mut().map(|v| v.as_mut_slice()).collect();
-        let hat = &hat;
-        per_brick(&mut outs, |b, o| {
-            let base = top.origin(b).as_vec3();
-            for i in 0..VOXELS {
-                let at = b * VOXELS + i;
-                let x = base + local(i);
-                let fwd = corners(top, b, x - d[at]);
-                let back = corners(top, b, x + d[at]);
-                for ((o, hat), field) in o.iter_mut().zip(hat.iter()).zip(fields.iter()) {
-                    let round_trip = back.sample(hat);
-                    let corrected = hat[at] + 0.5 * (field[at] - round_trip);
-                    let (lo, hi) = fwd.range(field);
-                    // max then min rather than clamp: no panic if a value was not finite.
-                    o[i] = corrected.max(lo).min(hi);
-                }
+    pass(top, |b, o| {
+        let base = top.origin(b).as_vec3();
+        for i in 0..VOXELS {
+            let at = b * VOXELS + i;
+            let x = base + local(i);
+            let (fwd, back) = (corners(top, b, x - d[at]), corners(top, b, x + d[at]));
+            for ((o, field), hat) in o.iter_mut().zip(fields).zip(&hat) {
+                o[i] = corrected(&fwd, &back, field, hat, at);
             }
-        });
-    }
-    new
+        }
+    })
 }
 
-/// Runs `f(brick, outputs of that brick)` over every brick in parallel.
-fn per_brick(outs: &mut [&mut [f32]], f: impl Fn(usize, &mut [&mut [f32]]) + Sync) {
-    let bricks = outs.first().map_or(0, |o| o.len() / VOXELS);
-    let mut per: Vec<Vec<&mut [f32]>> = (0..bricks).map(|_| Vec::with_capacity(outs.len())).collect();
-    for o in outs.iter_mut() {
+/// MacCormack's value at voxel `at` from the forward step `hat` of `field`: half the round
+/// trip's error added back, clamped to the values the forward step (`fwd`) interpolated between.
+#[inline(always)]
+fn corrected(fwd: &Corners, back: &Corners, field: &[f32], hat: &[f32], at: usize) -> f32 {
+    let value = hat[at] + 0.5 * (field[at] - back.sample(hat));
+    let (lo, hi) = fwd.range(field);
+    // max then min rather than clamp: no panic if a value was not finite.
+    value.max(lo).min(hi)
+}
+
+/// `N` new fields on `top`, each brick's values written by `f(brick, that brick's slices)` in
+/// parallel.
+fn pass<const N: usize>(top: &Topology, f: impl Fn(usize, &mut [&mut [f32]]) + Sync) -> [Vec<f32>; N] {
+    let mut out: [Vec<f32>; N] = std::array::from_fn(|_| vec![0.0; top.voxels()]);
+    let mut per: Vec<Vec<&mut [f32]>> = (0..top.len()).map(|_| Vec::with_capacity(N)).collect();
+    for o in out.iter_mut() {
         for (b, chunk) in o.chunks_mut(VOXELS).enumerate() {
             per[b].push(chunk);
         }
     }
     per.par_iter_mut().enumerate().for_each(|(b, o)| f(b, o));
+    out
 }
 
 /// Voxel `i`'s position inside its brick.
@@ -91,46 +86,30 @@ pub fn advect(state: &mut SimState, dt: f32) {
 /// used, rather than kept in an array per component: a third less memory traffic than three
 /// single-field passes.
 fn faces(top: &Topology, vel: &[Vec<f32>; 3], centred: &[[f32; 3]], scale: f32) -> [Vec<f32>; 3] {
-    let n = top.voxels();
     let d = |b: usize, i: usize, axis: usize| {
         let at = b * VOXELS + i;
         let here = Vec3::from_array(centred[at]);
         let below = lower_neighbor(top, b, i, axis).map_or(here, |m| Vec3::from_array(centred[m]));
         0.5 * (here + below) * scale
     };
-    let mut hat: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; n]);
-    {
-        let mut outs: Vec<&mut [f32]> = hat.iter_mut().map(|v| v.as_mut_slice()).collect();
-        per_brick(&mut outs, |b, o| {
-            let base = top.origin(b).as_vec3();
-            for i in 0..VOXELS {
-                for (axis, o) in o.iter_mut().enumerate() {
-                    o[i] = corners(top, b, base + local(i) - d(b, i, axis)).sample(&vel[axis]);
-                }
+    let hat: [Vec<f32>; 3] = pass(top, |b, o| {
+        let base = top.origin(b).as_vec3();
+        for i in 0..VOXELS {
+            for (axis, o) in o.iter_mut().enumerate() {
+                o[i] = corners(top, b, base + local(i) - d(b, i, axis)).sample(&vel[axis]);
             }
-        });
-    }
-    let mut new: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; n]);
-    {
-        let mut outs: Vec<&mut [f32]> = new.iter_mut().map(|v| v.as_mut_slice()).collect();
-        let hat = &hat;
-        per_brick(&mut outs, |b, o| {
-            let base = top.origin(b).as_vec3();
-            for i in 0..VOXELS {
-                let at = b * VOXELS + i;
-                let x = base + local(i);
-                for (axis, o) in o.iter_mut().enumerate() {
-                    let d = d(b, i, axis);
-                    let (fwd, back) = (corners(top, b, x - d), corners(top, b, x + d));
-                    let (field, hat) = (&vel[axis], &hat[axis]);
-                    let corrected = hat[at] + 0.5 * (field[at] - back.sample(hat));
-                    let (lo, hi) = fwd.range(field);
-                    o[i] = corrected.max(lo).min(hi);
-                }
+        }
+    });
+    pass(top, |b, o| {
+        let base = top.origin(b).as_vec3();
+        for i in 0..VOXELS {
+            let (at, x) = (b * VOXELS + i, base + local(i));
+            for (axis, o) in o.iter_mut().enumerate() {
+                let d = d(b, i, axis);
+                o[i] = corrected(&corners(top, b, x - d), &corners(top, b, x + d), &vel[axis], &hat[axis], at);
             }
-        });
-    }
-    new
+        }
+    })
 }
 
 /// The flat index of the voxel below brick `b`'s voxel `i` along `axis`, if active.

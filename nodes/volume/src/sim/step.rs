@@ -103,9 +103,9 @@ const ALL: u32 = (1 << 27) - 1;
 
 /// The neighbour slots brick `b` must keep active (0 when its scalars are all at or under the
 /// cutoff): itself, and each neighbour whose side the brick's smoke lies within reach of. The
-/// reach is the fastest flow in the brick over the sub-step plus two voxels (the trilinear
-/// stencil and the MacCormack correction's backward look), so smoke never moves into a brick
-/// that is not active, while a brick whose smoke sits in its middle keeps no neighbours: a
+/// reach is the fastest flow in the brick over the sub-step plus one voxel (the trilinear
+/// stencil; MacCormack's correction is clamped to what the forward step read, so it carries
+/// nothing farther), so smoke never moves into a brick that is not active, while a brick whose smoke sits in its middle keeps no neighbours: a
 /// one-brick margin all round would make the active region of a plume about half again as
 /// large as the smoke.
 fn reach_mask(state: &SimState, b: usize, cutoff: f32, per_voxel: f32) -> u32 {
@@ -124,7 +124,7 @@ fn reach_mask(state: &SimState, b: usize, cutoff: f32, per_voxel: f32) -> u32 {
         return 0;
     }
     let fastest = state.vel.iter().flat_map(|v| v[range.clone()].iter()).fold(0.0f32, |m, v| m.max(v.abs()));
-    let reach = (fastest * per_voxel).min(8.0).ceil() as usize + 2;
+    let reach = (fastest * per_voxel).min(8.0).ceil() as usize + 1;
     let ok = |a: usize, d: i32| match d {
         -1 => lo[a] < reach,
         1 => hi[a] + reach > 7,
@@ -247,14 +247,16 @@ mod tests {
 
     #[test]
     fn a_brick_keeps_only_the_neighbours_its_smoke_can_reach_in_a_sub_step() {
-        // Smoke in the middle at rest: within two voxels of no side.
+        // Smoke in the middle at rest: within a voxel of no side.
         assert_eq!(neighbours(&one_brick([4, 4, 4], 0.0)), vec![IVec3::ZERO]);
         // Smoke against the lower x side: that neighbour too.
         assert_eq!(neighbours(&one_brick([0, 4, 4], 0.0)), vec![IVec3::new(-1, 0, 0), IVec3::ZERO]);
         // In a corner: the seven bricks around that corner.
         assert_eq!(neighbours(&one_brick([7, 7, 7], 0.0)).len(), 8);
-        // Flow of three voxels a sub-step reaches every side from the middle.
-        assert_eq!(neighbours(&one_brick([4, 4, 4], 3.0)).len(), 27);
+        // Flow of four voxels a sub-step reaches every side from the middle (voxel 4 is four
+        // voxels from the lower side, three from the upper one); of two, neither.
+        assert_eq!(neighbours(&one_brick([4, 4, 4], 4.0)).len(), 27);
+        assert_eq!(neighbours(&one_brick([4, 4, 4], 2.0)), vec![IVec3::ZERO]);
         // Nothing above the cutoff keeps nothing.
         let mut empty = one_brick([4, 4, 4], 0.0);
         empty.scalars[DENSITY][voxel(4, 4, 4)] = 0.001;

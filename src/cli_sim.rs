@@ -114,7 +114,7 @@ pub fn simulate(registry: &Registry, a: &SimulateArgs) -> Result<(), Failure> {
         let mut stats = Stats::default();
         // Frames are written on a second thread while the next ones are stepped (encoding and
         // writing a frame of half a million voxels takes about as long as a sub-step), in
-        // order, at most two frames behind, so memory stays bounded and an interrupted run
+        // order, at most three frames behind (two queued, one being written), so memory stays bounded and an interrupted run
         // leaves every frame before the one it stopped at complete.
         std::thread::scope(|scope| -> Result<(), Failure> {
             let (to_writer, frames) = std::sync::mpsc::sync_channel::<(usize, std::sync::Arc<Volume>)>(2);

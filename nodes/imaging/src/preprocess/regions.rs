@@ -86,7 +86,7 @@ pyrograph_core::node! {
         /// A fire smaller than this many square pixels is left out
         #[range(0.0, 1.0e12)]
         min_area: f64 = 0.0,
-        /// A blob closer to a larger fire than this many times that fire's size (its box's longer side) is part of it — its glow, a reflection, a detached tip — and left out; 0 keeps every blob as a fire of its own
+        /// A blob closer to a larger fire than this many times that fire's size (its box's longer side) is taken for its glow, a reflection or a detached tip and left out, so fires closer together than this are kept as one, the largest; 0 keeps every blob as a fire of its own
         #[range(0.0, 100.0)]
         merge: f64 = 1.0,
         /// With select = index: the fire to keep, 0 for the largest
@@ -96,9 +96,9 @@ pyrograph_core::node! {
     pub struct FireRegionsOut {
         /// The kept fires' contours with their holes
         contours: Arc<Contours>,
-        /// Every fire above the size, largest first: box, area, centroid
+        /// Every fire above the size and apart from larger ones, largest first: box, area, centroid
         regions: Arc<FireRegions>,
-        /// How many fires are above the size
+        /// How many fires are above the size and apart from larger ones
         count: i64,
     }
 }

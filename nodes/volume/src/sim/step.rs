@@ -102,12 +102,16 @@ pub fn next_topology(state: &SimState, splat_bricks: &[IVec3], setup: &Setup, dt
 const ALL: u32 = (1 << 27) - 1;
 
 /// The neighbour slots brick `b` must keep active (0 when its scalars are all at or under the
-/// cutoff): itself, and each neighbour whose side the brick's smoke lies within reach of. The
-/// reach is the fastest flow in the brick over the sub-step plus one voxel (the trilinear
-/// stencil; MacCormack's correction is clamped to what the forward step read, so it carries
-/// nothing farther), so smoke never moves into a brick that is not active, while a brick whose smoke sits in its middle keeps no neighbours: a
-/// one-brick margin all round would make the active region of a plume about half again as
-/// large as the smoke.
+/// cutoff): itself, and each neighbour whose side the brick's smoke lies within reach of, so
+/// smoke never moves into a brick that is not active, while a brick whose smoke sits in its
+/// middle, or whose flow leads away from a side, keeps no neighbour there (a one-brick margin all
+/// round makes the active region of a plume about half again as large as the smoke).
+///
+/// The reach towards a side is how far the brick's fastest flow that way carries in two
+/// sub-steps, plus one voxel for the trilinear stencil (MacCormack's correction is clamped to
+/// what the forward step read, so it carries nothing farther). Two sub-steps, because a brick
+/// made active starts at rest and has flow only after that sub-step's projection: smoke reaching
+/// it in its first sub-step would find nothing there pulling it in, and be lost.
 fn reach_mask(state: &SimState, b: usize, cutoff: f32, per_voxel: f32) -> u32 {
     let range = b * VOXELS..(b + 1) * VOXELS;
     let (mut lo, mut hi) = ([8usize; 3], [0usize; 3]);
@@ -123,11 +127,14 @@ fn reach_mask(state: &SimState, b: usize, cutoff: f32, per_voxel: f32) -> u32 {
     if lo[0] == 8 {
         return 0;
     }
-    let fastest = state.vel.iter().flat_map(|v| v[range.clone()].iter()).fold(0.0f32, |m, v| m.max(v.abs()));
-    let reach = (fastest * per_voxel).min(8.0).ceil() as usize + 1;
+    // Voxels the flow carries towards the lower and the upper side of each axis in two sub-steps.
+    let reach = |a: usize, sign: f32| {
+        let fastest = state.vel[a][range.clone()].iter().fold(0.0f32, |m, v| m.max(sign * v));
+        (2.0 * fastest * per_voxel).min(8.0).ceil() as usize + 1
+    };
     let ok = |a: usize, d: i32| match d {
-        -1 => lo[a] < reach,
-        1 => hi[a] + reach > 7,
+        -1 => lo[a] < reach(a, -1.0),
+        1 => hi[a] + reach(a, 1.0) > 7,
         _ => true,
     };
     let mut mask = 0;
@@ -253,10 +260,13 @@ mod tests {
         assert_eq!(neighbours(&one_brick([0, 4, 4], 0.0)), vec![IVec3::new(-1, 0, 0), IVec3::ZERO]);
         // In a corner: the seven bricks around that corner.
         assert_eq!(neighbours(&one_brick([7, 7, 7], 0.0)).len(), 8);
-        // Flow of four voxels a sub-step reaches every side from the middle (voxel 4 is four
-        // voxels from the lower side, three from the upper one); of two, neither.
-        assert_eq!(neighbours(&one_brick([4, 4, 4], 4.0)).len(), 27);
-        assert_eq!(neighbours(&one_brick([4, 4, 4], 2.0)), vec![IVec3::ZERO]);
+        // Flow of 1.5 voxels a sub-step carries three voxels in two sub-steps, and the stencil
+        // one more: from voxel 4 it reaches the upper x side (4 voxels away) but not the lower
+        // one (5 away), from voxel 3 the lower one; flow of one voxel reaches neither from 4.
+        assert_eq!(neighbours(&one_brick([4, 4, 4], 1.5)), vec![IVec3::ZERO, IVec3::new(1, 0, 0)]);
+        assert_eq!(neighbours(&one_brick([4, 4, 4], -1.5)), vec![IVec3::ZERO]);
+        assert_eq!(neighbours(&one_brick([3, 4, 4], -1.5)), vec![IVec3::new(-1, 0, 0), IVec3::ZERO]);
+        assert_eq!(neighbours(&one_brick([4, 4, 4], 1.0)), vec![IVec3::ZERO]);
         // Nothing above the cutoff keeps nothing.
         let mut empty = one_brick([4, 4, 4], 0.0);
         empty.scalars[DENSITY][voxel(4, 4, 4)] = 0.001;
@@ -265,9 +275,11 @@ mod tests {
 
     #[test]
     fn smoke_carried_across_bricks_is_not_lost_to_inactive_ones() {
-        // A blob carried along +x at 3 voxels a sub-step (the default CFL) through twenty sub-steps, the active
-        // bricks chosen afresh before each, as a simulation does. Uniform flow by whole voxels moves it exactly:
-        // whatever reaches a brick that was not made active would vanish.
+        // A blob carried along +x at 3 voxels a sub-step (the default CFL) through twenty
+        // sub-steps, the active bricks chosen afresh before each, as a simulation does: a brick
+        // made active starts at rest and has the flow only from the next sub-step on (a
+        // simulation's projection gives it). Uniform flow by whole voxels moves the blob exactly:
+        // whatever reaches a brick before it has flow vanishes.
         let mut state = one_brick([3, 3, 3], 3.0);
         for i in 0..VOXELS {
             let p = advect::local(i) - glam::Vec3::splat(3.5);
@@ -275,12 +287,20 @@ mod tests {
         }
         let mass = |s: &SimState| s.scalars[DENSITY].iter().map(|v| f64::from(*v)).sum::<f64>();
         let before = mass(&state);
+        let flow = |state: &mut SimState| {
+            let n = state.top.voxels();
+            state.vel = std::array::from_fn(|a| vec![if a == 0 { 3.0 } else { 0.0 }; n]);
+        };
+        // The blob fills its brick from the start: its first neighbours get their flow before it
+        // moves, as they would have while it grew.
+        let top = next_topology(&state, &[], &setup(), 1.0).unwrap();
+        state.retopologize(top);
+        flow(&mut state);
         for _ in 0..20 {
             let top = next_topology(&state, &[], &setup(), 1.0).unwrap();
             state.retopologize(top);
-            let n = state.top.voxels();
-            state.vel = std::array::from_fn(|a| vec![if a == 0 { 3.0 } else { 0.0 }; n]);
             advect::advect(&mut state, 1.0);
+            flow(&mut state);
         }
         let after = mass(&state);
         let reach = state.top.voxel_bounds().unwrap();

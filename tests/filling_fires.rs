@@ -10,7 +10,7 @@ use pyrograph_testing::{footage, workspace};
 
 #[path = "support/plates.rs"]
 mod plates;
-use plates::ffmpeg_frames;
+use plates::{ffmpeg_frames, median};
 
 /// Frames of each clip: enough for the clip-wide rule to be tested on a moving fire.
 const FRAMES: usize = 48;
@@ -55,12 +55,6 @@ fn cook(frames: &Path) -> Outcome {
     }
     out.warnings = ctx.warnings().into_iter().map(|w| w.message).collect();
     out
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 #[test]

@@ -13,7 +13,7 @@ use pyrograph_testing::{footage, workspace};
 
 #[path = "support/plates.rs"]
 mod plates;
-use plates::{ffmpeg_frames, iou};
+use plates::{ffmpeg_frames, iou, median};
 
 /// Frames of each plate: enough for the clip-wide judgement and the smoothing window.
 const FRAMES: usize = 24;
@@ -80,12 +80,6 @@ fn cook(frames: &Path, size: (u32, u32)) -> Outcome {
     }
     out.warnings = ctx.warnings().into_iter().map(|w| w.message).collect();
     out
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! Plates made from the shared footage for the footage tests: frames through an ffmpeg filter,
-//! and the overlap of two masks.
+//! the overlap of two masks, and a median.
 #![allow(dead_code)] // Each test file uses its own part.
 
 use std::path::{Path, PathBuf};
@@ -32,4 +32,11 @@ pub fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
         union += u64::from(x || y);
     }
     if union == 0 { 1.0 } else { inter as f64 / union as f64 }
+}
+
+/// The middle value of `v` (the upper one of the two middle values for an even count).
+pub fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Value, port};
 
+use crate::blobs::{RegionSelect, fire_box, mask_box};
 use crate::crop::crop;
 
 pyrograph_core::choice! {
@@ -24,7 +25,7 @@ pyrograph_core::node! {
     /// is cropped around the fire, centred on its fuel, to drop the static background). The box around the
     /// flame mask of each frame is combined over the clip — their union, or each edge at a percentile of the
     /// frames' edges — grown by a margin, optionally made square, its size rounded up to a multiple, and
-    /// kept inside the frame. Outputs the cropped clip and the box, so an artist can freeze it in
+    /// kept inside the frame. With several fires in the plate, fires frames them all (one box around the group), the largest, or one by rank (pieces less than half a percent of the frame apart count as one fire). Outputs the cropped clip and the box, so an artist can freeze it in
     /// imaging.crop. Frames with an empty mask are left out of the box and listed in a warning, as is a flame
     /// that touches an edge of the picture in a quarter of the frames or more (its base or tip outside it); a
     /// mask empty in every frame is an error. A fire that fills the picture (its box over the clip spans max_fill
@@ -53,6 +54,11 @@ pyrograph_core::node! {
         /// A flame whose box over the clip spans this fraction of the frame's width or height fills the picture
         #[range(0.05, 1.0)]
         max_fill: f64 = 0.9,
+        /// all: one box around every fire of the mask; largest: around the largest fire of each frame; index: around the fire of that rank (0 the largest)
+        fires: RegionSelect = RegionSelect::All,
+        /// With fires = index: the fire to frame, 0 for the largest
+        #[range(0, 100_000)]
+        index: usize = 0,
     }
     pub struct AutoCropOut {
         /// The cropped clip.
@@ -72,17 +78,6 @@ pyrograph_core::node! {
 
 /// A box `[left, top, right, bottom)` in pixels.
 type PixelBox = [u32; 4];
-
-/// The box around the set pixels of `mask`, `None` when it has none.
-pub fn mask_box(mask: &Mask) -> Option<PixelBox> {
-    let w = mask.width() as usize;
-    let (mut left, mut top, mut right, mut bottom) = (u32::MAX, u32::MAX, 0, 0);
-    for (i, _) in mask.data().iter().enumerate().filter(|(_, v)| **v != 0) {
-        let (x, y) = ((i % w) as u32, (i / w) as u32);
-        (left, top, right, bottom) = (left.min(x), top.min(y), right.max(x + 1), bottom.max(y + 1));
-    }
-    (left != u32::MAX).then_some([left, top, right, bottom])
-}
 
 /// The value at `fraction` (0..1) of sorted `v` (nearest rank).
 fn rank(v: &[u32], fraction: f64) -> u32 {
@@ -237,26 +232,45 @@ impl Cook for AutoCrop {
     fn cook(self, ctx: &CookCtx) -> Result<AutoCropOut, NodeError> {
         let masks: &Clip = &self.mask;
         // Every frame's mask cooks the chain above it (a decode and a mask at full size): in
-        // parallel, in frame order; only the boxes are kept.
+        // parallel, in frame order; only the boxes are kept. Each thread walks long runs of
+        // frames: a video is decoded forward, and threads taking turns on neighbouring frames
+        // send reads behind the decoder (a new one from the last keyframe), most of all when
+        // the masks look back over frames (imaging.fire_cues).
         use rayon::prelude::*;
         let found = (0..masks.len())
             .into_par_iter()
+            .with_min_len(crate::media::long_runs(masks.len()))
             .map(|i| {
                 ctx.check_cancel()?;
                 let Value::Mask(mask) = masks.get(i, ctx)? else {
                     return Err(NodeError::port(port!(AutoCrop, mask), format!("frame {i} is not a mask")));
                 };
-                Ok(((mask.width(), mask.height()), mask_box(&mask)))
+                let all = mask_box(&mask);
+                let b = match self.fires {
+                    RegionSelect::All => all,
+                    RegionSelect::Largest => fire_box(&mask, 0),
+                    RegionSelect::Index => all.and_then(|_| fire_box(&mask, self.index)),
+                };
+                Ok(((mask.width(), mask.height()), all.is_some(), b))
             })
             .collect::<Result<Vec<_>, NodeError>>()?;
-        let size = found.first().map(|(s, _)| *s);
-        let mut boxes = Vec::new();
-        let mut empty = Vec::new();
-        for (i, (_, b)) in found.into_iter().enumerate() {
-            match b {
-                Some(b) => boxes.push(b),
-                None => empty.push(i),
+        let size = found.first().map(|(s, _, _)| *s);
+        let (mut boxes, mut empty, mut fewer) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, (_, any, b)) in found.into_iter().enumerate() {
+            match (b, any) {
+                (Some(b), _) => boxes.push(b),
+                (None, true) => fewer.push(i),
+                (None, false) => empty.push(i),
             }
+        }
+        if !fewer.is_empty() {
+            ctx.warn(format!(
+                "fires = index {} but {} of {} frames hold fewer fires ({}): they are left out of the box",
+                self.index,
+                fewer.len(),
+                masks.len(),
+                pyrograph_core::frames::list_for_message(&fewer)
+            ));
         }
         let Some((width, height)) = size else {
             return Err(NodeError::port(port!(AutoCrop, mask), "the mask clip has no frames"));
@@ -264,7 +278,14 @@ impl Cook for AutoCrop {
         if boxes.is_empty() {
             return Err(NodeError::port(
                 port!(AutoCrop, mask),
-                format!("the mask is empty in all {} frames: no flame to frame (check the HSV mask's thresholds)", masks.len()),
+                if fewer.is_empty() {
+                    format!(
+                        "the mask is empty in all {} frames: no flame to frame (check the HSV mask's thresholds)",
+                        masks.len()
+                    )
+                } else {
+                    format!("fires = index {}: no frame holds that many fires (lower index, or fires = all)", self.index)
+                },
             ));
         }
         let b = combine_boxes(&boxes, self.combine, self.percentile);
@@ -339,6 +360,8 @@ mod tests {
             square: false,
             multiple: 8,
             max_fill: 0.9,
+            fires: RegionSelect::All,
+            index: 0,
         };
         let ctx = CookCtx::new();
         let out = node.cook(&ctx).unwrap();
@@ -361,6 +384,28 @@ mod tests {
         // One flame with room around it: no fill, no warning.
         let (out, warnings) = cook_boxes(&[[40, 20, 60, 60]; 8]);
         assert!(!out.fills && warnings.is_empty(), "{warnings:?}");
+    }
+
+    #[test]
+    fn one_fire_of_several_is_framed_by_rank_and_pieces_of_one_fire_count_as_one() {
+        let mut data = vec![0u8; 200 * 100];
+        let mut fill = |r: PixelBox| {
+            for y in r[1]..r[3] {
+                for x in r[0]..r[2] {
+                    data[(y * 200 + x) as usize] = 255;
+                }
+            }
+        };
+        fill([10, 10, 30, 60]); // 1,000 px
+        fill([100, 20, 110, 40]); // 200 px, and its tip 2 px above it: one fire
+        fill([100, 15, 110, 18]);
+        fill([150, 70, 160, 80]); // 100 px
+        let mask = Mask::from_vec(200, 100, data).unwrap();
+        assert_eq!(fire_box(&mask, 0), Some([10, 10, 30, 60]));
+        assert_eq!(fire_box(&mask, 1), Some([100, 15, 110, 40]));
+        assert_eq!(fire_box(&mask, 2), Some([150, 70, 160, 80]));
+        assert_eq!(fire_box(&mask, 3), None);
+        assert_eq!(mask_box(&mask), Some([10, 10, 160, 80]));
     }
 
     #[test]

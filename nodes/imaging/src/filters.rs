@@ -26,6 +26,30 @@ impl Plane {
         Plane { width, height, data: vec![0.0; width * height] }
     }
 
+    /// Luminance × alpha of an image (Rec. 601 weights; a gray image as it is).
+    pub fn luminance(img: &pyrograph_core::Image) -> Plane {
+        let data = match img.channels() {
+            pyrograph_core::Channels::Gray => img.data().to_vec(),
+            pyrograph_core::Channels::Rgba => {
+                img.data().chunks_exact(4).map(|p| (0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]) * p[3]).collect()
+            }
+        };
+        Plane { width: img.width() as usize, height: img.height() as usize, data }
+    }
+
+    /// Bilinear sample at `(x, y)` in pixels, clamped to the edge. The plane must not be empty.
+    pub fn sample(&self, x: f32, y: f32) -> f32 {
+        let x = x.clamp(0.0, (self.width - 1) as f32);
+        let y = y.clamp(0.0, (self.height - 1) as f32);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(self.width - 1), (y0 + 1).min(self.height - 1));
+        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+        let at = |x: usize, y: usize| self.data[y * self.width + x];
+        let top = at(x0, y0) + fx * (at(x1, y0) - at(x0, y0));
+        let bottom = at(x0, y1) + fx * (at(x1, y1) - at(x0, y1));
+        top + fy * (bottom - top)
+    }
+
     /// The 2×2 box average, half the size (rounded up; the last row/column is repeated).
     pub fn half(&self) -> Plane {
         let (w, h) = (self.width.div_ceil(2), self.height.div_ceil(2));

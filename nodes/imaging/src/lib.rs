@@ -3,6 +3,7 @@
 #![deny(missing_docs)]
 
 pub mod auto_crop;
+pub mod blobs;
 pub mod bloom;
 pub mod color;
 pub mod composite;
@@ -60,6 +61,8 @@ pub fn register(registry: &mut Registry) {
     registry.declare::<preprocess::pose::PoseNormalize>();
     registry.declare::<preprocess::pose_smooth::SmoothAngle>();
     registry.declare::<preprocess::regions::FireRegionsNode>();
+    registry.declare::<preprocess::fire_cues::FireCues>();
+    registry.declare::<preprocess::stabilize::Stabilize>();
     registry.declare::<procedural::TurbulenceFlame>();
     registry.declare::<sheet::ContactSheet>();
     registry.declare::<sheet::Stack>();

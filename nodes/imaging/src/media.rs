@@ -106,3 +106,10 @@ pub fn fingerprint_files(files: &[PathBuf]) -> Result<u64, IoError> {
     }
     Ok(h.finish())
 }
+
+/// The shortest run of frames a thread takes when a clip of `n` frames is read in parallel: two
+/// runs per thread. A video decodes forward: threads taking turns on neighbouring frames send
+/// reads behind the decoder, which starts again from the last keyframe.
+pub fn long_runs(n: usize) -> usize {
+    n.div_ceil(2 * rayon::current_num_threads()).max(1)
+}

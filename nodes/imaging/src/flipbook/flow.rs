@@ -1,6 +1,6 @@
 //! Dense optical flow between two frames (pyramidal Lucas–Kanade) for the flipbook's motion sheet.
 
-use pyrograph_core::{Channels, Image};
+use pyrograph_core::Image;
 
 use crate::filters::{Plane, convolve_separable, gaussian_kernel};
 
@@ -12,27 +12,6 @@ pub const MIN_EIGENVALUE: f32 = 1e-4;
 /// and gets zero motion.
 pub const MIN_CONTENT: f32 = 0.02;
 
-/// Luminance × alpha of an image as a plane.
-fn luminance(img: &Image) -> Plane {
-    let data = match img.channels() {
-        Channels::Gray => img.data().to_vec(),
-        Channels::Rgba => img.data().chunks_exact(4).map(|p| (0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]) * p[3]).collect(),
-    };
-    Plane { width: img.width() as usize, height: img.height() as usize, data }
-}
-
-fn sample(p: &Plane, x: f32, y: f32) -> f32 {
-    let x = x.clamp(0.0, (p.width - 1) as f32);
-    let y = y.clamp(0.0, (p.height - 1) as f32);
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(p.width - 1), (y0 + 1).min(p.height - 1));
-    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-    let at = |x: usize, y: usize| p.data[y * p.width + x];
-    let top = at(x0, y0) + fx * (at(x1, y0) - at(x0, y0));
-    let bottom = at(x0, y1) + fx * (at(x1, y1) - at(x0, y1));
-    top + fy * (bottom - top)
-}
-
 /// Dense optical flow from `a` to `b` in pixels (x right, y down): a pyramidal Lucas–Kanade with a
 /// Gaussian window (σ 2), five levels at most and five iterations per level. A pixel at `p` in `a`
 /// is at `p + (u, v)` in `b`. Textureless regions (a black background) get zero motion; images of
@@ -42,7 +21,7 @@ pub fn optical_flow(a: &Image, b: &Image) -> (Plane, Plane) {
         let (w, h) = (a.width() as usize, a.height() as usize);
         return (Plane::new(w, h), Plane::new(w, h));
     }
-    let (mut pa, mut pb) = (vec![luminance(a)], vec![luminance(b)]);
+    let (mut pa, mut pb) = (vec![Plane::luminance(a)], vec![Plane::luminance(b)]);
     while pa.len() < 5 && pa[pa.len() - 1].width.min(pa[pa.len() - 1].height) >= 32 {
         let (na, nb) = (pa[pa.len() - 1].half(), pb[pb.len() - 1].half());
         pa.push(na);
@@ -61,7 +40,7 @@ pub fn optical_flow(a: &Image, b: &Image) -> (Plane, Plane) {
                     width: w,
                     height: h,
                     data: (0..w * h)
-                        .map(|k| 2.0 * sample(c, ((k % w) as f32 - 0.5) / 2.0, ((k / w) as f32 - 0.5) / 2.0))
+                        .map(|k| 2.0 * c.sample(((k % w) as f32 - 0.5) / 2.0, ((k / w) as f32 - 0.5) / 2.0))
                         .collect(),
                 };
                 (up(&cu), up(&cv))
@@ -82,7 +61,7 @@ pub fn optical_flow(a: &Image, b: &Image) -> (Plane, Plane) {
         let syy = prod(&|k| gy[k] * gy[k]);
         for _ in 0..5 {
             let it: Vec<f32> =
-                (0..w * h).map(|k| sample(i2, (k % w) as f32 + u.data[k], (k / w) as f32 + v.data[k]) - i1.data[k]).collect();
+                (0..w * h).map(|k| i2.sample((k % w) as f32 + u.data[k], (k / w) as f32 + v.data[k]) - i1.data[k]).collect();
             let bx = prod(&|k| gx[k] * it[k]);
             let by = prod(&|k| gy[k] * it[k]);
             for k in 0..w * h {

@@ -5,6 +5,7 @@
 //! `preprocess` bench) and wraps them in thin node types registered here.
 
 pub mod contours;
+pub mod fire_cues;
 pub mod hermite;
 pub mod hsv;
 pub mod hsv_auto;
@@ -12,6 +13,7 @@ pub mod morphology;
 pub mod pose;
 pub mod pose_smooth;
 pub mod regions;
+pub mod stabilize;
 
 #[cfg(test)]
 mod tests {

@@ -168,6 +168,7 @@ impl SmoothAngle {
         use rayon::prelude::*;
         (0..clip.len())
             .into_par_iter()
+            .with_min_len(crate::media::long_runs(clip.len()))
             .map(|i| {
                 ctx.check_cancel()?;
                 let v = clip.get(i, ctx)?;
@@ -183,10 +184,12 @@ impl Cook for SmoothAngle {
         if clip.is_empty() {
             return Err(NodeError::port(port!(SmoothAngle, angle), "the angle clip has no frames"));
         }
-        // Every frame's angle cooks the per-frame chain above it: in parallel, in frame order.
+        // Every frame's angle cooks the per-frame chain above it: in parallel, in frame order,
+        // each thread along long runs of frames (a video decodes forward; see auto_crop).
         use rayon::prelude::*;
         let values = (0..clip.len())
             .into_par_iter()
+            .with_min_len(crate::media::long_runs(clip.len()))
             .map(|i| {
                 ctx.check_cancel()?;
                 match clip.get(i, ctx)? {

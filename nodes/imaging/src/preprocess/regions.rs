@@ -11,17 +11,7 @@ use pyrograph_core::{Contour, Contours, Cook, CookCtx, NodeError, TypeInfo, Valu
 
 use super::contours::retain_contours;
 
-pyrograph_core::choice! {
-    /// Which fires `imaging.fire_regions` keeps.
-    pub enum RegionSelect {
-        /// Every fire at least min_share of the largest one's area (and min_area pixels).
-        All = "all",
-        /// The largest fire only.
-        Largest = "largest",
-        /// The fire at position index among the kept ones, largest first.
-        Index = "index",
-    }
-}
+pub use crate::blobs::RegionSelect;
 
 /// One fire in a frame.
 #[derive(Clone, Debug, PartialEq)]

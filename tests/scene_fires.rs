@@ -218,15 +218,7 @@ fn room_plate(dir: &Path, name: &str, shake: &[Rigid]) -> std::path::PathBuf {
             let light = if px < 0.0 || py < 0.0 || px > (w - 1) as f32 || py > (h - 1) as f32 {
                 [0.0; 3]
             } else {
-                let (x0, y0) = (px.floor() as u32, py.floor() as u32);
-                let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-                let (fx, fy) = (px - x0 as f32, py - y0 as f32);
-                let at = |x: u32, y: u32, k: usize| candle.get_pixel(x, y)[k];
-                [0, 1, 2].map(|k| {
-                    let top = at(x0, y0, k) + fx * (at(x1, y0, k) - at(x0, y0, k));
-                    let bottom = at(x0, y1, k) + fx * (at(x1, y1, k) - at(x0, y1, k));
-                    top + fy * (bottom - top)
-                })
+                [0, 1, 2].map(|k| sharp_sample(&candle, px, py, k))
             };
             let wall = room(px, py);
             image::Rgb([0, 1, 2].map(|k| 1.0 - (1.0 - wall[k]) * (1.0 - light[k])))
@@ -234,6 +226,28 @@ fn room_plate(dir: &Path, name: &str, shake: &[Rigid]) -> std::path::PathBuf {
         image::DynamicImage::ImageRgb32F(plate).to_rgb8().save(out.join(format!("f_{t:04}.png"))).unwrap();
     }
     out
+}
+
+/// Channel `k` of `img` at `(x, y)` (pixel indices), Catmull-Rom: a camera that moves records a
+/// sharp picture, and bilinear resampling would blur the flame's edge by up to half a pixel more
+/// than any camera does (the held frames are resampled again, and the mask follows that edge).
+fn sharp_sample(img: &image::Rgb32FImage, x: f32, y: f32, k: usize) -> f32 {
+    let (w, h) = img.dimensions();
+    let weights = |t: f32| {
+        let (t2, t3) = (t * t, t * t * t);
+        [0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)]
+    };
+    let (x0, y0) = (x.floor(), y.floor());
+    let (wx, wy) = (weights(x - x0), weights(y - y0));
+    let at = |dx: i64, dy: i64| {
+        let xx = (x0 as i64 + dx).clamp(0, i64::from(w) - 1) as u32;
+        let yy = (y0 as i64 + dy).clamp(0, i64::from(h) - 1) as u32;
+        img.get_pixel(xx, yy)[k]
+    };
+    let v: f32 = (0..4).map(|j| wy[j] * (0..4).map(|i| wx[i] * at(i as i64 - 1, j as i64 - 1)).sum::<f32>()).sum();
+    // Within the four nearest pixels, as a lens's picture has no ringing.
+    let near = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+    v.clamp(near.iter().cloned().fold(f32::MAX, f32::min), near.iter().cloned().fold(f32::MIN, f32::max))
 }
 
 /// A handheld camera's shake: frame 0 as filmed, then a random turn up to ±1.5° and shift up to
@@ -269,16 +283,14 @@ fn a_candle_in_a_lit_room_is_masked_as_on_black_even_from_a_shaken_camera() {
         let ious: Vec<f64> = o.masks.iter().zip(&base.masks).map(|(m, b)| iou(m, b)).collect();
         let worst = ious.iter().cloned().fold(1.0, f64::min);
         eprintln!(
-            "{name}: IoU against the candle on black, worst {worst:.3}, median {:.3}; fires {:?}; warnings {:?}",
+            "{name}: IoU against the candle on black, worst {worst:.4}, median {:.4}; fires {:?}; warnings {:?}",
             median(&ious),
             o.counts,
             o.warnings
         );
         // Light adds: over the wall the flame's edge pixels are brighter than over black, and the
-        // mask is a pixel wider all round (its area 10 % larger). The shaken plate is resampled
-        // twice (shaken, then held), which blurs that edge once more: one frame in 24 reads 0.895.
-        let floor = if name == "lit" { 0.9 } else { 0.88 };
-        assert!(worst >= floor && median(&ious) >= 0.9, "{name}: {ious:?}");
+        // mask is a pixel wider all round (its area 10 % larger); held frames are resampled once.
+        assert!(worst >= 0.9, "{name}: {ious:?}");
         assert!(o.counts.iter().all(|c| *c == 1), "{name}: the lamps and the window are not fires: {:?}", o.areas);
     }
     if std::env::var_os("REGENERATE").is_some() {

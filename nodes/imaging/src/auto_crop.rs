@@ -7,7 +7,7 @@ use std::sync::Arc;
 use pyrograph_core::fingerprint::Fingerprinter;
 use pyrograph_core::{Clip, ClipOf, Cook, CookCtx, FrameSource, Image, Mask, NodeError, Value, port};
 
-use crate::blobs::{RegionSelect, fire_box, mask_box};
+use crate::blobs::{RegionSelect, TRACKED_PER_FRAME, fire_boxes, mask_box, rank_over_clip};
 use crate::crop::crop;
 
 pyrograph_core::choice! {
@@ -25,7 +25,7 @@ pyrograph_core::node! {
     /// is cropped around the fire, centred on its fuel, to drop the static background). The box around the
     /// flame mask of each frame is combined over the clip — their union, or each edge at a percentile of the
     /// frames' edges — grown by a margin, optionally made square, its size rounded up to a multiple, and
-    /// kept inside the frame. With several fires in the plate, fires frames them all (one box around the group), the largest, or one by rank (pieces less than half a percent of the frame apart count as one fire). Outputs the cropped clip and the box, so an artist can freeze it in
+    /// kept inside the frame. With several fires in the plate, fires frames them all (one box around the group), the largest, or one by rank (pieces about a percent of the frame apart or nearer count as one fire). Outputs the cropped clip and the box, so an artist can freeze it in
     /// imaging.crop. Frames with an empty mask are left out of the box and listed in a warning, as is a flame
     /// that touches an edge of the picture in a quarter of the frames or more (its base or tip outside it); a
     /// mask empty in every frame is an error. A fire that fills the picture (its box over the clip spans max_fill
@@ -54,7 +54,7 @@ pyrograph_core::node! {
         /// A flame whose box over the clip spans this fraction of the frame's width or height fills the picture
         #[range(0.05, 1.0)]
         max_fill: f64 = 0.9,
-        /// all: one box around every fire of the mask; largest: around the largest fire of each frame; index: around the fire of that rank (0 the largest)
+        /// all: one box around every fire of the mask; largest: around the largest fire; index: around the fire of that rank (0 the largest). Fires are followed from frame to frame (a fire's box overlapping its box a few frames before) and ranked by their size over the whole clip, so the choice does not swap between two fires of about one size; frames the chosen fire is missing from are left out of the box, with a warning
         fires: RegionSelect = RegionSelect::All,
         /// With fires = index: the fire to frame, 0 for the largest
         #[range(0, 100_000)]
@@ -246,27 +246,37 @@ impl Cook for AutoCrop {
                     return Err(NodeError::port(port!(AutoCrop, mask), format!("frame {i} is not a mask")));
                 };
                 let all = mask_box(&mask);
-                let b = match self.fires {
-                    RegionSelect::All => all,
-                    RegionSelect::Largest => fire_box(&mask, 0),
-                    RegionSelect::Index => all.and_then(|_| fire_box(&mask, self.index)),
+                // A few boxes a frame (the largest fires), ranked over the clip below.
+                let fires = match self.fires {
+                    RegionSelect::All => Vec::new(),
+                    _ => fire_boxes(&mask).into_iter().take(TRACKED_PER_FRAME).collect(),
                 };
-                Ok(((mask.width(), mask.height()), all.is_some(), b))
+                Ok(((mask.width(), mask.height()), all, fires))
             })
             .collect::<Result<Vec<_>, NodeError>>()?;
         let size = found.first().map(|(s, _, _)| *s);
+        let chosen: Vec<Option<PixelBox>> = match self.fires {
+            RegionSelect::All => found.iter().map(|(_, all, _)| *all).collect(),
+            RegionSelect::Largest | RegionSelect::Index => {
+                let rank = if self.fires == RegionSelect::Largest { 0 } else { self.index };
+                let fires: Vec<_> = found.iter().map(|(_, _, f)| f.clone()).collect();
+                rank_over_clip(&fires, rank)
+            }
+        };
         let (mut boxes, mut empty, mut fewer) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, (_, any, b)) in found.into_iter().enumerate() {
-            match (b, any) {
+        for (i, (b, (_, all, _))) in chosen.into_iter().zip(&found).enumerate() {
+            match (b, all.is_some()) {
                 (Some(b), _) => boxes.push(b),
                 (None, true) => fewer.push(i),
                 (None, false) => empty.push(i),
             }
         }
         if !fewer.is_empty() {
+            let which =
+                if self.fires == RegionSelect::Largest { "the largest".to_string() } else { format!("index {}", self.index) };
             ctx.warn(format!(
-                "fires = index {} but {} of {} frames hold fewer fires ({}): they are left out of the box",
-                self.index,
+                "the fire chosen ({}, ranked by its size over the clip) is not in {} of {} frames ({}): they are left out of the box",
+                which,
                 fewer.len(),
                 masks.len(),
                 pyrograph_core::frames::list_for_message(&fewer)
@@ -284,7 +294,10 @@ impl Cook for AutoCrop {
                         masks.len()
                     )
                 } else {
-                    format!("fires = index {}: no frame holds that many fires (lower index, or fires = all)", self.index)
+                    format!(
+                        "fires = index {}: the clip holds fewer fires than that, followed from frame to frame (lower index, or fires = all)",
+                        self.index
+                    )
                 },
             ));
         }
@@ -348,9 +361,25 @@ mod tests {
     /// Cooks the node with `margin` 0.1 over masks whose flame is the box of each frame in `boxes`,
     /// in 100 × 80 frames; returns whether it fills and the warnings.
     fn cook_boxes(boxes: &[PixelBox]) -> (AutoCropOut, Vec<String>) {
+        let frames: Vec<Vec<PixelBox>> = boxes.iter().map(|b| vec![*b]).collect();
+        cook_fires(&frames, RegionSelect::All, 0).unwrap()
+    }
+
+    /// [`cook_boxes`] with several fires a frame (each a box), framing `fires` (`index`).
+    fn cook_fires(frames: &[Vec<PixelBox>], fires: RegionSelect, index: usize) -> Result<(AutoCropOut, Vec<String>), String> {
         use pyrograph_core::{PortType, Value};
-        let masks = boxes.iter().map(|b| Value::Mask(Arc::new(mask_with(100, 80, *b)))).collect();
-        let images = boxes.iter().map(|_| Value::Image(Arc::new(Image::new(100, 80, pyrograph_core::Channels::Gray)))).collect();
+        let masks = frames
+            .iter()
+            .map(|boxes| {
+                let mut m = Mask::new(100, 80);
+                for b in boxes {
+                    let one = mask_with(100, 80, *b);
+                    m = Mask::from_vec(100, 80, m.data().iter().zip(one.data()).map(|(a, b)| a | b).collect()).unwrap();
+                }
+                Value::Mask(Arc::new(m))
+            })
+            .collect();
+        let images = frames.iter().map(|_| Value::Image(Arc::new(Image::new(100, 80, pyrograph_core::Channels::Gray)))).collect();
         let node = AutoCrop {
             clip: ClipOf::new(Clip::from_frames(PortType::Image, 24.0, images)),
             mask: ClipOf::new(Clip::from_frames(PortType::Mask, 24.0, masks)),
@@ -360,12 +389,39 @@ mod tests {
             square: false,
             multiple: 8,
             max_fill: 0.9,
-            fires: RegionSelect::All,
-            index: 0,
+            fires,
+            index,
         };
         let ctx = CookCtx::new();
-        let out = node.cook(&ctx).unwrap();
-        (out, ctx.warnings().into_iter().map(|w| w.message).collect())
+        let out = node.cook(&ctx).map_err(|e| e.to_string())?;
+        Ok((out, ctx.warnings().into_iter().map(|w| w.message).collect()))
+    }
+
+    #[test]
+    fn a_fire_chosen_by_rank_is_followed_over_the_clip_and_its_absence_is_reported() {
+        // Two fires of about one size that swap the lead every frame (the left one larger in
+        // even frames); the right one is missing in frames 4 and 5, so over the clip the left is
+        // the largest (6,240 pixels against 4,800).
+        let frames: Vec<Vec<PixelBox>> = (0..8)
+            .map(|t| {
+                let left = if t % 2 == 0 { [10, 20, 30, 60] } else { [10, 22, 30, 60] };
+                let right = if t % 2 == 0 { [60, 22, 80, 60] } else { [60, 18, 80, 60] };
+                if (4..6).contains(&t) { vec![left] } else { vec![left, right] }
+            })
+            .collect();
+        let (out, warnings) = cook_fires(&frames, RegionSelect::Largest, 0).unwrap();
+        assert!(out.x + out.width < 60, "the left fire alone, in every frame: x {} width {}", out.x, out.width);
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let (out, warnings) = cook_fires(&frames, RegionSelect::Index, 1).unwrap();
+        assert!(out.x > 30, "the right fire alone: x {}", out.x);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].contains("(index 1, ranked by its size over the clip) is not in 2 of 8 frames (4, 5)"),
+            "{}",
+            warnings[0]
+        );
+        let err = cook_fires(&frames, RegionSelect::Index, 2).err().unwrap();
+        assert!(err.contains("fires = index 2: the clip holds fewer fires than that"), "{err}");
     }
 
     #[test]
@@ -401,10 +457,11 @@ mod tests {
         fill([100, 15, 110, 18]);
         fill([150, 70, 160, 80]); // 100 px
         let mask = Mask::from_vec(200, 100, data).unwrap();
-        assert_eq!(fire_box(&mask, 0), Some([10, 10, 30, 60]));
-        assert_eq!(fire_box(&mask, 1), Some([100, 15, 110, 40]));
-        assert_eq!(fire_box(&mask, 2), Some([150, 70, 160, 80]));
-        assert_eq!(fire_box(&mask, 3), None);
+        let fire_box = |rank: usize| fire_boxes(&mask).get(rank).map(|(_, b)| *b);
+        assert_eq!(fire_box(0), Some([10, 10, 30, 60]));
+        assert_eq!(fire_box(1), Some([100, 15, 110, 40]));
+        assert_eq!(fire_box(2), Some([150, 70, 160, 80]));
+        assert_eq!(fire_box(3), None);
         assert_eq!(mask_box(&mask), Some([10, 10, 160, 80]));
     }
 

@@ -97,6 +97,17 @@ pub fn contact_sheet(frames: &[&Image], columns: usize, gap: u32, background: [f
     Image::from_vec(sheet_w, sheet_h, Channels::Rgba, data).ok_or_else(|| "sheet size overflow".to_string())
 }
 
+/// `frame` scaled down (triangle filter) so its longer side is at most `cell` pixels; as it is
+/// when it already fits, when `cell` is 0, or when it is empty.
+pub fn fit_cell(frame: Arc<Image>, cell: u32) -> Arc<Image> {
+    let (w, h) = frame.size();
+    if cell == 0 || w.max(h) <= cell || w == 0 || h == 0 {
+        return frame;
+    }
+    let (tw, th) = if w >= h { (cell, 0) } else { (0, cell) };
+    crate::resize::resize(&frame, tw, th, image::imageops::FilterType::Triangle).map_or(frame, Arc::new)
+}
+
 pyrograph_core::node! {
     /// Lays frames of a clip out in a grid (left→right, top→bottom), picked evenly from first to last.
     #[node("imaging.contact_sheet", "Imaging", WholeClip)]
@@ -114,6 +125,11 @@ pyrograph_core::node! {
         gap: u32 = 4,
         /// Colour of the gaps.
         background: [f32; 4] = [0.08, 0.08, 0.08, 1.0],
+        /// Longest side of a cell in pixels: larger frames are scaled down to fit, keeping their
+        /// aspect, so a sheet of 4K frames stays a reviewable (and memory-bounded) size. 0 shows
+        /// frames at their own size.
+        #[range(0, 16384)]
+        cell_size: u32 = 0,
     }
     /// The sheet (RGBA).
     -> image: Arc<Image>
@@ -126,7 +142,12 @@ impl Cook for ContactSheet {
             return Err(NodeError::port(port!(ContactSheet, clip), "the clip has no frames"));
         }
         let picks = pick_frames(clip.len(), self.count);
-        let frames = picks.iter().map(|&f| clip.image(f, ctx)).collect::<Result<Vec<_>, _>>()?;
+        // One frame at a time, each shrunk before the next is read: the full-size frames are
+        // never all held at once.
+        let frames = picks
+            .iter()
+            .map(|&f| clip.image(f, ctx).map(|frame| fit_cell(frame, self.cell_size)))
+            .collect::<Result<Vec<_>, _>>()?;
         let refs: Vec<&Image> = frames.iter().map(|f| f.as_ref()).collect();
         let sheet = contact_sheet(&refs, self.columns, self.gap, self.background)
             .map_err(|m| NodeError::port(port!(ContactSheet, clip), m))?;
@@ -173,6 +194,18 @@ mod tests {
         let h = stack(&a, &b, false, 0, [0.0; 4]);
         assert_eq!(h.size(), (3, 2));
         assert_eq!(h.pixel(2, 1)[0], 0.75);
+    }
+
+    #[test]
+    fn large_frames_shrink_to_the_cell_keeping_their_aspect() {
+        let big = Arc::new(Image::gray_from_fn(400, 100, |x, _| if x < 200 { 0.0 } else { 1.0 }));
+        let small = fit_cell(big.clone(), 80);
+        assert_eq!(small.size(), (80, 20));
+        assert!(small.pixel(10, 10)[0] < 0.01 && small.pixel(70, 10)[0] > 0.99, "content kept in place");
+        assert!(Arc::ptr_eq(&fit_cell(big.clone(), 0), &big), "0 keeps the frame");
+        assert!(Arc::ptr_eq(&fit_cell(big.clone(), 400), &big), "a frame that fits is kept");
+        let tall = fit_cell(Arc::new(Image::gray_from_fn(30, 90, |_, _| 0.5)), 45);
+        assert_eq!(tall.size(), (15, 45));
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub const WORK_SIDE: usize = 960;
 pyrograph_core::node! {
     /// Keeps the blobs of a fire mask that behave like fire, not only look like it, so lamps, windows, sunlit patches and lit walls of fire-like colour in a scene plate drop out (extends Eigenfires thesis §3.2, whose flames are filmed on black; flicker after Töreyin et al. 2006 and Phillips et al. 2002, relative brightness after Chen et al. 2004).
     ///
-    /// Flicker: each pixel's mean absolute brightness change between consecutive frames over the window frames before it (the first temporal wavelet band of Töreyin et al.), each change taken as the smallest over a shift of up to reach pixels, so a camera moving a pixel or two or leftover shake after imaging.stabilize does not count as flicker. Measured on the frame box-averaged down to at most 960 pixels a side. A blob of the mask (pieces less than half a percent of the frame's size apart count as one) is kept when its mean flicker reaches min_flicker of its mean brightness (so a darker exposure is judged alike) and its mean brightness is min_contrast times that of the unmasked pixels around it (its box grown by half its size each way). The flicker output shows each pixel's flicker as a share of its brightness, 0.5 at min_flicker. A clip of one or two frames has no flicker to judge and passes unchanged, with a warning.
+    /// Flicker: each pixel's mean absolute brightness change between consecutive frames over the window frames before it (the first temporal wavelet band of Töreyin et al.), each change taken as the smallest over a shift of up to reach pixels, so a camera moving a pixel or two or leftover shake after imaging.stabilize does not count as flicker. Measured on the frame box-averaged down to at most 960 pixels a side; pixels with alpha 0 (no picture: the border imaging.stabilize brings in from outside the frame, a cut-out's clear background) are not measured, so a border moving from frame to frame is not flicker (a gray clip has no alpha: its border is black and is measured). A blob of the mask (pieces about a percent of the frame's size apart or nearer count as one) is kept when its mean flicker reaches min_flicker of its mean brightness (so a darker exposure is judged alike) and its mean brightness is min_contrast times that of the unmasked pixels around it (its box grown by half its size each way). The flicker output shows each pixel's flicker as a share of its brightness, 0.5 at min_flicker. A clip of one or two frames has no flicker to judge and passes unchanged, with a warning.
     #[node("imaging.fire_cues", "Pre-processing", WholeClip)]
     pub struct FireCues {
         /// The frames the mask was made from (stabilize a handheld clip first).
@@ -266,8 +266,18 @@ pub fn window_of(index: usize, window: usize, n: usize) -> (usize, usize) {
 }
 
 /// `img`'s luminance halved until its longer side is at most [`WORK_SIDE`], and how many halvings.
+/// Pixels with no picture (alpha 0: past the frame's edge after `imaging.stabilize` turned and
+/// moved it) are NaN, and so is every measuring pixel they touch: a border that moves from frame
+/// to frame is not flicker.
 pub fn work_plane(img: &Image) -> (Plane, u32) {
     let mut p = Plane::luminance(img);
+    if img.channels() == pyrograph_core::Channels::Rgba {
+        for (v, px) in p.data.iter_mut().zip(img.data().chunks_exact(4)) {
+            if px[3] <= 0.0 {
+                *v = f32::NAN;
+            }
+        }
+    }
     let mut halvings = 0;
     while p.width.max(p.height) > WORK_SIDE {
         p = p.half();
@@ -279,7 +289,8 @@ pub fn work_plane(img: &Image) -> (Plane, u32) {
 /// Mean absolute change between consecutive `planes` (same size, at least two), each change the
 /// smallest over shifts of the earlier plane by up to `reach` pixels: a still scene moved a pixel
 /// by the camera changes nothing, a flame's flicker does. Only inside `region` (`[x0, y0, x1, y1)`
-/// on the plane) when given, zero outside: a mask's blobs need no more.
+/// on the plane) when given, zero outside: a mask's blobs need no more. A pair with no picture at
+/// a pixel (NaN, see [`work_plane`]) adds no change there.
 pub fn flicker_plane(planes: &[&Plane], reach: usize, region: Option<[usize; 4]>) -> Plane {
     use rayon::prelude::*;
     let (w, h) = (planes[0].width, planes[0].height);
@@ -289,12 +300,18 @@ pub fn flicker_plane(planes: &[&Plane], reach: usize, region: Option<[usize; 4]>
     }
     let [x0, y0, x1, y1] = region.unwrap_or([0, 0, w, h]);
     let r = reach as i64;
-    let pairs = (planes.len() - 1) as f32;
     out.data.par_chunks_mut(w.max(1)).enumerate().filter(|(y, _)| (y0..y1).contains(y)).for_each(|(y, row)| {
+        // Pairs measured at each pixel: a pixel under the border in some frames is the mean of
+        // the others, not understated by them.
+        let mut pairs = vec![0u16; row.len()];
         for pair in planes.windows(2) {
             let (before, now) = (&pair[0], &pair[1]);
-            for (x, o) in row.iter_mut().enumerate().take(x1).skip(x0) {
+            for ((x, o), n) in row.iter_mut().enumerate().zip(pairs.iter_mut()).take(x1).skip(x0) {
                 let v = now.data[y * w + x];
+                if v.is_nan() {
+                    continue;
+                }
+                // `min` passes over NaN: a neighbour with no picture explains nothing.
                 let mut best = f32::MAX;
                 for dy in -r..=r {
                     let yy = (y as i64 + dy).clamp(0, h as i64 - 1) as usize;
@@ -303,9 +320,13 @@ pub fn flicker_plane(planes: &[&Plane], reach: usize, region: Option<[usize; 4]>
                         best = best.min((v - before.data[yy * w + xx]).abs());
                     }
                 }
-                *o += best / pairs;
+                if best < f32::MAX {
+                    *o += best;
+                    *n += 1;
+                }
             }
         }
+        row.iter_mut().zip(&pairs).for_each(|(o, n)| *o /= f32::from((*n).max(1)));
     });
     out
 }
@@ -335,6 +356,10 @@ pub fn judge_fires(mask: &Mask, flicker: &Plane, luma: &Plane, halvings: u32, mi
         let (x, y) = (i % w, i / w);
         let b = &mut blobs[*l as usize];
         let k = on_plane(x, y);
+        // A pixel with no picture tells nothing of the blob (see `work_plane`).
+        if luma.data[k].is_nan() {
+            continue;
+        }
         b.pixels += 1.0;
         b.flicker += f64::from(flicker.data[k]);
         b.brightness += f64::from(luma.data[k]);
@@ -396,7 +421,9 @@ impl Surroundings {
         for y in 0..h {
             let (mut row_sum, mut row_count) = (0.0, 0.0);
             for x in 0..w {
-                row_sum += free[y * w + x] * f64::from(luma.data[y * w + x]);
+                // No picture counts as black, as the dark around a flame on black does.
+                let v = luma.data[y * w + x];
+                row_sum += free[y * w + x] * f64::from(if v.is_nan() { 0.0 } else { v });
                 row_count += free[y * w + x];
                 let k = (y + 1) * (w + 1) + x + 1;
                 sum[k] = sum[k - (w + 1)] + row_sum;

@@ -155,3 +155,24 @@ fn a_frames_window_ends_at_it_except_at_the_clips_start() {
     assert_eq!(window_of(3, 8, 5), (0, 4));
     assert_eq!(window_of(0, 8, 1), (0, 0));
 }
+
+#[test]
+fn a_moving_border_with_no_picture_is_not_flicker_over_a_longer_clip() {
+    // A stabilized plate: the lamp sits at the frame's left edge, where the border brought in from
+    // outside the frame (transparent black) covers 4 more columns in odd frames than in even
+    // ones. 20 frames, more than the window of 8.
+    let frames: Vec<Image> = (0..20)
+        .map(|t| {
+            let mut img = scene(96, 80, (8.0, 40.0), (60.0, 45.0), t);
+            let border = if t % 2 == 1 { 5 } else { 1 };
+            img.data_mut().chunks_exact_mut(4).enumerate().filter(|(i, _)| i % 96 < border).for_each(|(_, p)| p.fill(0.0));
+            img
+        })
+        .collect();
+    let (out, ctx) = cook(frames, 1.2);
+    for i in [2, 9, 15, 19] {
+        let m = mask_at(&out, i, &ctx);
+        assert!(!m.get(8, 40), "frame {i}: the lamp holds still; the border moving over it is not flicker");
+        assert!(m.get(60, 45), "frame {i}: the flame flickers and is kept");
+    }
+}

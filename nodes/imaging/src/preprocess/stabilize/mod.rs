@@ -227,8 +227,11 @@ fn corner_shift(m: Rigid, size: (u32, u32)) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// `img` resampled (bilinear) so output pixel `x` shows input pixel `lookup(x)`, about the frame's
-/// centre; pixels from outside the frame are transparent black.
+/// `img` resampled so output pixel `x` shows input pixel `lookup(x)`, about the frame's centre;
+/// pixels from outside the frame are transparent black. Catmull-Rom (bicubic), each sample kept
+/// within its four nearest input pixels: a held frame is resampled once more than the footage,
+/// and bilinear would soften every edge (a flame's outline, which the mask follows) once more;
+/// the clamp keeps the cubic's overshoot from ringing around a bright flame.
 pub fn warp(img: &Image, lookup: Rigid) -> Image {
     use rayon::prelude::*;
     let (w, h) = (img.width() as usize, img.height() as usize);
@@ -244,19 +247,33 @@ pub fn warp(img: &Image, lookup: Rigid) -> Image {
             if fx < -0.5 || fy < -0.5 || fx > w as f64 - 0.5 || fy > h as f64 - 0.5 {
                 continue;
             }
-            let (x0, y0) = (fx.floor().max(0.0) as usize, fy.floor().max(0.0) as usize);
-            let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-            let (ax, ay) = ((fx - x0 as f64).clamp(0.0, 1.0) as f32, (fy - y0 as f64).clamp(0.0, 1.0) as f32);
+            let (x0, y0) = (fx.floor(), fy.floor());
+            let (wx, wy) = (catmull_rom((fx - x0) as f32), catmull_rom((fy - y0) as f32));
+            let clampi = |v: f64, most: usize| (v.max(0.0) as usize).min(most - 1);
+            let xs = [-1.0, 0.0, 1.0, 2.0].map(|d| clampi(x0 + d, w));
+            let ys = [-1.0, 0.0, 1.0, 2.0].map(|d| clampi(y0 + d, h));
             for k in 0..ch {
                 let at = |x: usize, y: usize| src[(y * w + x) * ch + k];
-                let top = at(x0, y0) + ax * (at(x1, y0) - at(x0, y0));
-                let bottom = at(x0, y1) + ax * (at(x1, y1) - at(x0, y1));
-                row[x * ch + k] = top + ay * (bottom - top);
+                let mut v = 0.0;
+                for (j, &yy) in ys.iter().enumerate() {
+                    let line: f32 = xs.iter().zip(&wx).map(|(&xx, wt)| wt * at(xx, yy)).sum();
+                    v += wy[j] * line;
+                }
+                let near = [at(xs[1], ys[1]), at(xs[2], ys[1]), at(xs[1], ys[2]), at(xs[2], ys[2])];
+                let (lo, hi) = near.iter().fold((f32::MAX, f32::MIN), |(l, u), &n| (l.min(n), u.max(n)));
+                // Four NaN neighbours (a float file's holes) leave nothing to clamp to.
+                row[x * ch + k] = if lo <= hi { v.clamp(lo, hi) } else { v };
             }
         }
     });
     let channels = if ch == 1 { Channels::Gray } else { Channels::Rgba };
     Image::from_vec(img.width(), img.height(), channels, out).unwrap_or_else(|| img.clone())
+}
+
+/// Catmull-Rom weights of the four taps around a sample `t` (0..1) past the second.
+fn catmull_rom(t: f32) -> [f32; 4] {
+    let (t2, t3) = (t * t, t * t * t);
+    [0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)]
 }
 
 /// The camera's motion from frame `a` to frame `b` (where a still point of `a` is in `b`), or
@@ -303,20 +320,62 @@ pub fn frame_motion(a: &Image, b: &Image) -> Option<Rigid> {
     // A camera's motion brings the still pixels into register; a flame, a hand or smoke moving on
     // its own does not. Unless the motion makes clearly more pixels agree than no motion does,
     // the camera is taken as still (a tripod's noise is not shake either).
-    let (moved, unmoved) = (agreeing(&pa[0], &pb[0], &pk[0], m), agreeing(&pa[0], &pb[0], &pk[0], Rigid::default()));
+    let within = agree_level(&pa[0], &pb[0], &pk[0], m);
+    let (moved, unmoved) =
+        (agreeing(&pa[0], &pb[0], &pk[0], m, within), agreeing(&pa[0], &pb[0], &pk[0], Rigid::default(), within));
     if moved < 0.5 || moved < unmoved + 0.05 {
         return Some(Rigid::default());
     }
     Some(Rigid { angle: m.angle, shift: [m.shift[0] * scale, m.shift[1] * scale] })
 }
 
-/// Brightness difference under which a pixel agrees in two frames.
+/// Brightness difference under which a pixel agrees in two frames, at most: footage with less
+/// noise and contrast is judged by its own residual (see [`agree_level`]).
 const AGREE: f32 = 0.03;
 
-/// Share of the still pixels of `a` inside `b` under the motion `m` whose brightness agrees.
-fn agreeing(a: &Plane, b: &Plane, still: &Plane, m: Rigid) -> f64 {
+/// The least difference a pixel may differ by and still disagree: three 8-bit steps.
+const AGREE_FLOOR: f32 = 3.0 / 255.0;
+
+/// The frame's centre in the plane's index coordinates: index `i` is the pixel whose centre is at
+/// `i + 0.5`, as [`warp`] counts, so both turn about the same point at every scale.
+fn index_centre(w: usize, h: usize) -> [f64; 2] {
+    [w as f64 / 2.0 - 0.5, h as f64 / 2.0 - 0.5]
+}
+
+/// The difference under which a still pixel agrees: 2.5 × the median residual of the still pixels
+/// under the motion found (what noise and resampling leave), between [`AGREE_FLOOR`] and
+/// [`AGREE`]. Dim or flat footage moves its pixels by less than a bright textured one for the same
+/// shake, and a fixed level would take its shake for noise. The floor keeps 8-bit noise from
+/// agreeing better under a half-pixel motion than under none (bilinear sampling averages four noisy
+/// pixels, a quarter less noise, which a level of about 2σ would count as agreement).
+fn agree_level(a: &Plane, b: &Plane, still: &Plane, m: Rigid) -> f32 {
     let (w, h) = (a.width, a.height);
-    let c = [w as f64 / 2.0, h as f64 / 2.0];
+    let c = index_centre(w, h);
+    let mut residuals = Vec::new();
+    for y in (0..h).step_by(2) {
+        for x in (0..w).step_by(2) {
+            if still.data[y * w + x] < 1.0 {
+                continue;
+            }
+            let [bx, by] = m.apply([x as f64, y as f64], c);
+            if bx < 0.0 || by < 0.0 || bx > (w - 1) as f64 || by > (h - 1) as f64 {
+                continue;
+            }
+            residuals.push((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs());
+        }
+    }
+    if residuals.is_empty() {
+        return AGREE;
+    }
+    let mid = residuals.len() / 2;
+    let median = *residuals.select_nth_unstable_by(mid, f32::total_cmp).1;
+    (2.5 * median).clamp(AGREE_FLOOR, AGREE)
+}
+
+/// Share of the still pixels of `a` inside `b` under the motion `m` whose brightness agrees.
+fn agreeing(a: &Plane, b: &Plane, still: &Plane, m: Rigid, within: f32) -> f64 {
+    let (w, h) = (a.width, a.height);
+    let c = index_centre(w, h);
     let (mut agree, mut all) = (0usize, 0usize);
     for y in 0..h {
         for x in 0..w {
@@ -328,7 +387,7 @@ fn agreeing(a: &Plane, b: &Plane, still: &Plane, m: Rigid) -> f64 {
                 continue;
             }
             all += 1;
-            agree += usize::from((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs() < AGREE);
+            agree += usize::from((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs() < within);
         }
     }
     if all == 0 { 0.0 } else { agree as f64 / all as f64 }
@@ -424,7 +483,7 @@ impl Gradients {
 /// too little texture to fix the motion.
 fn gauss_newton_step(a: &Plane, b: &Plane, still: &Plane, g: &Gradients, m: Rigid) -> Option<[f64; 3]> {
     let (w, h) = (a.width, a.height);
-    let c = [w as f64 / 2.0, h as f64 / 2.0];
+    let c = index_centre(w, h);
     let (s, co) = m.angle.sin_cos();
     // Residuals and Jacobians of the pixels used; the Huber scale is their median residual's.
     let mut rows: Vec<(f64, [f64; 3])> = Vec::with_capacity(w * h);

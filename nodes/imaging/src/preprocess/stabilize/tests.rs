@@ -114,3 +114,78 @@ fn a_smoothed_path_keeps_a_pan_and_removes_the_shake() {
     }
     assert!(smooth_path(&path, 0.0).iter().all(|r| *r == Rigid::default()));
 }
+
+#[test]
+fn a_turning_pan_with_shake_keeps_its_smooth_path_and_loses_the_shake() {
+    // The camera pans 2 px and turns 0.004 rad a frame, with a shake of ±3 px and ±0.012 rad
+    // alternating on top: what is left between held frames is the pan's step.
+    let n = 12;
+    let truth: Vec<Rigid> = (0..n)
+        .map(|i| {
+            let jitter = if i % 2 == 0 { 1.0 } else { -1.0 };
+            Rigid { angle: 0.004 * i as f64 + 0.012 * jitter, shift: [2.0 * i as f64 + 3.0 * jitter, -1.5 * jitter] }
+        })
+        .collect();
+    let scene = wall(240, 180, false, 0);
+    let frames: Vec<Value> = truth.iter().map(|m| Value::Image(Arc::new(warp(&scene, m.inverse())))).collect();
+    let node = Stabilize { clip: ClipOf::new(Clip::from_frames(PortType::Image, 24.0, frames)), smoothing: 2.0 };
+    let ctx = CookCtx::new();
+    let out = node.cook(&ctx).unwrap();
+    let held: Vec<Arc<Image>> = (0..n)
+        .map(|i| match out.clip.get(i, &ctx).unwrap() {
+            Value::Image(img) => img,
+            _ => panic!("frame {i}"),
+        })
+        .collect();
+    for i in 4..8 {
+        let input = frame_motion(&warp(&scene, truth[i].inverse()), &warp(&scene, truth[i + 1].inverse())).unwrap();
+        let step = frame_motion(&held[i], &held[i + 1]).unwrap();
+        assert!((input.angle - 0.004).abs() > 0.02, "frame {i}: the input shakes: {input:?}");
+        assert!((step.angle - 0.004).abs() < 0.003, "frame {i}: turned {} between held frames", step.angle);
+        let len = step.shift[0].hypot(step.shift[1]);
+        assert!((len - 2.0).abs() < 0.6, "frame {i}: moved {len:.2} px between held frames: {step:?}");
+    }
+}
+
+#[test]
+fn dim_noisy_footage_from_a_tripod_is_not_a_camera_motion() {
+    // Faint texture (±0.02) under 8-bit sensor noise (up to two steps either way, new in every
+    // frame): the residual is mostly noise, and no sub-pixel motion may pass for the camera's.
+    let frame = |seed: u64| {
+        let mut s = seed;
+        let mut data = Vec::with_capacity(640 * 360 * 4);
+        for y in 0..360u32 {
+            for x in 0..640u32 {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                let noise = ((s % 5) as f32 - 2.0) / 255.0;
+                let v = 0.2 + 0.02 * (x as f32 * 0.13).sin() * (y as f32 * 0.09).cos() + noise;
+                let v = (v * 255.0).round() / 255.0;
+                data.extend_from_slice(&[v, v * 0.8, v * 0.6, 1.0]);
+            }
+        }
+        Image::from_vec(640, 360, Channels::Rgba, data).unwrap()
+    };
+    for (a, b) in [(1, 2), (3, 4), (5, 6)] {
+        let m = frame_motion(&frame(a), &frame(b));
+        assert!(m.is_none_or(is_identity), "seeds {a}, {b}: {m:?}");
+    }
+}
+
+#[test]
+fn a_dim_wall_shaken_by_a_few_pixels_is_measured() {
+    // The wall at 40 % of its brightness: a 3 px shake changes its pixels by about 0.015, under a
+    // fixed agreement level of 0.03, so only a level set by the footage's own residual sees it.
+    let dim = |img: Image| {
+        let mut img = img;
+        img.data_mut().chunks_exact_mut(4).for_each(|p| p[..3].iter_mut().for_each(|v| *v *= 0.4));
+        img
+    };
+    let a = dim(wall(320, 240, false, 0));
+    let truth = Rigid { angle: 0.004, shift: [3.0, -2.0] };
+    let b = warp(&a, truth.inverse());
+    let m = frame_motion(&a, &b).expect("textured");
+    let err = corner_shift(m.then(truth.inverse()), (320, 240));
+    assert!(err < 0.3, "measured {m:?}: corners off by {err:.3} px");
+}

@@ -320,9 +320,10 @@ pub fn frame_motion(a: &Image, b: &Image) -> Option<Rigid> {
     // A camera's motion brings the still pixels into register; a flame, a hand or smoke moving on
     // its own does not. Unless the motion makes clearly more pixels agree than no motion does,
     // the camera is taken as still (a tripod's noise is not shake either).
-    let within = agree_level(&pa[0], &pb[0], &pk[0], m);
+    let moved = still_residuals(&pa[0], &pb[0], &pk[0], m);
+    let within = agree_level(&moved);
     let (moved, unmoved) =
-        (agreeing(&pa[0], &pb[0], &pk[0], m, within), agreeing(&pa[0], &pb[0], &pk[0], Rigid::default(), within));
+        (agreeing(&moved, within), agreeing(&still_residuals(&pa[0], &pb[0], &pk[0], Rigid::default()), within));
     if moved < 0.5 || moved < unmoved + 0.05 {
         return Some(Rigid::default());
     }
@@ -342,41 +343,36 @@ fn index_centre(w: usize, h: usize) -> [f64; 2] {
     [w as f64 / 2.0 - 0.5, h as f64 / 2.0 - 0.5]
 }
 
-/// The difference under which a still pixel agrees: 2.5 × the median residual of the still pixels
-/// under the motion found (what noise and resampling leave), between [`AGREE_FLOOR`] and
+/// The difference under which a still pixel agrees, from the still pixels' `residuals` under the
+/// motion found (what noise and resampling leave): 2.5 × their median, between [`AGREE_FLOOR`] and
 /// [`AGREE`]. Dim or flat footage moves its pixels by less than a bright textured one for the same
 /// shake, and a fixed level would take its shake for noise. The floor keeps 8-bit noise from
 /// agreeing better under a half-pixel motion than under none (bilinear sampling averages four noisy
 /// pixels, a quarter less noise, which a level of about 2σ would count as agreement).
-fn agree_level(a: &Plane, b: &Plane, still: &Plane, m: Rigid) -> f32 {
-    let (w, h) = (a.width, a.height);
-    let c = index_centre(w, h);
-    let mut residuals = Vec::new();
-    for y in (0..h).step_by(2) {
-        for x in (0..w).step_by(2) {
-            if still.data[y * w + x] < 1.0 {
-                continue;
-            }
-            let [bx, by] = m.apply([x as f64, y as f64], c);
-            if bx < 0.0 || by < 0.0 || bx > (w - 1) as f64 || by > (h - 1) as f64 {
-                continue;
-            }
-            residuals.push((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs());
-        }
-    }
+fn agree_level(residuals: &[f32]) -> f32 {
     if residuals.is_empty() {
         return AGREE;
     }
-    let mid = residuals.len() / 2;
-    let median = *residuals.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let mut sorted = residuals.to_vec();
+    let mid = sorted.len() / 2;
+    let median = *sorted.select_nth_unstable_by(mid, f32::total_cmp).1;
     (2.5 * median).clamp(AGREE_FLOOR, AGREE)
 }
 
-/// Share of the still pixels of `a` inside `b` under the motion `m` whose brightness agrees.
-fn agreeing(a: &Plane, b: &Plane, still: &Plane, m: Rigid, within: f32) -> f64 {
+/// Share of `residuals` under `within`: of the still pixels, those that agree (0 with none).
+fn agreeing(residuals: &[f32], within: f32) -> f64 {
+    if residuals.is_empty() {
+        return 0.0;
+    }
+    residuals.iter().filter(|r| **r < within).count() as f64 / residuals.len() as f64
+}
+
+/// The brightness differences between the still pixels of `a` and where the motion `m` puts them
+/// in `b`, for those it keeps inside `b`.
+fn still_residuals(a: &Plane, b: &Plane, still: &Plane, m: Rigid) -> Vec<f32> {
     let (w, h) = (a.width, a.height);
     let c = index_centre(w, h);
-    let (mut agree, mut all) = (0usize, 0usize);
+    let mut out = Vec::new();
     for y in 0..h {
         for x in 0..w {
             if still.data[y * w + x] < 1.0 {
@@ -386,11 +382,10 @@ fn agreeing(a: &Plane, b: &Plane, still: &Plane, m: Rigid, within: f32) -> f64 {
             if bx < 0.0 || by < 0.0 || bx > (w - 1) as f64 || by > (h - 1) as f64 {
                 continue;
             }
-            all += 1;
-            agree += usize::from((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs() < within);
+            out.push((b.sample(bx as f32, by as f32) - a.data[y * w + x]).abs());
         }
     }
-    if all == 0 { 0.0 } else { agree as f64 / all as f64 }
+    out
 }
 
 /// 1 where a pixel is far enough from the fire to count as still scene in both frames, 0 near it:
